@@ -1,0 +1,143 @@
+//! Gaussian particle filter (Kotecha and Djuric 2003; seed 003): the posterior is carried as one
+//! Gaussian, and each step samples it, propagates, weights, and refits mean and covariance.
+//! No resampling, so no degeneracy; O(N D^2) per step.
+
+use super::{Estimate, Filter, StepStatus, moments, scaled};
+use crate::error::Error;
+use crate::likelihood::Likelihood;
+use crate::model::Model;
+use crate::particles::ParticleSet;
+use rand_core::Rng;
+
+/// The Gaussian particle filter over model `M`, likelihood `L`, `N` samples of dimension `D`.
+#[derive(Debug, Clone)]
+pub struct Gpf<M, L, const N: usize, const D: usize> {
+    /// State-space model.
+    pub model: M,
+    /// Measurement likelihood.
+    pub likelihood: L,
+    samples: ParticleSet<N, D>,
+    prior: Option<([f32; D], [[f32; D]; D])>,
+    last: Estimate<D>,
+}
+
+impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize> Gpf<M, L, N, D> {
+    /// A filter awaiting [`Filter::initialise`].
+    pub fn new(model: M, likelihood: L) -> Self {
+        Self {
+            model,
+            likelihood,
+            samples: ParticleSet::new(),
+            prior: None,
+            last: Estimate {
+                mean: [0.0; D],
+                covariance: [[0.0; D]; D],
+                ess: 0.0,
+                status: StepStatus::Updated,
+            },
+        }
+    }
+
+    /// The weighted samples of the last step.
+    pub fn samples(&self) -> &ParticleSet<N, D> {
+        &self.samples
+    }
+
+    /// Mutable samples: the swarm optimisers move them before the moments are refitted.
+    pub fn samples_mut(&mut self) -> &mut ParticleSet<N, D> {
+        &mut self.samples
+    }
+
+    /// Draw the samples from the current Gaussian and propagate them.
+    pub fn predict<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<(), Error> {
+        let Estimate {
+            mean, covariance, ..
+        } = self.last;
+        self.samples.draw_gaussian(&mean, &covariance, rng)?;
+        for x in self.samples.states.iter_mut() {
+            self.model.propagate(x, rng);
+        }
+        Ok(())
+    }
+
+    /// Weight the current samples by `z` and refit the Gaussian.
+    pub fn update<R: Rng + ?Sized>(
+        &mut self,
+        z: &M::Measurement,
+        rng: &mut R,
+    ) -> Result<Estimate<D>, Error> {
+        for (x, lw) in self
+            .samples
+            .states
+            .iter()
+            .zip(self.samples.log_weights.iter_mut())
+        {
+            *lw = self.model.ln_likelihood(x, z, &self.likelihood);
+        }
+        let ess = match self.samples.normalise() {
+            Ok(ess) => ess,
+            Err(Error::WeightCollapse) => {
+                let (mean, cov) = self.prior.ok_or(Error::NotInitialised)?;
+                self.samples.draw_gaussian(&mean, &scaled(&cov, 4.0), rng)?;
+                self.last = Estimate {
+                    mean,
+                    covariance: scaled(&cov, 4.0),
+                    ess: N as f32,
+                    status: StepStatus::Reinitialised,
+                };
+                return Ok(self.last);
+            }
+            Err(e) => return Err(e),
+        };
+        let mean = self.samples.mean();
+        let covariance = self.samples.covariance(&mean);
+        self.last = Estimate {
+            mean,
+            covariance,
+            ess,
+            status: StepStatus::Updated,
+        };
+        Ok(self.last)
+    }
+}
+
+impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize> Filter<D> for Gpf<M, L, N, D> {
+    type Measurement = M::Measurement;
+
+    fn initialise<R: Rng + ?Sized>(
+        &mut self,
+        cloud: &[[f32; D]],
+        _rng: &mut R,
+    ) -> Result<(), Error> {
+        let (mean, covariance) = moments(cloud).ok_or(if cloud.is_empty() {
+            Error::TooFewMeasurements
+        } else {
+            Error::NonFinite
+        })?;
+        self.prior = Some((mean, covariance));
+        self.last = Estimate {
+            mean,
+            covariance,
+            ess: N as f32,
+            status: StepStatus::Updated,
+        };
+        Ok(())
+    }
+
+    fn step<R: Rng + ?Sized>(
+        &mut self,
+        z: &M::Measurement,
+        rng: &mut R,
+    ) -> Result<Estimate<D>, Error> {
+        if self.prior.is_none() {
+            return Err(Error::NotInitialised);
+        }
+        self.model.check(z)?;
+        self.predict(rng)?;
+        self.update(z, rng)
+    }
+
+    fn estimate(&self) -> Estimate<D> {
+        self.last
+    }
+}

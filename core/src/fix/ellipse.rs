@@ -1,0 +1,69 @@
+//! Confidence ellipse and CEP50 from a 2x2 position covariance.
+
+use crate::error::Error;
+use crate::linalg;
+
+/// An error ellipse: semi-axes and orientation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ellipse {
+    /// Semi-major axis, metres.
+    pub major: f32,
+    /// Semi-minor axis, metres.
+    pub minor: f32,
+    /// Orientation of the major axis, radians counter-clockwise from east.
+    pub orientation: f32,
+    /// Probability mass inside, e.g. 0.95.
+    pub confidence: f32,
+}
+
+impl Ellipse {
+    /// The ellipse holding `confidence` of a Gaussian with covariance `cov`: semi-axes
+    /// sqrt(-2 ln(1 - p) lambda_i) (sqrt(5.991 lambda) at 95 %).
+    pub fn from_covariance(cov: &[[f32; 2]; 2], confidence: f32) -> Result<Self, Error> {
+        crate::error::check_finite(&[cov[0][0], cov[0][1], cov[1][0], cov[1][1], confidence])?;
+        if !(confidence > 0.0 && confidence < 1.0) {
+            return Err(Error::OutOfRange);
+        }
+        let (l1, l2, orientation) = linalg::eigen2(cov).ok_or(Error::NonFinite)?;
+        if l2 < -1e-6 * l1.abs().max(1e-12) {
+            return Err(Error::OutOfRange);
+        }
+        let k = -2.0 * libm::logf(1.0 - confidence);
+        Ok(Self {
+            major: libm::sqrtf(k * l1.max(0.0)),
+            minor: libm::sqrtf(k * l2.max(0.0)),
+            orientation,
+            confidence,
+        })
+    }
+}
+
+/// Circular error probable (50 %): 0.59 (s1 + s2) of the standard deviations along the axes
+/// (accurate to a few percent while s2 / s1 > 0.2).
+pub fn cep50(cov: &[[f32; 2]; 2]) -> Result<f32, Error> {
+    let e = Ellipse::from_covariance(cov, 0.5)?;
+    let k = libm::sqrtf(-2.0 * libm::logf(0.5));
+    Ok(0.59 * (e.major + e.minor) / k)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn circular_95() {
+        let e = Ellipse::from_covariance(&[[4.0, 0.0], [0.0, 4.0]], 0.95).unwrap();
+        assert!((e.major - 2.0 * libm::sqrtf(5.991)).abs() < 1e-2);
+        assert!((e.minor - e.major).abs() < 1e-4);
+        // CEP50 of a circular Gaussian is 1.1774 sigma; the 0.59 (s1 + s2) rule gives 1.18 sigma.
+        let c = cep50(&[[4.0, 0.0], [0.0, 4.0]]).unwrap();
+        assert!((c - 2.0 * 1.1774).abs() < 0.01, "{c}");
+    }
+
+    #[test]
+    fn rejects_bad_covariances() {
+        assert!(Ellipse::from_covariance(&[[f32::NAN, 0.0], [0.0, 1.0]], 0.95).is_err());
+        assert!(Ellipse::from_covariance(&[[1.0, 0.0], [0.0, -1.0]], 0.95).is_err());
+        assert!(Ellipse::from_covariance(&[[1.0, 0.0], [0.0, 1.0]], 1.0).is_err());
+    }
+}

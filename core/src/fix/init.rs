@@ -1,0 +1,80 @@
+//! Initial particles from bearing pairs (seed 002 section 3.3).
+//!
+//! Adjacent records see the emitter from almost the same place, so their crossings repeat each
+//! other; the seed pairs records a fixed interval apart. Here the pairs are (i, i + m/k) for
+//! k = 2, 3, ... (half the drive apart first, then thirds, quarters...), keeping only crossings
+//! at a good angle in front of both vehicles. When too few pairs qualify (a short or straight
+//! drive), the cloud is drawn around the bias-compensated PLE with its covariance, inflated.
+
+use super::intersection::intersect;
+use crate::error::Error;
+use crate::model::bearing::Bearing;
+use crate::particles::ParticleSet;
+use rand_core::Rng;
+
+/// How the initial cloud was made.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum InitialCloud {
+    /// From this many bearing-pair intersections.
+    Intersections(u32),
+    /// Around the PLE fix (too few pairs crossed well).
+    AroundPle,
+}
+
+/// Inflation of the PLE covariance (in standard deviations) for the fallback cloud.
+const PLE_INFLATION: f32 = 3.0;
+
+/// Fill `set` with initial emitter hypotheses from `bearings`, with uniform weights.
+pub fn initial_particles<R: Rng + ?Sized, const N: usize>(
+    bearings: &[Bearing],
+    min_angle: f32,
+    set: &mut ParticleSet<N, 2>,
+    rng: &mut R,
+) -> Result<InitialCloud, Error> {
+    let m = bearings.len();
+    let mut found = 0usize;
+    'outer: for k in 2..=m.max(2) {
+        for j in 1..k {
+            // Only reduced fractions j/k, so no interval is tried twice.
+            if gcd(j, k) != 1 {
+                continue;
+            }
+            let offset = m * j / k;
+            if offset == 0 || offset >= m {
+                continue;
+            }
+            for i in 0..m - offset {
+                if let Ok(p) = intersect(&bearings[i], &bearings[i + offset], min_angle) {
+                    set.states[found] = p;
+                    found += 1;
+                    if found == N {
+                        break 'outer;
+                    }
+                }
+            }
+        }
+    }
+    let enough = (N / 10).max(3);
+    if found >= enough {
+        for i in found..N {
+            set.states[i] = set.states[i % found];
+        }
+        set.set_uniform_weights();
+        return Ok(InitialCloud::Intersections(found as u32));
+    }
+    let fix = super::ple::bias_compensated_ple(bearings)?;
+    let k = PLE_INFLATION * PLE_INFLATION;
+    let cov = [
+        [k * fix.covariance[0][0], k * fix.covariance[0][1]],
+        [k * fix.covariance[1][0], k * fix.covariance[1][1]],
+    ];
+    set.draw_gaussian(&fix.position, &cov, rng)?;
+    Ok(InitialCloud::AroundPle)
+}
+
+fn gcd(mut a: usize, mut b: usize) -> usize {
+    while b != 0 {
+        (a, b) = (b, a % b);
+    }
+    a
+}

@@ -1,0 +1,36 @@
+//! foxhunt-core: find a radio emitter from bearings (or RSSI) with particle filters, an EKF and
+//! batch fixes, each measured against the Cramér-Rao bound.
+//!
+//! Everything here runs without an allocator: particle arrays are sized by const generics, so a
+//! filter can live in a `static` on a microcontroller. Randomness comes only from a
+//! caller-supplied [`rand_core::Rng`], so one seed gives the same answer on the host and the MCU.
+//! No entry point panics or returns NaN on bad input: it returns an [`Error`] instead.
+#![no_std]
+#![deny(missing_docs)]
+
+pub mod error;
+pub mod linalg;
+pub mod particles;
+pub mod random;
+pub mod resample;
+
+pub use error::Error;
+pub use particles::ParticleSet;
+pub use resample::Resampling;
+pub mod likelihood;
+pub mod model;
+
+pub use likelihood::{Cauchy, Gaussian, GaussianUniform, Huber, Likelihood, StudentT};
+pub use model::Model;
+pub use model::bearing::{Bearing, StaticEmitter};
+pub mod fix;
+
+pub use fix::Fix;
+pub mod filter;
+pub mod roughen;
+
+pub use filter::ekf::BearingEkf;
+pub use filter::gpf::Gpf;
+pub use filter::sir::{Sir, SirConfig};
+pub use filter::{Estimate, Filter, StepStatus};
+pub use roughen::Roughening;

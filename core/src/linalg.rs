@@ -1,0 +1,97 @@
+//! The little linear algebra the filters need: symmetric 2x2 inverse and eigen-decomposition,
+//! and a Cholesky factor for any small D. Everything returns `None` instead of NaN.
+
+/// Inverse of a symmetric 2x2 matrix; `None` when it is singular or ill-conditioned.
+pub fn inverse2(m: &[[f32; 2]; 2]) -> Option<[[f32; 2]; 2]> {
+    let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+    let scale = libm::fabsf(m[0][0] * m[1][1]) + libm::fabsf(m[0][1] * m[1][0]);
+    if !det.is_finite() || !(scale > 0.0) || libm::fabsf(det) <= 1e-6 * scale {
+        return None;
+    }
+    let inv = [
+        [m[1][1] / det, -m[0][1] / det],
+        [-m[1][0] / det, m[0][0] / det],
+    ];
+    all_finite2(&inv).then_some(inv)
+}
+
+/// Solve a 2x2 system `m x = b`.
+pub fn solve2(m: &[[f32; 2]; 2], b: &[f32; 2]) -> Option<[f32; 2]> {
+    let inv = inverse2(m)?;
+    let x = [
+        inv[0][0] * b[0] + inv[0][1] * b[1],
+        inv[1][0] * b[0] + inv[1][1] * b[1],
+    ];
+    (x[0].is_finite() && x[1].is_finite()).then_some(x)
+}
+
+/// Eigenvalues (descending) and the orientation of the major axis (radians from +x) of a
+/// symmetric 2x2 matrix.
+pub fn eigen2(m: &[[f32; 2]; 2]) -> Option<(f32, f32, f32)> {
+    let a = m[0][0];
+    let b = 0.5 * (m[0][1] + m[1][0]);
+    let c = m[1][1];
+    let half_trace = 0.5 * (a + c);
+    let radius = libm::hypotf(0.5 * (a - c), b);
+    let l1 = half_trace + radius;
+    let l2 = half_trace - radius;
+    let angle = 0.5 * libm::atan2f(2.0 * b, a - c);
+    (l1.is_finite() && l2.is_finite() && angle.is_finite()).then_some((l1, l2, angle))
+}
+
+/// Lower Cholesky factor of a symmetric positive semi-definite matrix. Near-zero pivots are
+/// clamped to zero (a degenerate direction gets no spread) rather than producing NaN.
+pub fn cholesky<const D: usize>(m: &[[f32; D]; D]) -> Option<[[f32; D]; D]> {
+    let mut l = [[0.0f32; D]; D];
+    for i in 0..D {
+        for j in 0..=i {
+            let mut sum = 0.5 * (m[i][j] + m[j][i]);
+            for k in 0..j {
+                sum -= l[i][k] * l[j][k];
+            }
+            if i == j {
+                l[i][i] = if sum > 0.0 { libm::sqrtf(sum) } else { 0.0 };
+            } else if l[j][j] > 0.0 {
+                l[i][j] = sum / l[j][j];
+            }
+        }
+    }
+    l.iter().flatten().all(|v| v.is_finite()).then_some(l)
+}
+
+fn all_finite2(m: &[[f32; 2]; 2]) -> bool {
+    m.iter().flatten().all(|v| v.is_finite())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn inverse_and_singular() {
+        let m = [[4.0, 1.0], [1.0, 3.0]];
+        let inv = inverse2(&m).unwrap();
+        assert!((inv[0][0] - 3.0 / 11.0).abs() < 1e-6);
+        assert!(inverse2(&[[1.0, 2.0], [2.0, 4.0]]).is_none());
+        assert!(inverse2(&[[f32::NAN, 0.0], [0.0, 1.0]]).is_none());
+    }
+
+    #[test]
+    fn eigen_of_rotated_ellipse() {
+        let (l1, l2, a) = eigen2(&[[2.0, 1.0], [1.0, 2.0]]).unwrap();
+        assert!((l1 - 3.0).abs() < 1e-6 && (l2 - 1.0).abs() < 1e-6);
+        assert!((a - core::f32::consts::FRAC_PI_4).abs() < 1e-6);
+    }
+
+    #[test]
+    fn cholesky_reconstructs() {
+        let m = [[4.0, 2.0, 0.0], [2.0, 5.0, 1.0], [0.0, 1.0, 3.0]];
+        let l = cholesky(&m).unwrap();
+        for i in 0..3 {
+            for j in 0..3 {
+                let s: f32 = (0..3).map(|k| l[i][k] * l[j][k]).sum();
+                assert!((s - m[i][j]).abs() < 1e-5);
+            }
+        }
+    }
+}

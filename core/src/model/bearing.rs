@@ -1,0 +1,160 @@
+//! The static emitter seen from a moving vehicle: one bearing per vehicle position.
+//!
+//! Conventions (SCENARIOS.md): local East-North metres; the model bearing is the mathematical
+//! angle theta = atan2(yT - y, xT - x) from +x, counter-clockwise; a DF unit reports the azimuth
+//! gamma clockwise from true north, theta = pi/2 - gamma. Every residual is wrapped to
+//! (-pi, pi] before it reaches a likelihood, so a bearing near +-180 degrees is never an outlier.
+
+use super::Model;
+use crate::error::{Error, check_finite};
+use crate::likelihood::Likelihood;
+use crate::random;
+use core::f32::consts::{FRAC_PI_2, PI, TAU};
+use rand_core::Rng;
+
+/// One bearing measurement in the local frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bearing {
+    /// Vehicle position (east, north), metres.
+    pub vehicle: [f32; 2],
+    /// Measured mathematical angle theta (radians from east, counter-clockwise).
+    pub theta: f32,
+    /// Standard deviation of the bearing noise, radians (> 0).
+    pub sigma: f32,
+}
+
+impl Bearing {
+    /// A bearing from a DF azimuth (radians clockwise from north).
+    pub fn from_azimuth(vehicle: [f32; 2], azimuth: f32, sigma: f32) -> Self {
+        Self {
+            vehicle,
+            theta: azimuth_to_theta(azimuth),
+            sigma,
+        }
+    }
+
+    /// `Ok` when every field is finite and sigma is positive.
+    pub fn check(&self) -> Result<(), Error> {
+        check_finite(&[self.vehicle[0], self.vehicle[1], self.theta, self.sigma])?;
+        if self.sigma > 0.0 && libm::fabsf(self.theta) <= 4.0 * PI {
+            Ok(())
+        } else {
+            Err(Error::OutOfRange)
+        }
+    }
+
+    /// Unit direction (cos theta, sin theta) of the bearing line.
+    pub fn direction(&self) -> [f32; 2] {
+        [libm::cosf(self.theta), libm::sinf(self.theta)]
+    }
+
+    /// Wrapped residual z - h(p) of an emitter hypothesis `p`.
+    #[inline]
+    pub fn residual(&self, p: &[f32; 2]) -> f32 {
+        wrap(self.theta - predicted(p, &self.vehicle))
+    }
+}
+
+/// Wrap an angle to (-pi, pi]. Non-finite input stays non-finite (callers check first).
+#[inline]
+pub fn wrap(a: f32) -> f32 {
+    if (-PI..=PI).contains(&a) && a != -PI {
+        return a;
+    }
+    let w = a - TAU * libm::floorf((a + PI) / TAU);
+    // w is in [-pi, pi) up to rounding: move the closed end to +pi.
+    if w <= -PI {
+        w + TAU
+    } else if w > PI {
+        w - TAU
+    } else {
+        w
+    }
+}
+
+/// The model bearing of an emitter at `p` from a vehicle at `v`: atan2, never the quadrant-losing
+/// arctan of the seeds.
+#[inline]
+pub fn predicted(p: &[f32; 2], v: &[f32; 2]) -> f32 {
+    libm::atan2f(p[1] - v[1], p[0] - v[0])
+}
+
+/// DF azimuth (clockwise from north) to model angle (counter-clockwise from east), wrapped.
+#[inline]
+pub fn azimuth_to_theta(azimuth: f32) -> f32 {
+    wrap(FRAC_PI_2 - azimuth)
+}
+
+/// Model angle back to a DF azimuth in [0, 2 pi).
+#[inline]
+pub fn theta_to_azimuth(theta: f32) -> f32 {
+    let a = wrap(FRAC_PI_2 - theta);
+    if a < 0.0 { a + TAU } else { a }
+}
+
+/// The static emitter: state [x, y], bearing measurements, an optional random-walk jitter
+/// (the seeds' "process noise", variance in m^2 per step; 0 for a truly static model).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StaticEmitter {
+    /// Random-walk variance added per step, m^2.
+    pub process_var: f32,
+}
+
+impl Model<2> for StaticEmitter {
+    type Measurement = Bearing;
+
+    fn check(&self, z: &Bearing) -> Result<(), Error> {
+        z.check()
+    }
+
+    #[inline]
+    fn propagate<R: Rng + ?Sized>(&self, x: &mut [f32; 2], rng: &mut R) {
+        if self.process_var > 0.0 {
+            let s = libm::sqrtf(self.process_var);
+            x[0] += s * random::normal(rng);
+            x[1] += s * random::normal(rng);
+        }
+    }
+
+    #[inline]
+    fn ln_likelihood<L: Likelihood>(&self, x: &[f32; 2], z: &Bearing, lik: &L) -> f32 {
+        lik.ln(z.residual(x), z.sigma)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wrap_range() {
+        for a in [-10.0f32, -PI, -3.0, 0.0, 3.0, PI, 3.2, 7.0, 100.0] {
+            let w = wrap(a);
+            assert!(w > -PI && w <= PI, "{a} -> {w}");
+            assert!(libm::fabsf(libm::sinf(w) - libm::sinf(a)) < 1e-4);
+        }
+        assert_eq!(wrap(-PI), PI);
+    }
+
+    #[test]
+    fn azimuth_conventions() {
+        // North is +y, east is +x.
+        assert!((azimuth_to_theta(0.0) - FRAC_PI_2).abs() < 1e-6);
+        assert!(azimuth_to_theta(FRAC_PI_2).abs() < 1e-6);
+        assert!((theta_to_azimuth(PI) - 3.0 * FRAC_PI_2).abs() < 1e-5);
+        // Quadrant kept: an emitter south-west of the vehicle.
+        let t = predicted(&[-1.0, -1.0], &[0.0, 0.0]);
+        assert!((t + 3.0 * PI / 4.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn residual_wraps_across_the_cut() {
+        let b = Bearing {
+            vehicle: [0.0, 0.0],
+            theta: PI - 0.01,
+            sigma: 0.02,
+        };
+        let r = b.residual(&[-100.0, -1.0]);
+        assert!(libm::fabsf(r) < 0.03, "{r}");
+    }
+}

@@ -1,0 +1,19 @@
+//! State-space models: how a state moves and what a measurement says about it.
+
+pub mod bearing;
+
+use crate::error::Error;
+use crate::likelihood::Likelihood;
+use rand_core::Rng;
+
+/// A state-space model over a `D`-dimensional state, as the particle filters need it.
+pub trait Model<const D: usize> {
+    /// One measurement.
+    type Measurement;
+    /// `Ok` when the measurement is usable (finite, in range).
+    fn check(&self, z: &Self::Measurement) -> Result<(), Error>;
+    /// Move one state forward by one step, process noise included.
+    fn propagate<R: Rng + ?Sized>(&self, x: &mut [f32; D], rng: &mut R);
+    /// Log-likelihood of `z` given the state, under `lik`.
+    fn ln_likelihood<L: Likelihood>(&self, x: &[f32; D], z: &Self::Measurement, lik: &L) -> f32;
+}

@@ -1,0 +1,231 @@
+//! The particle set: states and weights in fixed arrays sized by const generics.
+
+use crate::error::Error;
+use crate::linalg;
+use crate::random;
+use crate::resample::Resampling;
+use rand_core::Rng;
+
+/// `N` weighted particles of state dimension `D`, stored inline (no allocator).
+///
+/// Weights are kept twice: `log_weights` accumulate likelihoods (a burst of unlikely
+/// measurements cannot underflow them), `weights` hold the normalised linear weights after
+/// [`ParticleSet::normalise`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParticleSet<const N: usize, const D: usize> {
+    /// Particle states.
+    pub states: [[f32; D]; N],
+    /// Unnormalised log-weights.
+    pub log_weights: [f32; N],
+    /// Normalised weights (sum 1) as of the last normalisation.
+    pub weights: [f32; N],
+}
+
+impl<const N: usize, const D: usize> Default for ParticleSet<N, D> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const N: usize, const D: usize> ParticleSet<N, D> {
+    /// All particles at the origin with equal weights.
+    pub const fn new() -> Self {
+        const { assert!(N > 0 && D > 0, "a particle set needs particles and a state") };
+        Self {
+            states: [[0.0; D]; N],
+            log_weights: [0.0; N],
+            weights: [1.0 / N as f32; N],
+        }
+    }
+
+    /// Reset every weight to 1/N.
+    pub fn set_uniform_weights(&mut self) {
+        self.log_weights = [0.0; N];
+        self.weights = [1.0 / N as f32; N];
+    }
+
+    /// Turn log-weights into normalised weights by shifting with the maximum first.
+    ///
+    /// NaN log-weights count as impossible particles. If no particle has a finite log-weight
+    /// the weights are reset to uniform and [`Error::WeightCollapse`] is returned, so the
+    /// caller can re-initialise; the set is never left holding NaN. On success the log-weights
+    /// are rebased to the logs of the normalised weights and the effective sample size is
+    /// returned.
+    pub fn normalise(&mut self) -> Result<f32, Error> {
+        let max = self
+            .log_weights
+            .iter()
+            .copied()
+            .filter(|v| !v.is_nan())
+            .fold(f32::NEG_INFINITY, f32::max);
+        if !max.is_finite() {
+            self.set_uniform_weights();
+            return Err(Error::WeightCollapse);
+        }
+        let mut sum = 0.0f32;
+        for (w, lw) in self.weights.iter_mut().zip(self.log_weights.iter()) {
+            *w = if lw.is_nan() {
+                0.0
+            } else {
+                libm::expf(lw - max)
+            };
+            sum += *w;
+        }
+        // The maximum contributes exp(0) = 1, so 1 <= sum <= N here.
+        let inv = 1.0 / sum;
+        let ln_sum = libm::logf(sum);
+        for (w, lw) in self.weights.iter_mut().zip(self.log_weights.iter_mut()) {
+            *w *= inv;
+            *lw = if *w > 0.0 {
+                *lw - max - ln_sum
+            } else {
+                f32::NEG_INFINITY
+            };
+        }
+        Ok(self.ess())
+    }
+
+    /// Effective sample size 1 / sum w^2 of the normalised weights, in [1, N].
+    pub fn ess(&self) -> f32 {
+        let s: f32 = self.weights.iter().map(|w| w * w).sum();
+        if s > 0.0 { 1.0 / s } else { 0.0 }
+    }
+
+    /// Weighted mean of the states.
+    pub fn mean(&self) -> [f32; D] {
+        let mut m = [0.0f32; D];
+        for (x, w) in self.states.iter().zip(self.weights.iter()) {
+            for (mj, xj) in m.iter_mut().zip(x.iter()) {
+                *mj += w * xj;
+            }
+        }
+        m
+    }
+
+    /// Weighted covariance of the states about `mean`.
+    pub fn covariance(&self, mean: &[f32; D]) -> [[f32; D]; D] {
+        let mut c = [[0.0f32; D]; D];
+        for (x, w) in self.states.iter().zip(self.weights.iter()) {
+            let mut d = [0.0f32; D];
+            for j in 0..D {
+                d[j] = x[j] - mean[j];
+            }
+            for i in 0..D {
+                for j in 0..=i {
+                    c[i][j] += w * d[i] * d[j];
+                }
+            }
+        }
+        for i in 0..D {
+            for j in 0..i {
+                c[j][i] = c[i][j];
+            }
+        }
+        c
+    }
+
+    /// Range (max - min) of each state component: the scale of the roughening jitter.
+    pub fn spread(&self) -> [f32; D] {
+        let mut lo = [f32::INFINITY; D];
+        let mut hi = [f32::NEG_INFINITY; D];
+        for x in self.states.iter() {
+            for j in 0..D {
+                lo[j] = lo[j].min(x[j]);
+                hi[j] = hi[j].max(x[j]);
+            }
+        }
+        let mut e = [0.0f32; D];
+        for j in 0..D {
+            e[j] = hi[j] - lo[j];
+        }
+        e
+    }
+
+    /// Resample in place with `scheme` and reset the weights to 1/N.
+    pub fn resample<R: Rng + ?Sized>(&mut self, scheme: Resampling, rng: &mut R) {
+        let mut counts = [0u32; N];
+        scheme.counts(&self.weights, rng, &mut counts);
+        self.apply_counts(&counts);
+        self.set_uniform_weights();
+    }
+
+    /// Replicate particle j `counts[j]` times, in place: survivors stay where they are and
+    /// their extra copies fill the slots of the particles that died. No second state array.
+    pub fn apply_counts(&mut self, counts: &[u32; N]) {
+        let mut free = 0usize;
+        for j in 0..N {
+            for _ in 1..counts[j] {
+                while free < N && counts[free] != 0 {
+                    free += 1;
+                }
+                if free >= N {
+                    return;
+                }
+                self.states[free] = self.states[j];
+                free += 1;
+            }
+        }
+    }
+
+    /// Fill the set by drawing every particle from N(mean, cov), with uniform weights.
+    pub fn draw_gaussian<R: Rng + ?Sized>(
+        &mut self,
+        mean: &[f32; D],
+        cov: &[[f32; D]; D],
+        rng: &mut R,
+    ) -> Result<(), Error> {
+        let l = linalg::cholesky(cov).ok_or(Error::NonFinite)?;
+        crate::error::check_finite(mean)?;
+        for x in self.states.iter_mut() {
+            *x = random::gaussian(rng, mean, &l);
+        }
+        self.set_uniform_weights();
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normalise_survives_underflow() {
+        let mut p = ParticleSet::<4, 1>::new();
+        p.log_weights = [-1.0e4, -1.0e4 - 1.0, -2.0e4, f32::NAN];
+        let ess = p.normalise().unwrap();
+        let e = libm::expf(-1.0);
+        assert!((p.weights[0] - 1.0 / (1.0 + e)).abs() < 1e-6);
+        assert_eq!(p.weights[2], 0.0);
+        assert_eq!(p.weights[3], 0.0);
+        assert!(ess > 1.0 && ess < 2.0);
+    }
+
+    #[test]
+    fn collapse_is_typed_not_nan() {
+        let mut p = ParticleSet::<3, 2>::new();
+        p.log_weights = [f32::NEG_INFINITY, f32::NAN, f32::NEG_INFINITY];
+        assert_eq!(p.normalise(), Err(Error::WeightCollapse));
+        assert!(p.weights.iter().all(|w| (*w - 1.0 / 3.0).abs() < 1e-7));
+    }
+
+    #[test]
+    fn mean_and_covariance() {
+        let mut p = ParticleSet::<4, 2>::new();
+        p.states = [[1.0, 0.0], [-1.0, 0.0], [0.0, 2.0], [0.0, -2.0]];
+        let m = p.mean();
+        let c = p.covariance(&m);
+        assert_eq!(m, [0.0, 0.0]);
+        assert!((c[0][0] - 0.5).abs() < 1e-6 && (c[1][1] - 2.0).abs() < 1e-6);
+        assert_eq!(c[0][1], 0.0);
+    }
+
+    #[test]
+    fn apply_counts_in_place() {
+        let mut p = ParticleSet::<5, 1>::new();
+        p.states = [[0.0], [1.0], [2.0], [3.0], [4.0]];
+        p.apply_counts(&[0, 3, 0, 2, 0]);
+        let mut s: [f32; 5] = core::array::from_fn(|i| p.states[i][0]);
+        s.sort_by(f32::total_cmp);
+        assert_eq!(s, [1.0, 1.0, 1.0, 3.0, 3.0]);
+    }
+}

@@ -1,0 +1,8 @@
+//! foxhunt-sim: the host side of foxhunt. Simulation of the canonical scenarios, seeded
+//! parallel Monte Carlo benchmarks of every method against the CRLB, and reports.
+#![deny(missing_docs)]
+
+pub mod methods;
+pub mod montecarlo;
+pub mod report;
+pub mod scenario;

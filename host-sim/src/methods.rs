@@ -1,0 +1,181 @@
+//! Every bearing-only method the bench compares, run on one simulated drive.
+
+use crate::scenario::Scenario;
+use foxhunt_core::fix::{init::initial_particles, intersection::MIN_CROSSING, ml, ple};
+use foxhunt_core::{
+    Bearing, BearingEkf, Error, Filter, Gaussian, Gpf, Huber, ParticleSet, Resampling, Roughening,
+    Sir, SirConfig, StaticEmitter,
+};
+use rand_xorshift::XorShiftRng;
+
+/// A method of the bench.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Method {
+    /// The seeds' plain SIR: jitter of the scenario's process variance every step, systematic
+    /// resampling every step, no roughening.
+    SirSeed,
+    /// Well-tuned SIR: static model, systematic resampling at ESS < N/2, shrinkage roughening.
+    Sir,
+    /// Gaussian particle filter.
+    Gpf,
+    /// Extended Kalman filter.
+    Ekf,
+    /// Pseudo-linear estimator.
+    Ple,
+    /// Bias-compensated PLE.
+    BcPle,
+    /// Weighted instrumental variable.
+    Wiv,
+    /// Gaussian maximum likelihood.
+    Ml,
+    /// Robust (Huber IRLS) maximum likelihood.
+    MlHuber,
+}
+
+impl Method {
+    /// All methods, in table order.
+    pub const ALL: [Method; 9] = [
+        Method::SirSeed,
+        Method::Sir,
+        Method::Gpf,
+        Method::Ekf,
+        Method::Ple,
+        Method::BcPle,
+        Method::Wiv,
+        Method::Ml,
+        Method::MlHuber,
+    ];
+
+    /// The name printed in tables and JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::SirSeed => "sir-seed",
+            Method::Sir => "sir",
+            Method::Gpf => "gpf",
+            Method::Ekf => "ekf",
+            Method::Ple => "ple",
+            Method::BcPle => "bc-ple",
+            Method::Wiv => "wiv",
+            Method::Ml => "ml",
+            Method::MlHuber => "ml-huber",
+        }
+    }
+
+    /// Whether the method uses particles (and so reports N).
+    pub fn uses_particles(self) -> bool {
+        matches!(self, Method::SirSeed | Method::Sir | Method::Gpf)
+    }
+
+    /// Estimate the emitter from one drive's bearings.
+    pub fn run(
+        self,
+        scenario: &Scenario,
+        bearings: &[Bearing],
+        rng: &mut XorShiftRng,
+    ) -> Result<[f32; 2], Error> {
+        match self {
+            Method::Ple => ple::ple(bearings).map(|f| f.position),
+            Method::BcPle => ple::bias_compensated_ple(bearings).map(|f| f.position),
+            Method::Wiv => ple::wiv(bearings, 3).map(|f| f.position),
+            Method::Ml => ml::ml(bearings, None, &Gaussian, Default::default()).map(|f| f.position),
+            Method::MlHuber => robust_ml(bearings),
+            _ => with_particles(self, scenario, bearings, rng),
+        }
+    }
+}
+
+/// Robust ML: Huber IRLS started from the bias-compensated PLE. The start is dragged by wild
+/// bearings, but Huber's bounded influence pulls the fix back within a few iterations.
+fn robust_ml(bearings: &[Bearing]) -> Result<[f32; 2], Error> {
+    ml::ml(bearings, None, &Huber::default(), Default::default()).map(|f| f.position)
+}
+
+/// Particle counts the bench can run (the core sizes particle arrays at compile time).
+pub const PARTICLE_COUNTS: [usize; 8] = [50, 80, 100, 200, 500, 1000, 2000, 10000];
+
+fn with_particles(
+    method: Method,
+    s: &Scenario,
+    bearings: &[Bearing],
+    rng: &mut XorShiftRng,
+) -> Result<[f32; 2], Error> {
+    match s.particles {
+        50 => sequential::<50>(method, s, bearings, rng),
+        80 => sequential::<80>(method, s, bearings, rng),
+        100 => sequential::<100>(method, s, bearings, rng),
+        200 => sequential::<200>(method, s, bearings, rng),
+        500 => sequential::<500>(method, s, bearings, rng),
+        1000 => sequential::<1000>(method, s, bearings, rng),
+        2000 => sequential::<2000>(method, s, bearings, rng),
+        10000 => sequential::<10000>(method, s, bearings, rng),
+        _ => Err(Error::OutOfRange),
+    }
+}
+
+fn sequential<const N: usize>(
+    method: Method,
+    s: &Scenario,
+    bearings: &[Bearing],
+    rng: &mut XorShiftRng,
+) -> Result<[f32; 2], Error> {
+    let mut cloud = Box::new(ParticleSet::<N, 2>::new());
+    initial_particles(bearings, MIN_CROSSING, &mut cloud, rng)?;
+    match method {
+        Method::SirSeed => {
+            let config = SirConfig {
+                resampling: Resampling::Systematic,
+                ess_threshold: 1.0 + 1.0 / N as f32,
+                roughening: Roughening::None,
+            };
+            let model = StaticEmitter {
+                process_var: s.process_var,
+            };
+            drive(
+                &mut *Box::new(Sir::<_, _, N, 2>::new(model, Gaussian, config)),
+                &cloud.states,
+                bearings,
+                rng,
+            )
+        }
+        Method::Sir => {
+            let model = StaticEmitter { process_var: 0.0 };
+            let f = Sir::<_, _, N, 2>::new(model, Gaussian, SirConfig::default());
+            drive(&mut *Box::new(f), &cloud.states, bearings, rng)
+        }
+        Method::Gpf => {
+            let model = StaticEmitter { process_var: 0.0 };
+            drive(
+                &mut *Box::new(Gpf::<_, _, N, 2>::new(model, Gaussian)),
+                &cloud.states,
+                bearings,
+                rng,
+            )
+        }
+        _ => drive(
+            &mut *Box::new(BearingEkf::new(0.0)),
+            &cloud.states,
+            bearings,
+            rng,
+        ),
+    }
+}
+
+/// Initialise a filter from the cloud and step it through every bearing; rejected bearings are
+/// skipped (and would be counted by a caller that reports them).
+pub fn drive<F: Filter<2, Measurement = Bearing>>(
+    filter: &mut F,
+    cloud: &[[f32; 2]],
+    bearings: &[Bearing],
+    rng: &mut XorShiftRng,
+) -> Result<[f32; 2], Error> {
+    filter.initialise(cloud, rng)?;
+    for b in bearings {
+        let _ = filter.step(b, rng);
+    }
+    let m = filter.estimate().mean;
+    if m.iter().all(|v| v.is_finite()) {
+        Ok(m)
+    } else {
+        Err(Error::NonFinite)
+    }
+}

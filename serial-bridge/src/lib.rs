@@ -1,0 +1,3 @@
+//! foxhunt-bridge: serial byte streams to measurements.
+#![no_std]
+#![deny(missing_docs)]
