@@ -31,6 +31,8 @@ pub enum Error {
     WeightCollapse,
     /// The filter was stepped before it was initialised.
     NotInitialised,
+    /// The DF unit rated the bearing at or below the quality gate.
+    LowQuality,
 }
 
 impl fmt::Display for Error {
@@ -47,6 +49,7 @@ impl fmt::Display for Error {
             Error::NotConverged => "the solver did not converge",
             Error::WeightCollapse => "every particle weight vanished; re-initialised",
             Error::NotInitialised => "the filter was not initialised",
+            Error::LowQuality => "the bearing's DF quality is below the gate",
         };
         f.write_str(text)
     }

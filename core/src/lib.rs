@@ -34,3 +34,4 @@ pub use filter::gpf::Gpf;
 pub use filter::sir::{Sir, SirConfig};
 pub use filter::{Estimate, Filter, StepStatus};
 pub use roughen::Roughening;
+pub mod preprocess;

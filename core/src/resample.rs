@@ -28,6 +28,9 @@ impl Resampling {
         counts: &mut [u32; N],
     ) {
         *counts = [0; N];
+        if N == 0 {
+            return;
+        }
         let n = N as f32;
         match self {
             Resampling::Systematic => {
@@ -50,7 +53,8 @@ impl Resampling {
                 let mut rsum = 0.0f32;
                 for ((c, w), r) in counts.iter_mut().zip(weights).zip(remainders.iter_mut()) {
                     let nw = (n * w).clamp(0.0, n);
-                    let k = libm::floorf(nw);
+                    // Never more copies than slots left, even for unnormalised weights.
+                    let k = libm::floorf(nw).min((N - assigned) as f32);
                     *c = k as u32;
                     assigned += k as usize;
                     *r = nw - k;

@@ -3,8 +3,8 @@
 use crate::scenario::Scenario;
 use foxhunt_core::fix::{init::initial_particles, intersection::MIN_CROSSING, ml, ple};
 use foxhunt_core::{
-    Bearing, BearingEkf, Error, Filter, Gaussian, Gpf, Huber, ParticleSet, Resampling, Roughening,
-    Sir, SirConfig, StaticEmitter,
+    Bearing, BearingEkf, Error, Filter, Gaussian, GaussianUniform, Gpf, Huber, ParticleSet,
+    Resampling, Roughening, Sir, SirConfig, StaticEmitter,
 };
 use rand_xorshift::XorShiftRng;
 
@@ -16,6 +16,9 @@ pub enum Method {
     SirSeed,
     /// Well-tuned SIR: static model, systematic resampling at ESS < N/2, shrinkage roughening.
     Sir,
+    /// The tuned SIR with a Gaussian + uniform likelihood (5 % outlier share): survives wild
+    /// bearings.
+    SirRobust,
     /// Gaussian particle filter.
     Gpf,
     /// Extended Kalman filter.
@@ -34,9 +37,10 @@ pub enum Method {
 
 impl Method {
     /// All methods, in table order.
-    pub const ALL: [Method; 9] = [
+    pub const ALL: [Method; 10] = [
         Method::SirSeed,
         Method::Sir,
+        Method::SirRobust,
         Method::Gpf,
         Method::Ekf,
         Method::Ple,
@@ -51,6 +55,7 @@ impl Method {
         match self {
             Method::SirSeed => "sir-seed",
             Method::Sir => "sir",
+            Method::SirRobust => "sir-robust",
             Method::Gpf => "gpf",
             Method::Ekf => "ekf",
             Method::Ple => "ple",
@@ -63,7 +68,10 @@ impl Method {
 
     /// Whether the method uses particles (and so reports N).
     pub fn uses_particles(self) -> bool {
-        matches!(self, Method::SirSeed | Method::Sir | Method::Gpf)
+        matches!(
+            self,
+            Method::SirSeed | Method::Sir | Method::SirRobust | Method::Gpf
+        )
     }
 
     /// Estimate the emitter from one drive's bearings.
@@ -141,6 +149,16 @@ fn sequential<const N: usize>(
             let model = StaticEmitter { process_var: 0.0 };
             let f = Sir::<_, _, N, 2>::new(model, Gaussian, SirConfig::default());
             drive(&mut *Box::new(f), &cloud.states, bearings, rng)
+        }
+        Method::SirRobust => {
+            let model = StaticEmitter { process_var: 0.0 };
+            let lik = GaussianUniform { eps: 0.05 };
+            drive(
+                &mut *Box::new(Sir::<_, _, N, 2>::new(model, lik, SirConfig::default())),
+                &cloud.states,
+                bearings,
+                rng,
+            )
         }
         Method::Gpf => {
             let model = StaticEmitter { process_var: 0.0 };

@@ -91,6 +91,9 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize> Gpf<M, L, N, D>
         };
         let mean = self.samples.mean();
         let covariance = self.samples.covariance(&mean);
+        if !super::all_finite(&mean, &covariance) {
+            return Err(Error::NonFinite);
+        }
         self.last = Estimate {
             mean,
             covariance,

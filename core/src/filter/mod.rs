@@ -88,3 +88,10 @@ pub(crate) fn scaled<const D: usize>(cov: &[[f32; D]; D], k: f32) -> [[f32; D]; 
     }
     c
 }
+
+/// Whether a mean and covariance hold only finite numbers.
+pub(crate) fn all_finite<const D: usize>(mean: &[f32; D], cov: &[[f32; D]; D]) -> bool {
+    mean.iter()
+        .chain(cov.iter().flatten())
+        .all(|v| v.is_finite())
+}

@@ -34,6 +34,22 @@ impl Default for SirConfig {
     }
 }
 
+impl SirConfig {
+    /// `Ok` when the threshold and the roughening parameter are usable numbers.
+    pub fn check(&self) -> Result<(), Error> {
+        let p = match self.roughening {
+            Roughening::None => 0.0,
+            Roughening::Gordon { k } => k,
+            Roughening::Shrinkage { scale } => scale,
+        };
+        if self.ess_threshold.is_finite() && p.is_finite() && p >= 0.0 {
+            Ok(())
+        } else {
+            Err(Error::OutOfRange)
+        }
+    }
+}
+
 /// The bootstrap particle filter over model `M`, likelihood `L`, `N` particles of dimension `D`.
 #[derive(Debug, Clone)]
 pub struct Sir<M, L, const N: usize, const D: usize> {
@@ -114,6 +130,9 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize> Sir<M, L, N, D>
         };
         let mean = self.particles.mean();
         let covariance = self.particles.covariance(&mean);
+        if !super::all_finite(&mean, &covariance) {
+            return self.restart(rng);
+        }
         if ess < self.config.ess_threshold * N as f32 {
             self.particles.resample(self.config.resampling, rng);
             self.config
@@ -165,6 +184,7 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize> Filter<D> for S
         if self.prior.is_none() {
             return Err(Error::NotInitialised);
         }
+        self.config.check()?;
         self.model.check(z)?;
         for x in self.particles.states.iter_mut() {
             self.model.propagate(x, rng);

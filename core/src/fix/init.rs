@@ -56,6 +56,9 @@ pub fn initial_particles<R: Rng + ?Sized, const N: usize>(
     }
     let enough = (N / 10).max(3);
     if found >= enough {
+        found = drop_wild_crossings(&mut set.states, found);
+    }
+    if found >= enough {
         for i in found..N {
             set.states[i] = set.states[i % found];
         }
@@ -70,6 +73,45 @@ pub fn initial_particles<R: Rng + ?Sized, const N: usize>(
     ];
     set.draw_gaussian(&fix.position, &cov, rng)?;
     Ok(InitialCloud::AroundPle)
+}
+
+/// Wild bearings make wild crossings. Keep the crossings within 5 robust standard deviations
+/// (1.4826 MAD) of the coordinate-wise median, compacting them to the front; returns how many
+/// remain. O(N log N) with an in-place sort of a stack copy.
+fn drop_wild_crossings<const N: usize>(states: &mut [[f32; 2]; N], found: usize) -> usize {
+    let mut centre = [0.0f32; 2];
+    let mut scale = [0.0f32; 2];
+    for axis in 0..2 {
+        let mut v = [0.0f32; N];
+        for (vi, s) in v.iter_mut().zip(states.iter()).take(found) {
+            *vi = s[axis];
+        }
+        let m = median(&mut v[..found]);
+        for vi in v.iter_mut().take(found) {
+            *vi = libm::fabsf(*vi - m);
+        }
+        centre[axis] = m;
+        scale[axis] = 1.4826 * median(&mut v[..found]);
+    }
+    let mut kept = 0;
+    for i in 0..found {
+        let p = states[i];
+        let inside = (0..2).all(|a| libm::fabsf(p[a] - centre[a]) <= 5.0 * scale[a] + 1e-3);
+        if inside {
+            states[kept] = p;
+            kept += 1;
+        }
+    }
+    kept
+}
+
+fn median(v: &mut [f32]) -> f32 {
+    v.sort_unstable_by(f32::total_cmp);
+    match v.len() {
+        0 => 0.0,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
 }
 
 fn gcd(mut a: usize, mut b: usize) -> usize {

@@ -88,3 +88,90 @@ pub(crate) fn geometry(bearings: &[Bearing]) -> Result<Geometry, Error> {
 pub(crate) fn usable(bearings: &[Bearing]) -> impl Iterator<Item = &Bearing> {
     bearings.iter().filter(|b| b.check().is_ok())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::crlb::crlb;
+    use super::ml::{MlOptions, ml};
+    use super::ple::{ple, wiv};
+    use crate::error::Error;
+    use crate::likelihood::{Gaussian, Huber};
+    use crate::model::bearing::{Bearing, predicted};
+
+    fn exact(vehicles: &[[f32; 2]], e: [f32; 2]) -> [Bearing; 8] {
+        core::array::from_fn(|i| {
+            let v = vehicles[i % vehicles.len()];
+            Bearing {
+                vehicle: v,
+                theta: predicted(&e, &v),
+                sigma: 0.02,
+            }
+        })
+    }
+
+    const ROUTE: [[f32; 2]; 8] = [
+        [0.0, 0.0],
+        [50.0, 0.0],
+        [100.0, 0.0],
+        [150.0, 0.0],
+        [200.0, 0.0],
+        [200.0, 50.0],
+        [200.0, 100.0],
+        [200.0, 150.0],
+    ];
+
+    #[test]
+    fn noise_free_fixes_land_on_the_emitter() {
+        let e = [1200.0, 800.0];
+        let bs = exact(&ROUTE, e);
+        for (name, f) in [
+            ("ple", ple(&bs)),
+            ("wiv", wiv(&bs, 3)),
+            ("ml", ml(&bs, None, &Gaussian, MlOptions::default())),
+            (
+                "huber",
+                ml(&bs, None, &Huber::default(), MlOptions::default()),
+            ),
+        ] {
+            let p = f.unwrap().position;
+            let err = libm::hypotf(p[0] - e[0], p[1] - e[1]);
+            // f32 round-off over a 1.4 km range: centimetres. (The bias-compensated PLE is left
+            // out: on noise-free bearings it still subtracts the bias that noise would cause.)
+            assert!(err < 2.0, "{name}: {p:?}");
+        }
+    }
+
+    #[test]
+    fn degenerate_geometries_are_named() {
+        let e = [1200.0, 800.0];
+        let one = &exact(&ROUTE, e)[..1];
+        assert_eq!(
+            ml(one, None, &Gaussian, MlOptions::default()),
+            Err(Error::TooFewMeasurements)
+        );
+        let parked = exact(&[[5.0, 5.0]], e);
+        assert_eq!(ple(&parked), Err(Error::StationaryVehicle));
+        assert_eq!(
+            ml(&parked, None, &Gaussian, MlOptions::default()),
+            Err(Error::StationaryVehicle)
+        );
+        // Driving straight at the emitter: every bearing is the same line.
+        let toward: [[f32; 2]; 4] = [[0.0, 0.0], [120.0, 80.0], [240.0, 160.0], [360.0, 240.0]];
+        let parallel = exact(&toward, e);
+        assert_eq!(ple(&parallel), Err(Error::ParallelBearings));
+        assert_eq!(wiv(&parallel, 3), Err(Error::ParallelBearings));
+        let no_range = crlb(&e, &parallel);
+        assert_eq!(no_range, Err(Error::DegenerateGeometry));
+    }
+
+    #[test]
+    fn bad_bearings_are_skipped_not_fatal() {
+        let e = [1200.0, 800.0];
+        let mut bs = exact(&ROUTE, e);
+        bs[2].theta = f32::NAN;
+        bs[5].sigma = -1.0;
+        let f = ml(&bs, None, &Gaussian, MlOptions::default()).unwrap();
+        assert_eq!((f.used, f.skipped), (6, 2));
+        assert!(libm::hypotf(f.position[0] - e[0], f.position[1] - e[1]) < 1.0);
+    }
+}

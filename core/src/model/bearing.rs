@@ -56,20 +56,15 @@ impl Bearing {
 }
 
 /// Wrap an angle to (-pi, pi]. Non-finite input stays non-finite (callers check first).
+///
+/// The IEEE remainder is exact for any finite input, so even 1e30 wraps into range.
 #[inline]
 pub fn wrap(a: f32) -> f32 {
     if (-PI..=PI).contains(&a) && a != -PI {
         return a;
     }
-    let w = a - TAU * libm::floorf((a + PI) / TAU);
-    // w is in [-pi, pi) up to rounding: move the closed end to +pi.
-    if w <= -PI {
-        w + TAU
-    } else if w > PI {
-        w - TAU
-    } else {
-        w
-    }
+    let w = libm::remainderf(a, TAU);
+    if w <= -PI { w + TAU } else { w }
 }
 
 /// The model bearing of an emitter at `p` from a vehicle at `v`: atan2, never the quadrant-losing
@@ -104,6 +99,9 @@ impl Model<2> for StaticEmitter {
     type Measurement = Bearing;
 
     fn check(&self, z: &Bearing) -> Result<(), Error> {
+        if !(self.process_var >= 0.0 && self.process_var.is_finite()) {
+            return Err(Error::OutOfRange);
+        }
         z.check()
     }
 
