@@ -140,8 +140,10 @@ proptest! {
         check_fix(ml::ml(&bs, None, &Cauchy, Default::default()));
         if let Ok(c) = crlb::crlb(&start, &bs) { prop_assert!(c.rmse.is_finite() && c.rmse > 0.0); }
         let _ = crlb::information(&start, &bs);
-        if bs.len() >= 2 {
-            if let Ok(p) = intersection::intersect(&bs[0], &bs[1], angle) { prop_assert!(finite(&p)); }
+        if let [a, b, ..] = bs.as_slice()
+            && let Ok(p) = intersection::intersect(a, b, angle)
+        {
+            prop_assert!(finite(&p));
         }
         let mut rng = XorShiftRng::seed_from_u64(1);
         let mut set = ParticleSet::<16, 2>::new();
