@@ -16,7 +16,7 @@ fn run(name: &str, methods: &[Method]) -> Vec<Row> {
     bench(&s, methods, false)
 }
 
-fn row<'a>(rows: &'a [Row], m: Method) -> &'a Row {
+fn row(rows: &[Row], m: Method) -> &Row {
     rows.iter().find(|r| r.method == m.name()).expect("row")
 }
 
