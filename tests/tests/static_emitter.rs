@@ -101,3 +101,17 @@ fn the_core_holds_no_allocator() {
     }
     assert!(files > 10);
 }
+
+#[test]
+fn same_seed_same_result_bit_for_bit() {
+    let s = Scenario::named("aoa-afsa").expect("scenario");
+    for m in [Method::Sir, Method::SirRobust, Method::Gpf, Method::Ekf, Method::Ml] {
+        let once = |run| {
+            let mut rng = s.rng(run);
+            let bearings = s.simulate(&mut rng);
+            m.run(&s, &bearings, &mut rng).map(|p| p.map(f32::to_bits))
+        };
+        assert_eq!(once(3), once(3), "{}", m.name());
+        assert_ne!(once(3), once(4), "{}: runs differ", m.name());
+    }
+}
