@@ -35,3 +35,10 @@ pub use filter::sir::{Sir, SirConfig};
 pub use filter::{Estimate, Filter, StepStatus};
 pub use roughen::Roughening;
 pub mod preprocess;
+pub mod swarm;
+
+pub use swarm::afsa::Afsa;
+pub use swarm::firefly::{Firefly, ImprovedFirefly};
+pub use swarm::gsa::Gsa;
+pub use swarm::pso::Pso;
+pub use swarm::{NoSwarm, Swarm};

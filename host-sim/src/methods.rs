@@ -3,8 +3,8 @@
 use crate::scenario::Scenario;
 use foxhunt_core::fix::{init::initial_particles, intersection::MIN_CROSSING, ml, ple};
 use foxhunt_core::{
-    Bearing, BearingEkf, Error, Filter, Gaussian, GaussianUniform, Gpf, Huber, ParticleSet,
-    Resampling, Roughening, Sir, SirConfig, StaticEmitter,
+    Afsa, Bearing, BearingEkf, Error, Filter, Firefly, Gaussian, GaussianUniform, Gpf, Huber,
+    ImprovedFirefly, ParticleSet, Resampling, Roughening, Sir, SirConfig, StaticEmitter,
 };
 use rand_xorshift::XorShiftRng;
 
@@ -19,6 +19,12 @@ pub enum Method {
     /// The tuned SIR with a Gaussian + uniform likelihood (5 % outlier share): survives wild
     /// bearings.
     SirRobust,
+    /// AFSA-PF (seed 002): the seeds' SIR with an artificial-fish-swarm move every step.
+    AfsaPf,
+    /// Standard firefly PF (seed 001's comparison): the seeds' SIR with Yang's O(N^2) move.
+    FaPf,
+    /// Improved firefly PF (seed 001): move toward the best only, resample when ESS < N/2.
+    FaPfImproved,
     /// Gaussian particle filter.
     Gpf,
     /// Extended Kalman filter.
@@ -37,10 +43,13 @@ pub enum Method {
 
 impl Method {
     /// All methods, in table order.
-    pub const ALL: [Method; 10] = [
+    pub const ALL: [Method; 13] = [
         Method::SirSeed,
         Method::Sir,
         Method::SirRobust,
+        Method::AfsaPf,
+        Method::FaPf,
+        Method::FaPfImproved,
         Method::Gpf,
         Method::Ekf,
         Method::Ple,
@@ -56,6 +65,9 @@ impl Method {
             Method::SirSeed => "sir-seed",
             Method::Sir => "sir",
             Method::SirRobust => "sir-robust",
+            Method::AfsaPf => "afsa-pf",
+            Method::FaPf => "fa-pf",
+            Method::FaPfImproved => "fa-pf-imp",
             Method::Gpf => "gpf",
             Method::Ekf => "ekf",
             Method::Ple => "ple",
@@ -70,7 +82,13 @@ impl Method {
     pub fn uses_particles(self) -> bool {
         matches!(
             self,
-            Method::SirSeed | Method::Sir | Method::SirRobust | Method::Gpf
+            Method::SirSeed
+                | Method::Sir
+                | Method::SirRobust
+                | Method::AfsaPf
+                | Method::FaPf
+                | Method::FaPfImproved
+                | Method::Gpf
         )
     }
 
@@ -128,19 +146,57 @@ fn sequential<const N: usize>(
 ) -> Result<[f32; 2], Error> {
     let mut cloud = Box::new(ParticleSet::<N, 2>::new());
     initial_particles(bearings, MIN_CROSSING, &mut cloud, rng)?;
+    let seed_config = SirConfig {
+        resampling: Resampling::Systematic,
+        ess_threshold: 1.0 + 1.0 / N as f32,
+        roughening: Roughening::None,
+    };
+    let seed_model = StaticEmitter {
+        process_var: s.process_var,
+    };
+    let cloud = &cloud.states;
     match method {
-        Method::SirSeed => {
+        Method::SirSeed => drive(
+            &mut *Box::new(Sir::<_, _, N, 2>::new(seed_model, Gaussian, seed_config)),
+            cloud,
+            bearings,
+            rng,
+        ),
+        Method::AfsaPf => drive(
+            &mut *Box::new(Sir::<_, _, N, 2, _>::with_swarm(
+                seed_model,
+                Gaussian,
+                seed_config,
+                Afsa::default(),
+            )),
+            cloud,
+            bearings,
+            rng,
+        ),
+        Method::FaPf => drive(
+            &mut *Box::new(Sir::<_, _, N, 2, _>::with_swarm(
+                seed_model,
+                Gaussian,
+                seed_config,
+                Firefly::default(),
+            )),
+            cloud,
+            bearings,
+            rng,
+        ),
+        Method::FaPfImproved => {
             let config = SirConfig {
-                resampling: Resampling::Systematic,
-                ess_threshold: 1.0 + 1.0 / N as f32,
-                roughening: Roughening::None,
-            };
-            let model = StaticEmitter {
-                process_var: s.process_var,
+                ess_threshold: 0.5,
+                ..seed_config
             };
             drive(
-                &mut *Box::new(Sir::<_, _, N, 2>::new(model, Gaussian, config)),
-                &cloud.states,
+                &mut *Box::new(Sir::<_, _, N, 2, _>::with_swarm(
+                    seed_model,
+                    Gaussian,
+                    config,
+                    ImprovedFirefly::default(),
+                )),
+                cloud,
                 bearings,
                 rng,
             )
@@ -148,14 +204,14 @@ fn sequential<const N: usize>(
         Method::Sir => {
             let model = StaticEmitter { process_var: 0.0 };
             let f = Sir::<_, _, N, 2>::new(model, Gaussian, SirConfig::default());
-            drive(&mut *Box::new(f), &cloud.states, bearings, rng)
+            drive(&mut *Box::new(f), cloud, bearings, rng)
         }
         Method::SirRobust => {
             let model = StaticEmitter { process_var: 0.0 };
             let lik = GaussianUniform { eps: 0.05 };
             drive(
                 &mut *Box::new(Sir::<_, _, N, 2>::new(model, lik, SirConfig::default())),
-                &cloud.states,
+                cloud,
                 bearings,
                 rng,
             )
@@ -164,17 +220,12 @@ fn sequential<const N: usize>(
             let model = StaticEmitter { process_var: 0.0 };
             drive(
                 &mut *Box::new(Gpf::<_, _, N, 2>::new(model, Gaussian)),
-                &cloud.states,
+                cloud,
                 bearings,
                 rng,
             )
         }
-        _ => drive(
-            &mut *Box::new(BearingEkf::new(0.0)),
-            &cloud.states,
-            bearings,
-            rng,
-        ),
+        _ => drive(&mut *Box::new(BearingEkf::new(0.0)), cloud, bearings, rng),
     }
 }
 

@@ -7,26 +7,39 @@ use crate::error::Error;
 use crate::likelihood::Likelihood;
 use crate::model::Model;
 use crate::particles::ParticleSet;
+use crate::swarm::{NoSwarm, Swarm};
 use rand_core::Rng;
 
 /// The Gaussian particle filter over model `M`, likelihood `L`, `N` samples of dimension `D`.
 #[derive(Debug, Clone)]
-pub struct Gpf<M, L, const N: usize, const D: usize> {
+pub struct Gpf<M, L, const N: usize, const D: usize, S = NoSwarm> {
     /// State-space model.
     pub model: M,
     /// Measurement likelihood.
     pub likelihood: L,
+    /// Swarm move run between prediction and weighting ([`NoSwarm`] for the plain filter).
+    pub swarm: S,
     samples: ParticleSet<N, D>,
+    evaluations: u64,
     prior: Option<([f32; D], [[f32; D]; D])>,
     last: Estimate<D>,
 }
 
 impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize> Gpf<M, L, N, D> {
-    /// A filter awaiting [`Filter::initialise`].
+    /// A plain GPF awaiting [`Filter::initialise`].
     pub fn new(model: M, likelihood: L) -> Self {
+        Self::with_swarm(model, likelihood, NoSwarm)
+    }
+}
+
+impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Gpf<M, L, N, D, S> {
+    /// A swarm-optimised GPF (PSO-GPF, GSA-GPF) awaiting [`Filter::initialise`].
+    pub fn with_swarm(model: M, likelihood: L, swarm: S) -> Self {
         Self {
             model,
             likelihood,
+            swarm,
+            evaluations: 0,
             samples: ParticleSet::new(),
             prior: None,
             last: Estimate {
@@ -36,6 +49,11 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize> Gpf<M, L, N, D>
                 status: StepStatus::Updated,
             },
         }
+    }
+
+    /// Likelihood evaluations so far (weighting and swarm moves).
+    pub fn evaluations(&self) -> u64 {
+        self.evaluations
     }
 
     /// The weighted samples of the last step.
@@ -49,13 +67,17 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize> Gpf<M, L, N, D>
     }
 
     /// Draw the samples from the current Gaussian and propagate them.
-    pub fn predict<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Result<(), Error> {
+    pub fn predict<R: Rng + ?Sized>(
+        &mut self,
+        z: &M::Measurement,
+        rng: &mut R,
+    ) -> Result<(), Error> {
         let Estimate {
             mean, covariance, ..
         } = self.last;
         self.samples.draw_gaussian(&mean, &covariance, rng)?;
         for x in self.samples.states.iter_mut() {
-            self.model.propagate(x, rng);
+            self.model.propagate(x, z, rng);
         }
         Ok(())
     }
@@ -74,6 +96,7 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize> Gpf<M, L, N, D>
         {
             *lw = self.model.ln_likelihood(x, z, &self.likelihood);
         }
+        self.evaluations += N as u64;
         let ess = match self.samples.normalise() {
             Ok(ess) => ess,
             Err(Error::WeightCollapse) => {
@@ -104,7 +127,9 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize> Gpf<M, L, N, D>
     }
 }
 
-impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize> Filter<D> for Gpf<M, L, N, D> {
+impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Filter<D>
+    for Gpf<M, L, N, D, S>
+{
     type Measurement = M::Measurement;
 
     fn initialise<R: Rng + ?Sized>(
@@ -136,7 +161,14 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize> Filter<D> for G
             return Err(Error::NotInitialised);
         }
         self.model.check(z)?;
-        self.predict(rng)?;
+        self.predict(z, rng)?;
+        let (model, likelihood) = (&self.model, &self.likelihood);
+        let spent = self.swarm.optimise(
+            &mut self.samples,
+            |x| model.ln_likelihood(x, z, likelihood),
+            rng,
+        );
+        self.evaluations += spent as u64;
         self.update(z, rng)
     }
 

@@ -9,6 +9,7 @@ use crate::model::Model;
 use crate::particles::ParticleSet;
 use crate::resample::Resampling;
 use crate::roughen::Roughening;
+use crate::swarm::{NoSwarm, Swarm};
 use rand_core::Rng;
 
 /// SIR settings.
@@ -52,14 +53,17 @@ impl SirConfig {
 
 /// The bootstrap particle filter over model `M`, likelihood `L`, `N` particles of dimension `D`.
 #[derive(Debug, Clone)]
-pub struct Sir<M, L, const N: usize, const D: usize> {
+pub struct Sir<M, L, const N: usize, const D: usize, S = NoSwarm> {
     /// State-space model.
     pub model: M,
     /// Measurement likelihood.
     pub likelihood: L,
     /// Settings.
     pub config: SirConfig,
+    /// Swarm move run between prediction and weighting ([`NoSwarm`] for the plain filter).
+    pub swarm: S,
     particles: ParticleSet<N, D>,
+    evaluations: u64,
     prior: Option<([f32; D], [[f32; D]; D])>,
     last: Estimate<D>,
 }
@@ -68,12 +72,21 @@ pub struct Sir<M, L, const N: usize, const D: usize> {
 const RESTART_INFLATION: f32 = 4.0;
 
 impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize> Sir<M, L, N, D> {
-    /// A filter awaiting [`Filter::initialise`].
+    /// A plain SIR filter awaiting [`Filter::initialise`].
     pub fn new(model: M, likelihood: L, config: SirConfig) -> Self {
+        Self::with_swarm(model, likelihood, config, NoSwarm)
+    }
+}
+
+impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Sir<M, L, N, D, S> {
+    /// A swarm-optimised SIR filter (AFSA-PF, FA-PF...) awaiting [`Filter::initialise`].
+    pub fn with_swarm(model: M, likelihood: L, config: SirConfig, swarm: S) -> Self {
         Self {
             model,
             likelihood,
             config,
+            swarm,
+            evaluations: 0,
             particles: ParticleSet::new(),
             prior: None,
             last: Estimate {
@@ -83,6 +96,12 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize> Sir<M, L, N, D>
                 status: StepStatus::Updated,
             },
         }
+    }
+
+    /// Likelihood evaluations so far (weighting and swarm moves): the cost currency of
+    /// equal-effort comparisons.
+    pub fn evaluations(&self) -> u64 {
+        self.evaluations
     }
 
     /// The particles, for plots and diagnostics.
@@ -123,6 +142,7 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize> Sir<M, L, N, D>
         {
             *lw += self.model.ln_likelihood(x, z, &self.likelihood);
         }
+        self.evaluations += N as u64;
         let ess = match self.particles.normalise() {
             Ok(ess) => ess,
             Err(Error::WeightCollapse) => return self.restart(rng),
@@ -149,7 +169,9 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize> Sir<M, L, N, D>
     }
 }
 
-impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize> Filter<D> for Sir<M, L, N, D> {
+impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Filter<D>
+    for Sir<M, L, N, D, S>
+{
     type Measurement = M::Measurement;
 
     fn initialise<R: Rng + ?Sized>(
@@ -187,8 +209,15 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize> Filter<D> for S
         self.config.check()?;
         self.model.check(z)?;
         for x in self.particles.states.iter_mut() {
-            self.model.propagate(x, rng);
+            self.model.propagate(x, z, rng);
         }
+        let (model, likelihood) = (&self.model, &self.likelihood);
+        let spent = self.swarm.optimise(
+            &mut self.particles,
+            |x| model.ln_likelihood(x, z, likelihood),
+            rng,
+        );
+        self.evaluations += spent as u64;
         self.update(z, rng)
     }
 

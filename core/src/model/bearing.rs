@@ -106,7 +106,7 @@ impl Model<2> for StaticEmitter {
     }
 
     #[inline]
-    fn propagate<R: Rng + ?Sized>(&self, x: &mut [f32; 2], rng: &mut R) {
+    fn propagate<R: Rng + ?Sized>(&self, x: &mut [f32; 2], _z: &Bearing, rng: &mut R) {
         if self.process_var > 0.0 {
             let s = libm::sqrtf(self.process_var);
             x[0] += s * random::normal(rng);

@@ -12,8 +12,9 @@ pub trait Model<const D: usize> {
     type Measurement;
     /// `Ok` when the measurement is usable (finite, in range).
     fn check(&self, z: &Self::Measurement) -> Result<(), Error>;
-    /// Move one state forward by one step, process noise included.
-    fn propagate<R: Rng + ?Sized>(&self, x: &mut [f32; D], rng: &mut R);
+    /// Move one state forward to the time of measurement `z`, process noise included (the
+    /// measurement carries its time: the UNGM's step index, say).
+    fn propagate<R: Rng + ?Sized>(&self, x: &mut [f32; D], z: &Self::Measurement, rng: &mut R);
     /// Log-likelihood of `z` given the state, under `lik`.
     fn ln_likelihood<L: Likelihood>(&self, x: &[f32; D], z: &Self::Measurement, lik: &L) -> f32;
 }

@@ -1,0 +1,164 @@
+//! Firefly algorithms (Yang; seed 001). Brightness is the likelihood at a firefly.
+//!
+//! Scale (chosen): the seeds give beta0 = 1, gamma = 1 and a random step alpha without units.
+//! Here distances and the random step are measured in units of the cloud's per-axis standard
+//! deviation at the start of the move, so the same constants work for an emitter kilometres
+//! away and for the UNGM's unitless state.
+
+use super::{Swarm, argmax, axis_scale, evaluate, sane};
+use crate::particles::ParticleSet;
+use crate::random;
+use rand_core::Rng;
+
+/// Standard firefly: every firefly moves toward every brighter one,
+/// x_i += beta0 exp(-gamma r_ij^2) (x_j - x_i) + alpha (U(0,1) - 1/2). O(N^2) per iteration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Firefly {
+    /// Attraction at zero distance.
+    pub beta0: f32,
+    /// Light absorption.
+    pub gamma: f32,
+    /// Random step (in cloud standard deviations).
+    pub alpha: f32,
+    /// Factor on alpha per iteration.
+    pub alpha_decay: f32,
+    /// Iterations (chosen: 10).
+    pub iterations: u32,
+}
+
+impl Default for Firefly {
+    fn default() -> Self {
+        Self {
+            beta0: 1.0,
+            gamma: 1.0,
+            alpha: 0.2,
+            alpha_decay: 0.97,
+            iterations: 10,
+        }
+    }
+}
+
+/// Improved firefly of seed 001 (its formulas (4)-(5) are lost; reconstruction of
+/// ALGORITHMS.md, chosen): every firefly moves toward the current best G only,
+/// beta_i = beta0 (I_best / (I_best + I_i)) exp(-gamma r_i^2) eps(t),
+/// eps(t) = eps_min + (1 - eps_min) exp(-t / t_c). O(N) per iteration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImprovedFirefly {
+    /// Attraction at zero distance.
+    pub beta0: f32,
+    /// Light absorption.
+    pub gamma: f32,
+    /// Random step (in cloud standard deviations).
+    pub alpha: f32,
+    /// Factor on alpha per iteration.
+    pub alpha_decay: f32,
+    /// Floor of the attraction schedule eps(t) (chosen: 0.1).
+    pub eps_min: f32,
+    /// Time constant of eps(t), iterations (chosen: 5).
+    pub t_c: f32,
+    /// Iterations (chosen: 10).
+    pub iterations: u32,
+}
+
+impl Default for ImprovedFirefly {
+    fn default() -> Self {
+        Self {
+            beta0: 1.0,
+            gamma: 1.0,
+            alpha: 0.2,
+            alpha_decay: 0.97,
+            eps_min: 0.1,
+            t_c: 5.0,
+            iterations: 10,
+        }
+    }
+}
+
+/// Squared distance in units of `scale`.
+fn scaled_r2<const D: usize>(a: &[f32; D], b: &[f32; D], scale: &[f32; D]) -> f32 {
+    (0..D)
+        .map(|k| {
+            let d = (a[k] - b[k]) / scale[k];
+            d * d
+        })
+        .sum()
+}
+
+impl<const D: usize> Swarm<D> for Firefly {
+    fn optimise<const N: usize, R: Rng + ?Sized, F: FnMut(&[f32; D]) -> f32>(
+        &mut self,
+        set: &mut ParticleSet<N, D>,
+        mut fitness: F,
+        rng: &mut R,
+    ) -> u32 {
+        let scale = axis_scale(set, 1e-6);
+        let mut light = evaluate(set, &mut fitness);
+        let mut evals = N as u32;
+        let mut alpha = self.alpha;
+        for _ in 0..self.iterations {
+            for i in 0..N {
+                let mut moved = false;
+                for j in 0..N {
+                    if light[j] > light[i] {
+                        let xj = set.states[j];
+                        let xi = &mut set.states[i];
+                        let beta =
+                            self.beta0 * libm::expf(-self.gamma * scaled_r2(xi, &xj, &scale));
+                        for k in 0..D {
+                            xi[k] += beta * (xj[k] - xi[k])
+                                + alpha * scale[k] * (random::uniform(rng) - 0.5);
+                        }
+                        moved = true;
+                    }
+                }
+                if moved {
+                    light[i] = sane(fitness(&set.states[i]));
+                    evals += 1;
+                }
+            }
+            alpha *= self.alpha_decay;
+        }
+        evals
+    }
+}
+
+impl<const D: usize> Swarm<D> for ImprovedFirefly {
+    fn optimise<const N: usize, R: Rng + ?Sized, F: FnMut(&[f32; D]) -> f32>(
+        &mut self,
+        set: &mut ParticleSet<N, D>,
+        mut fitness: F,
+        rng: &mut R,
+    ) -> u32 {
+        let scale = axis_scale(set, 1e-6);
+        let mut light = evaluate(set, &mut fitness);
+        let mut evals = N as u32;
+        let mut alpha = self.alpha;
+        for t in 1..=self.iterations {
+            let (b, l_best) = argmax(&light);
+            if !l_best.is_finite() {
+                break;
+            }
+            let g = set.states[b];
+            let eps = self.eps_min + (1.0 - self.eps_min) * libm::expf(-(t as f32) / self.t_c);
+            for i in 0..N {
+                if i == b {
+                    continue;
+                }
+                // Relative brightness I_i / I_best in [0, 1]: dimmer fireflies are pulled harder.
+                let rel = libm::expf(light[i] - l_best);
+                let xi = &mut set.states[i];
+                let beta = self.beta0 / (1.0 + rel)
+                    * libm::expf(-self.gamma * scaled_r2(xi, &g, &scale))
+                    * eps;
+                for k in 0..D {
+                    xi[k] +=
+                        beta * (g[k] - xi[k]) + alpha * scale[k] * (random::uniform(rng) - 0.5);
+                }
+                light[i] = sane(fitness(xi));
+                evals += 1;
+            }
+            alpha *= self.alpha_decay;
+        }
+        evals
+    }
+}
