@@ -105,7 +105,13 @@ fn the_core_holds_no_allocator() {
 #[test]
 fn same_seed_same_result_bit_for_bit() {
     let s = Scenario::named("aoa-afsa").expect("scenario");
-    for m in [Method::Sir, Method::SirRobust, Method::Gpf, Method::Ekf, Method::Ml] {
+    for m in [
+        Method::Sir,
+        Method::SirRobust,
+        Method::Gpf,
+        Method::Ekf,
+        Method::Ml,
+    ] {
         let once = |run| {
             let mut rng = s.rng(run);
             let bearings = s.simulate(&mut rng);

@@ -52,10 +52,8 @@ impl<const D: usize> Swarm<D> for Afsa {
         mut fitness: F,
         rng: &mut R,
     ) -> u32 {
-        if !(self.visual > 0.0 && self.step > 0.0)
-            || !self.visual.is_finite()
-            || N > u16::MAX as usize
-        {
+        let usable = self.visual > 0.0 && self.step > 0.0 && self.visual.is_finite();
+        if !usable || N > u16::MAX as usize {
             return 0;
         }
         let v = self.visual;
