@@ -23,6 +23,8 @@ pub mod model;
 pub use likelihood::{Cauchy, Gaussian, GaussianUniform, Huber, Likelihood, StudentT};
 pub use model::Model;
 pub use model::bearing::{Bearing, StaticEmitter};
+pub use model::rssi::{PathLoss, RssiMeasurement, RssiTracker};
+pub use model::ungm::{Ungm, UngmObservation};
 pub mod fix;
 
 pub use fix::Fix;

@@ -59,6 +59,36 @@ pub fn cholesky<const D: usize>(m: &[[f32; D]; D]) -> Option<[[f32; D]; D]> {
     l.iter().flatten().all(|v| v.is_finite()).then_some(l)
 }
 
+/// Inverse of a symmetric positive definite matrix through its Cholesky factor; `None` when
+/// the matrix is not positive definite (a zero or negative pivot) or the result is not finite.
+pub fn inverse_spd<const D: usize>(m: &[[f32; D]; D]) -> Option<[[f32; D]; D]> {
+    let l = cholesky(m)?;
+    let max_pivot = (0..D).map(|i| l[i][i]).fold(0.0f32, f32::max);
+    if (0..D).any(|i| !(l[i][i] > 1e-6 * max_pivot)) {
+        return None;
+    }
+    // Solve L L^T X = I column by column.
+    let mut inv = [[0.0f32; D]; D];
+    for c in 0..D {
+        let mut y = [0.0f32; D];
+        for i in 0..D {
+            let mut s = if i == c { 1.0 } else { 0.0 };
+            for k in 0..i {
+                s -= l[i][k] * y[k];
+            }
+            y[i] = s / l[i][i];
+        }
+        for i in (0..D).rev() {
+            let mut s = y[i];
+            for k in i + 1..D {
+                s -= l[k][i] * inv[k][c];
+            }
+            inv[i][c] = s / l[i][i];
+        }
+    }
+    inv.iter().flatten().all(|v| v.is_finite()).then_some(inv)
+}
+
 fn all_finite2(m: &[[f32; 2]; 2]) -> bool {
     m.iter().flatten().all(|v| v.is_finite())
 }
@@ -81,6 +111,19 @@ mod tests {
         let (l1, l2, a) = eigen2(&[[2.0, 1.0], [1.0, 2.0]]).unwrap();
         assert!((l1 - 3.0).abs() < 1e-6 && (l2 - 1.0).abs() < 1e-6);
         assert!((a - core::f32::consts::FRAC_PI_4).abs() < 1e-6);
+    }
+
+    #[test]
+    fn spd_inverse() {
+        let m = [[4.0, 2.0, 0.0], [2.0, 5.0, 1.0], [0.0, 1.0, 3.0]];
+        let inv = inverse_spd(&m).unwrap();
+        for i in 0..3 {
+            for j in 0..3 {
+                let s: f32 = (0..3).map(|k| m[i][k] * inv[k][j]).sum();
+                assert!((s - if i == j { 1.0 } else { 0.0 }).abs() < 1e-5);
+            }
+        }
+        assert!(inverse_spd(&[[1.0, 0.0], [0.0, 0.0]]).is_none());
     }
 
     #[test]

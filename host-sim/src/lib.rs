@@ -6,3 +6,4 @@ pub mod methods;
 pub mod montecarlo;
 pub mod report;
 pub mod scenario;
+pub mod tracking;

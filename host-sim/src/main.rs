@@ -5,6 +5,7 @@ use foxhunt_sim::methods::{Method, PARTICLE_COUNTS};
 use foxhunt_sim::montecarlo::bench;
 use foxhunt_sim::report;
 use foxhunt_sim::scenario::{NAMES, Scenario};
+use foxhunt_sim::tracking::{self, Tracking};
 use std::process::ExitCode;
 
 /// Find radio transmitters from bearings: benchmarks of every method against the CRLB.
@@ -17,11 +18,15 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Monte Carlo benchmark of every method on a scenario, against the CRLB.
+    /// Monte Carlo benchmark of every method on a scenario, against the CRLB (or PCRB).
+    ///
+    /// Bearing scenarios: aoa-afsa, aoa-firefly, aoa-pf-vs-kf, aoa-drive, aoa-afsa-wild.
+    /// Tracking scenarios: rssi-sim (N = 50, 100, 200), rssi-lab, ungm.
     ///
     /// Examples:
     ///   foxhunt bench                              # aoa-afsa, 100 seeded runs
     ///   foxhunt bench --scenario all --markdown    # every canonical scenario, README table
+    ///   foxhunt bench --scenario rssi-sim --runs 20
     ///   foxhunt bench --scenario-file my.toml --json
     #[command(verbatim_doc_comment)]
     Bench {
@@ -67,26 +72,45 @@ fn run(cli: Cli) -> Result<(), String> {
             json,
             markdown,
         } => {
-            let mut scenarios = match scenario_file {
+            let names: Vec<&str> = NAMES
+                .iter()
+                .chain(tracking::NAMES.iter())
+                .copied()
+                .collect();
+            let mut bearing: Vec<Scenario> = Vec::new();
+            let mut tracks: Vec<Tracking> = Vec::new();
+            match scenario_file {
                 Some(path) => {
                     let text = std::fs::read_to_string(&path)
                         .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-                    vec![
+                    bearing.push(
                         Scenario::from_toml(&text)
                             .map_err(|e| format!("{}: {e}", path.display()))?,
-                    ]
+                    );
                 }
                 None if scenario == "all" => {
-                    NAMES.iter().filter_map(|n| Scenario::named(n)).collect()
+                    bearing.extend(NAMES.iter().filter_map(|n| Scenario::named(n)));
+                    tracks.extend(tracking::NAMES.iter().filter_map(|n| Tracking::named(n)));
                 }
-                None => vec![Scenario::named(&scenario).ok_or_else(|| {
-                    format!(
-                        "unknown scenario `{scenario}`; known: all, {}",
-                        NAMES.join(", ")
-                    )
-                })?],
-            };
-            for s in scenarios.iter_mut() {
+                None => match (Scenario::named(&scenario), Tracking::named(&scenario)) {
+                    (Some(s), _) => bearing.push(s),
+                    (None, Some(t)) => tracks.push(t),
+                    (None, None) => {
+                        return Err(format!(
+                            "unknown scenario `{scenario}`; known: all, {}",
+                            names.join(", ")
+                        ));
+                    }
+                },
+            }
+            if let Some(n) = particles
+                && !PARTICLE_COUNTS.contains(&n)
+            {
+                return Err(format!(
+                    "{n} particles is not a compiled size; use one of {PARTICLE_COUNTS:?}"
+                ));
+            }
+            for s in bearing.iter_mut() {
                 if let Some(r) = runs {
                     s.runs = r.max(1);
                 }
@@ -100,12 +124,23 @@ fn run(cli: Cli) -> Result<(), String> {
                     ));
                 }
             }
+            for t in tracks.iter_mut() {
+                if let Some(r) = runs {
+                    t.runs = r.max(1);
+                }
+            }
             let progress =
                 !json && !markdown && std::io::IsTerminal::is_terminal(&std::io::stderr());
-            let rows: Vec<_> = scenarios
+            let mut rows: Vec<_> = bearing
                 .iter()
-                .flat_map(|s| bench(s, &Method::ALL, progress))
+                .flat_map(|s| bench(s, &Method::for_scenario(&s.name), progress))
                 .collect();
+            for t in &tracks {
+                let counts = particles
+                    .map(|n| vec![n])
+                    .unwrap_or_else(|| t.particle_counts());
+                rows.extend(tracking::bench(t, &counts, progress));
+            }
             if json {
                 println!(
                     "{}",
@@ -114,7 +149,7 @@ fn run(cli: Cli) -> Result<(), String> {
             } else if markdown {
                 print!("{}", report::markdown(&rows));
             } else {
-                for s in &scenarios {
+                for s in &bearing {
                     println!(
                         "{}: emitter ({}, {}) m, {} bearings, sigma {:.3} deg, wild {:.0} %, N = {}, {} runs, seed {}",
                         s.name,
@@ -126,6 +161,12 @@ fn run(cli: Cli) -> Result<(), String> {
                         s.particles,
                         s.runs,
                         s.seed
+                    );
+                }
+                for t in &tracks {
+                    println!(
+                        "{}: {} steps, {} runs, seed {}; bound = posterior CRB",
+                        t.name, t.steps, t.runs, t.seed
                     );
                 }
                 print!("{}", report::table(&rows));

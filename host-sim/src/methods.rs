@@ -59,6 +59,35 @@ impl Method {
         Method::MlHuber,
     ];
 
+    /// The methods of a bearing scenario's table: each paper's own comparison, plus the tuned
+    /// SIR, the Kalman filter and the batch fixes for context. The O(N^2) standard firefly runs
+    /// only where its paper compares it.
+    pub fn for_scenario(name: &str) -> Vec<Method> {
+        use Method::*;
+        match name {
+            "aoa-afsa" => vec![
+                SirSeed, Sir, SirRobust, AfsaPf, Gpf, Ekf, Ple, BcPle, Wiv, Ml, MlHuber,
+            ],
+            "aoa-firefly" => vec![SirSeed, Sir, FaPf, FaPfImproved, Gpf, Ekf, Ml],
+            "aoa-pf-vs-kf" => vec![SirSeed, Sir, Ekf, Ml],
+            "aoa-afsa-wild" => vec![SirSeed, Sir, SirRobust, Gpf, Ekf, Ple, Ml, MlHuber],
+            _ => vec![
+                SirSeed,
+                Sir,
+                SirRobust,
+                AfsaPf,
+                FaPfImproved,
+                Gpf,
+                Ekf,
+                Ple,
+                BcPle,
+                Wiv,
+                Ml,
+                MlHuber,
+            ],
+        }
+    }
+
     /// The name printed in tables and JSON.
     pub fn name(self) -> &'static str {
         match self {
@@ -99,12 +128,23 @@ impl Method {
         bearings: &[Bearing],
         rng: &mut XorShiftRng,
     ) -> Result<[f32; 2], Error> {
+        self.run_counted(scenario, bearings, rng).map(|(p, _)| p)
+    }
+
+    /// [`Method::run`] and the likelihood evaluations it spent (0 for batch fixes).
+    pub fn run_counted(
+        self,
+        scenario: &Scenario,
+        bearings: &[Bearing],
+        rng: &mut XorShiftRng,
+    ) -> Result<([f32; 2], u64), Error> {
+        let batch = |r: Result<foxhunt_core::Fix, Error>| r.map(|f| (f.position, 0));
         match self {
-            Method::Ple => ple::ple(bearings).map(|f| f.position),
-            Method::BcPle => ple::bias_compensated_ple(bearings).map(|f| f.position),
-            Method::Wiv => ple::wiv(bearings, 3).map(|f| f.position),
-            Method::Ml => ml::ml(bearings, None, &Gaussian, Default::default()).map(|f| f.position),
-            Method::MlHuber => robust_ml(bearings),
+            Method::Ple => batch(ple::ple(bearings)),
+            Method::BcPle => batch(ple::bias_compensated_ple(bearings)),
+            Method::Wiv => batch(ple::wiv(bearings, 3)),
+            Method::Ml => batch(ml::ml(bearings, None, &Gaussian, Default::default())),
+            Method::MlHuber => batch(robust_ml(bearings)),
             _ => with_particles(self, scenario, bearings, rng),
         }
     }
@@ -112,19 +152,19 @@ impl Method {
 
 /// Robust ML: Huber IRLS started from the bias-compensated PLE. The start is dragged by wild
 /// bearings, but Huber's bounded influence pulls the fix back within a few iterations.
-fn robust_ml(bearings: &[Bearing]) -> Result<[f32; 2], Error> {
-    ml::ml(bearings, None, &Huber::default(), Default::default()).map(|f| f.position)
+fn robust_ml(bearings: &[Bearing]) -> Result<foxhunt_core::Fix, Error> {
+    ml::ml(bearings, None, &Huber::default(), Default::default())
 }
 
 /// Particle counts the bench can run (the core sizes particle arrays at compile time).
-pub const PARTICLE_COUNTS: [usize; 8] = [50, 80, 100, 200, 500, 1000, 2000, 10000];
+pub const PARTICLE_COUNTS: [usize; 9] = [50, 80, 100, 200, 500, 1000, 2000, 5000, 10000];
 
 fn with_particles(
     method: Method,
     s: &Scenario,
     bearings: &[Bearing],
     rng: &mut XorShiftRng,
-) -> Result<[f32; 2], Error> {
+) -> Result<([f32; 2], u64), Error> {
     match s.particles {
         50 => sequential::<50>(method, s, bearings, rng),
         80 => sequential::<80>(method, s, bearings, rng),
@@ -133,6 +173,7 @@ fn with_particles(
         500 => sequential::<500>(method, s, bearings, rng),
         1000 => sequential::<1000>(method, s, bearings, rng),
         2000 => sequential::<2000>(method, s, bearings, rng),
+        5000 => sequential::<5000>(method, s, bearings, rng),
         10000 => sequential::<10000>(method, s, bearings, rng),
         _ => Err(Error::OutOfRange),
     }
@@ -143,7 +184,7 @@ fn sequential<const N: usize>(
     s: &Scenario,
     bearings: &[Bearing],
     rng: &mut XorShiftRng,
-) -> Result<[f32; 2], Error> {
+) -> Result<([f32; 2], u64), Error> {
     let mut cloud = Box::new(ParticleSet::<N, 2>::new());
     initial_particles(bearings, MIN_CROSSING, &mut cloud, rng)?;
     let seed_config = SirConfig {
@@ -236,14 +277,14 @@ pub fn drive<F: Filter<2, Measurement = Bearing>>(
     cloud: &[[f32; 2]],
     bearings: &[Bearing],
     rng: &mut XorShiftRng,
-) -> Result<[f32; 2], Error> {
+) -> Result<([f32; 2], u64), Error> {
     filter.initialise(cloud, rng)?;
     for b in bearings {
         let _ = filter.step(b, rng);
     }
     let m = filter.estimate().mean;
     if m.iter().all(|v| v.is_finite()) {
-        Ok(m)
+        Ok((m, filter.evaluations()))
     } else {
         Err(Error::NonFinite)
     }

@@ -1,6 +1,6 @@
 //! Seeded, parallel Monte Carlo runs and the metrics of SCENARIOS.md.
 
-use crate::methods::Method;
+use crate::methods::{Method, PARTICLE_COUNTS};
 use crate::scenario::Scenario;
 use foxhunt_core::fix::crlb::crlb;
 use indicatif::{ParallelProgressIterator, ProgressBar, ProgressStyle};
@@ -19,66 +19,103 @@ pub struct Row {
     pub particles: Option<usize>,
     /// Monte Carlo runs.
     pub runs: usize,
-    /// Root mean square position error, metres.
+    /// Root mean square position error, metres (tracking: over every step of every run).
     pub rmse: f64,
-    /// Mean relative error along x, percent.
-    pub rel_x: f64,
-    /// Mean relative error along y, percent.
-    pub rel_y: f64,
-    /// CRLB rmse of the scenario's geometry, metres.
+    /// Mean relative error along x, percent (static emitter only).
+    pub rel_x: Option<f64>,
+    /// Mean relative error along y, percent (static emitter only).
+    pub rel_y: Option<f64>,
+    /// The bound: CRLB rmse of the geometry, or the PCRB for tracking.
     pub crlb: f64,
     /// rmse / crlb.
     pub ratio: f64,
     /// Mean wall time per run, seconds.
     pub time_s: f64,
+    /// Mean likelihood evaluations per run (0 for batch fixes).
+    pub evaluations: f64,
     /// Runs in which the method returned no estimate (counted, excluded from the metrics).
     pub failures: usize,
     /// The seed paper's figure for this row, if it printed one.
     pub paper: Option<String>,
 }
 
-/// Run every method on `scenario`, `scenario.runs` times each, in parallel over runs.
+/// A progress bar on stderr when asked for, hidden otherwise.
+pub fn progress_bar(total: u64, label: &str, show: bool) -> ProgressBar {
+    if !show {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(total).with_style(
+        ProgressStyle::with_template("{msg:>14} [{bar:30}] {pos}/{len} runs {elapsed}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar.set_message(label.to_string());
+    bar
+}
+
+/// The outcome of one run: the estimate (if any), seconds, likelihood evaluations.
+type Outcome = (Option<[f32; 2]>, f64, u64);
+
+/// Run every method on `scenario`, `scenario.runs` times each, in parallel over runs. Each swarm
+/// method is followed by the tuned SIR at the particle count that spends the same likelihood
+/// evaluations per step (the largest compiled count not above it): the equal-cost comparison.
 pub fn bench(scenario: &Scenario, methods: &[Method], progress: bool) -> Vec<Row> {
     let bound = crlb(&scenario.emitter, &scenario.geometry())
         .map(|c| c.rmse as f64)
         .unwrap_or(f64::INFINITY);
-    let total = (scenario.runs * methods.len()) as u64;
-    let bar = if progress {
-        ProgressBar::new(total).with_style(
-            ProgressStyle::with_template("{msg:>14} [{bar:30}] {pos}/{len} runs {elapsed}")
-                .unwrap_or_else(|_| ProgressStyle::default_bar()),
-        )
-    } else {
-        ProgressBar::hidden()
-    };
-    bar.set_message(scenario.name.clone());
-    let rows = methods
-        .iter()
-        .map(|&m| {
-            let outcomes: Vec<(Option<[f32; 2]>, f64)> = (0..scenario.runs)
-                .into_par_iter()
-                .progress_with(bar.clone())
-                .map(|run| {
-                    let mut rng = scenario.rng(run);
-                    let bearings = scenario.simulate(&mut rng);
-                    let t = Instant::now();
-                    let est = m.run(scenario, &bearings, &mut rng).ok();
-                    (est, t.elapsed().as_secs_f64())
-                })
-                .collect();
-            summarise(scenario, m, bound, &outcomes)
-        })
-        .collect();
+    let bar = progress_bar(
+        (scenario.runs * methods.len()) as u64,
+        &scenario.name,
+        progress,
+    );
+    let mut rows = Vec::new();
+    for &m in methods {
+        let outcomes = run_all(scenario, m, &bar);
+        let row = summarise(scenario, m, bound, &outcomes);
+        let per_step = row.evaluations / scenario.route.len().max(1) as f64;
+        let swarm = matches!(m, Method::AfsaPf | Method::FaPf | Method::FaPfImproved);
+        rows.push(row);
+        if swarm {
+            let n = PARTICLE_COUNTS
+                .iter()
+                .copied()
+                .filter(|n| *n as f64 <= per_step)
+                .max()
+                .unwrap_or(scenario.particles);
+            let equal = Scenario {
+                particles: n,
+                ..scenario.clone()
+            };
+            let outcomes = run_all(&equal, Method::Sir, &bar);
+            let mut r = summarise(&equal, Method::Sir, bound, &outcomes);
+            r.method = format!("sir={}", m.name());
+            rows.push(r);
+        }
+    }
     bar.finish_and_clear();
     rows
 }
 
-fn summarise(s: &Scenario, m: Method, bound: f64, outcomes: &[(Option<[f32; 2]>, f64)]) -> Row {
+fn run_all(scenario: &Scenario, m: Method, bar: &ProgressBar) -> Vec<Outcome> {
+    (0..scenario.runs)
+        .into_par_iter()
+        .progress_with(bar.clone())
+        .map(|run| {
+            let mut rng = scenario.rng(run);
+            let bearings = scenario.simulate(&mut rng);
+            let t = Instant::now();
+            let est = m.run_counted(scenario, &bearings, &mut rng).ok();
+            let secs = t.elapsed().as_secs_f64();
+            (est.map(|e| e.0), secs, est.map(|e| e.1).unwrap_or(0))
+        })
+        .collect()
+}
+
+fn summarise(s: &Scenario, m: Method, bound: f64, outcomes: &[Outcome]) -> Row {
     let (ex, ey) = (s.emitter[0] as f64, s.emitter[1] as f64);
     let mut sq = 0.0;
     let (mut rx, mut ry) = (0.0, 0.0);
     let mut ok = 0usize;
-    for (est, _) in outcomes {
+    for (est, _, _) in outcomes {
         if let Some(p) = est {
             let dx = p[0] as f64 - ex;
             let dy = p[1] as f64 - ey;
@@ -90,19 +127,20 @@ fn summarise(s: &Scenario, m: Method, bound: f64, outcomes: &[(Option<[f32; 2]>,
     }
     let n = ok.max(1) as f64;
     let rmse = if ok > 0 { (sq / n).sqrt() } else { f64::NAN };
-    let time_s = outcomes.iter().map(|o| o.1).sum::<f64>() / outcomes.len().max(1) as f64;
+    let runs = outcomes.len().max(1) as f64;
     Row {
         scenario: s.name.clone(),
         method: m.name().to_string(),
         particles: m.uses_particles().then_some(s.particles),
         runs: outcomes.len(),
         rmse,
-        rel_x: 100.0 * rx / n,
-        rel_y: 100.0 * ry / n,
+        rel_x: Some(100.0 * rx / n),
+        rel_y: Some(100.0 * ry / n),
         crlb: bound,
         ratio: rmse / bound,
-        time_s,
+        time_s: outcomes.iter().map(|o| o.1).sum::<f64>() / runs,
+        evaluations: outcomes.iter().map(|o| o.2 as f64).sum::<f64>() / runs,
         failures: outcomes.len() - ok,
-        paper: crate::report::paper_figure(s, m),
+        paper: crate::report::paper_figure(&s.name, m.name()),
     }
 }

@@ -51,11 +51,6 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Gp
         }
     }
 
-    /// Likelihood evaluations so far (weighting and swarm moves).
-    pub fn evaluations(&self) -> u64 {
-        self.evaluations
-    }
-
     /// The weighted samples of the last step.
     pub fn samples(&self) -> &ParticleSet<N, D> {
         &self.samples
@@ -174,5 +169,9 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Fi
 
     fn estimate(&self) -> Estimate<D> {
         self.last
+    }
+
+    fn evaluations(&self) -> u64 {
+        self.evaluations
     }
 }

@@ -51,6 +51,11 @@ pub trait Filter<const D: usize> {
 
     /// The current estimate.
     fn estimate(&self) -> Estimate<D>;
+
+    /// Likelihood evaluations so far: the machine-independent cost of a run.
+    fn evaluations(&self) -> u64 {
+        0
+    }
 }
 
 /// Mean and covariance of an equally weighted cloud; `None` for an empty or non-finite cloud.

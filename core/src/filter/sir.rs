@@ -98,12 +98,6 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Si
         }
     }
 
-    /// Likelihood evaluations so far (weighting and swarm moves): the cost currency of
-    /// equal-effort comparisons.
-    pub fn evaluations(&self) -> u64 {
-        self.evaluations
-    }
-
     /// The particles, for plots and diagnostics.
     pub fn particles(&self) -> &ParticleSet<N, D> {
         &self.particles
@@ -223,5 +217,9 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Fi
 
     fn estimate(&self) -> Estimate<D> {
         self.last
+    }
+
+    fn evaluations(&self) -> u64 {
+        self.evaluations
     }
 }

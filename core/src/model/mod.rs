@@ -1,6 +1,8 @@
 //! State-space models: how a state moves and what a measurement says about it.
 
 pub mod bearing;
+pub mod rssi;
+pub mod ungm;
 
 use crate::error::Error;
 use crate::likelihood::Likelihood;
