@@ -179,3 +179,122 @@ proptest! {
         if let Some(b) = p.bearing() { prop_assert!(b.is_finite()); }
     }
 }
+
+/// Every swarm variant, in SIR and GPF, on the bearing, RSSI and UNGM models: arbitrary
+/// measurements (NaN, inf, wild values) and likelihoods that vanish (a Gaussian + uniform with
+/// eps = 0 gives ln L = -inf far out) never panic, and every Ok estimate is finite.
+mod swarms {
+    use super::*;
+    use foxhunt_core::{
+        Afsa, Firefly, Gsa, ImprovedFirefly, Model, PathLoss, Pso, RssiMeasurement, RssiTracker,
+        Swarm, Ungm, UngmObservation,
+    };
+
+    fn run_sir<M: Model<D> + Copy, S: Swarm<D> + Copy, L: Likelihood, const D: usize>(
+        model: M,
+        lik: L,
+        swarm: S,
+        cloud: &[[f32; D]],
+        zs: &[M::Measurement],
+    ) {
+        let mut rng = XorShiftRng::seed_from_u64(5);
+        let mut sir = Sir::<M, L, 12, D, S>::with_swarm(model, lik, SirConfig::default(), swarm);
+        let mut gpf = Gpf::<M, L, 12, D, S>::with_swarm(model, lik, swarm);
+        let _ = sir.initialise(cloud, &mut rng);
+        let _ = gpf.initialise(cloud, &mut rng);
+        for z in zs {
+            if let Ok(e) = sir.step(z, &mut rng) {
+                assert!(finite(&e.mean), "sir {e:?}");
+            }
+            if let Ok(e) = gpf.step(z, &mut rng) {
+                assert!(finite(&e.mean), "gpf {e:?}");
+            }
+        }
+    }
+
+    fn all_swarms<M: Model<D> + Copy, L: Likelihood, const D: usize>(
+        model: M,
+        lik: L,
+        cloud: &[[f32; D]],
+        zs: &[M::Measurement],
+    ) {
+        let afsa = Afsa {
+            tries: 3,
+            iterations: 2,
+            ..Afsa::default()
+        };
+        run_sir(model, lik, afsa, cloud, zs);
+        run_sir(
+            model,
+            lik,
+            Firefly {
+                iterations: 2,
+                ..Firefly::default()
+            },
+            cloud,
+            zs,
+        );
+        run_sir(
+            model,
+            lik,
+            ImprovedFirefly {
+                iterations: 2,
+                ..Default::default()
+            },
+            cloud,
+            zs,
+        );
+        run_sir(
+            model,
+            lik,
+            Pso {
+                iterations: 2,
+                ..Pso::default()
+            },
+            cloud,
+            zs,
+        );
+        run_sir(
+            model,
+            lik,
+            Gsa {
+                iterations: 3,
+                ..Gsa::default()
+            },
+            cloud,
+            zs,
+        );
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        #[test]
+        fn bearing_model(zs in prop::collection::vec(bearing(), 1..5), c in prop::array::uniform2(wild())) {
+            let cloud = [[1000.0, 800.0], [1010.0, 790.0], c];
+            all_swarms(StaticEmitter { process_var: 1.0 }, Gaussian, &cloud, &zs);
+            all_swarms(StaticEmitter { process_var: 0.0 }, GaussianUniform { eps: 0.0 }, &cloud, &zs);
+        }
+
+        #[test]
+        fn rssi_model(dbm in prop::collection::vec(prop::array::uniform3(wild()), 1..4), sigma in wild()) {
+            let model = RssiTracker {
+                anchors: [[0.0, 5.0], [5.0, 10.0], [10.0, 0.0]],
+                sigma: [0.5, 0.5, sigma],
+                path_loss: PathLoss { p0: -37.8, d0: 1.0, eta: 2.3 },
+                dt: 0.5,
+                q: [0.5, 1.0, 0.5, 1.0],
+            };
+            let zs: Vec<_> = dbm.into_iter().map(RssiMeasurement::all).collect();
+            let cloud = [[1.0, 0.5, 1.0, 0.5], [2.0, 0.0, 1.0, 0.0]];
+            all_swarms(model, Gaussian, &cloud, &zs);
+        }
+
+        #[test]
+        fn ungm_model(obs in prop::collection::vec((0u32..60, wild()), 1..5), x in wild()) {
+            let zs: Vec<_> = obs.into_iter().map(|(k, z)| UngmObservation { k, z }).collect();
+            all_swarms(Ungm::default(), Gaussian, &[[0.1], [x]], &zs);
+            all_swarms(Ungm { process_var: x, measurement_var: 1.0 }, Cauchy, &[[0.1], [2.0]], &zs);
+        }
+    }
+}
