@@ -284,6 +284,7 @@ mod swarms {
                 path_loss: PathLoss { p0: -37.8, d0: 1.0, eta: 2.3 },
                 dt: 0.5,
                 q: [0.5, 1.0, 0.5, 1.0],
+                room: Some([10.0, sigma]),
             };
             let zs: Vec<_> = dbm.into_iter().map(RssiMeasurement::all).collect();
             let cloud = [[1.0, 0.5, 1.0, 0.5], [2.0, 0.0, 1.0, 0.0]];

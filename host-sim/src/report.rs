@@ -13,7 +13,7 @@ pub fn paper_figure(scenario: &str, method: &str) -> Option<String> {
         ("aoa-firefly", "fa-pf-imp") => "seed 001 improved FA-PF: largest error 0.23 %, < 0.3 s",
         ("aoa-pf-vs-kf", "sir-seed") => "seed 004: PF (N = 500) beats the linearised KF",
         ("aoa-pf-vs-kf", "ekf") => "seed 004: worse than the PF",
-        ("ungm", "sir") => "seed 001 PF: 3.0190",
+        ("ungm", "pf") => "seed 001 PF: 3.0190",
         ("ungm", "fa-pf-imp") => "seed 001 improved FA-PF: 1.4322",
         _ => return rssi_figure(scenario, method),
     };

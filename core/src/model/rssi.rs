@@ -76,6 +76,9 @@ pub struct RssiTracker<const A: usize> {
     pub dt: f32,
     /// Process noise variances of [x, vx, y, vy].
     pub q: [f32; 4],
+    /// The room [0, w] x [0, h] the node cannot leave, if known: a state that would cross a
+    /// wall is mirrored back and that velocity component reversed. `None`: open space.
+    pub room: Option<[f32; 2]>,
 }
 
 impl<const A: usize> RssiTracker<A> {
@@ -93,6 +96,33 @@ impl<const A: usize> RssiTracker<A> {
     /// Noise-free move of a state by one step.
     pub fn advance(&self, x: &[f32; 4]) -> [f32; 4] {
         [x[0] + self.dt * x[1], x[1], x[2] + self.dt * x[3], x[3]]
+    }
+
+    /// Mirror a state back into the room (if any), reversing the velocity of each wall it
+    /// crossed; a state already inside, or a non-finite one, is left as it is.
+    pub fn confine(&self, mut x: [f32; 4]) -> [f32; 4] {
+        let Some(room) = self.room else {
+            return x;
+        };
+        for (p, v, size) in [(0, 1, room[0]), (2, 3, room[1])] {
+            if !(size > 0.0) || !x[p].is_finite() || (0.0..=size).contains(&x[p]) {
+                continue;
+            }
+            // Fold into [0, 2 size), then mirror the upper half; an odd number of wall
+            // crossings reverses the velocity.
+            let period = 2.0 * size;
+            let folded = x[p] - period * libm::floorf(x[p] / period);
+            let crossings = libm::floorf(x[p] / size) as i64;
+            x[p] = if folded > size {
+                period - folded
+            } else {
+                folded
+            };
+            if crossings % 2 != 0 {
+                x[v] = -x[v];
+            }
+        }
+        x
     }
 
     /// Expected RSSI at every anchor from position (x, y).
@@ -156,6 +186,7 @@ impl<const A: usize> Model<4> for RssiTracker<A> {
         for (xi, q) in x.iter_mut().zip(self.q.iter()) {
             *xi += libm::sqrtf(*q) * random::normal(rng);
         }
+        *x = self.confine(*x);
     }
 
     fn ln_likelihood<L: Likelihood>(&self, x: &[f32; 4], z: &RssiMeasurement<A>, lik: &L) -> f32 {
@@ -173,6 +204,27 @@ impl<const A: usize> Model<4> for RssiTracker<A> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn walls_reflect() {
+        let t = RssiTracker {
+            anchors: [[0.0, 0.0]],
+            sigma: [1.0],
+            path_loss: PathLoss {
+                p0: -40.0,
+                d0: 1.0,
+                eta: 2.0,
+            },
+            dt: 1.0,
+            q: [0.0; 4],
+            room: Some([10.0, 6.0]),
+        };
+        assert_eq!(t.confine([-1.0, -2.0, 7.0, 1.0]), [1.0, 2.0, 5.0, -1.0]);
+        assert_eq!(t.confine([3.0, 1.0, 4.0, 1.0]), [3.0, 1.0, 4.0, 1.0]);
+        // Two crossings (past both walls) keep the velocity's sign.
+        let x = t.confine([23.0, 1.0, 1.0, 0.0]);
+        assert!((x[0] - 3.0).abs() < 1e-5 && x[1] == 1.0, "{x:?}");
+    }
 
     #[test]
     fn path_loss_round_trip_and_bias() {
