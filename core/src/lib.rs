@@ -20,7 +20,7 @@ pub use resample::Resampling;
 pub mod likelihood;
 pub mod model;
 
-pub use likelihood::{Cauchy, Gaussian, GaussianUniform, Huber, Likelihood, StudentT};
+pub use likelihood::{Cauchy, Gaussian, GaussianUniform, Huber, Likelihood, StudentT, Widened};
 pub use model::Model;
 pub use model::bearing::{Bearing, StaticEmitter};
 pub use model::rssi::{PathLoss, RssiMeasurement, RssiTracker};

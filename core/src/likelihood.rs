@@ -142,6 +142,31 @@ impl Likelihood for GaussianUniform {
     }
 }
 
+/// Any likelihood evaluated with its scale multiplied by `factor` (> 1 widens it).
+///
+/// When the likelihood is much sharper than the spacing of the particles (an RSSI reading good
+/// to 0.5 dB, say), almost every particle gets a negligible weight and the filter starves. Widening
+/// the likelihood the filter uses ("measurement-noise inflation") trades a little resolution for
+/// a cloud that keeps enough particles alive to follow the target.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Widened<L> {
+    /// The likelihood being widened.
+    pub inner: L,
+    /// Scale multiplier (> 0).
+    pub factor: f32,
+}
+
+impl<L: Likelihood> Likelihood for Widened<L> {
+    #[inline]
+    fn ln(&self, r: f32, sigma: f32) -> f32 {
+        self.inner.ln(r, sigma * self.factor)
+    }
+    #[inline]
+    fn irls_weight(&self, u: f32) -> f32 {
+        self.inner.irls_weight(u / self.factor)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -163,6 +188,10 @@ mod tests {
         check(Cauchy);
         check(StudentT::default());
         check(GaussianUniform::default());
+        check(Widened {
+            inner: Cauchy,
+            factor: 2.0,
+        });
     }
 
     #[test]

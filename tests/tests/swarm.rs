@@ -78,17 +78,34 @@ fn aoa_pf_vs_kf_table() {
 
 #[test]
 fn rssi_sim_table() {
-    let mut t = Tracking::named("rssi-sim").expect("scenario");
-    t.runs = 20;
+    // The full 50 runs: two of the rows sit within 15 % of each other.
+    let t = Tracking::named("rssi-sim").expect("scenario");
     let r = tracking::bench(&t, &[50], false);
-    // Observed (50 runs, N = 50): PSO-GPF 0.40 m < GSA-GPF 0.89 < tuned SIR 1.34 < GPF 2.45 <
-    // the seeds' PF 2.63. With 50 particles the swarm moves pay; at their equal likelihood
-    // budget (N = 500) the tuned SIR gives 0.75.
+    // Observed (N = 50): PSO-GPF 0.40 m < GSA-GPF 0.89 < tuned SIR 1.02 < GPF 2.45 < the seeds'
+    // Gaussian PF 2.63. Issue bar: our SIR at N = 50 <= seed 003's PF figure, 1.25 m.
     let e = |m| get(&r, m).rmse;
+    assert!(e("sir") <= 1.25, "sir {}", e("sir"));
     assert!(e("pso-gpf") < 0.8, "pso-gpf {}", e("pso-gpf"));
-    assert!(e("pso-gpf") * 1.5 < e("gsa-gpf"));
-    assert!(e("gsa-gpf") < e("sir") && e("sir") * 1.5 < e("pf"));
-    assert!(e("pso-gpf") * 3.0 < e("gpf"));
+    assert!(e("pso-gpf") < e("gsa-gpf") && e("gsa-gpf") < e("sir"));
+    assert!(e("sir") * 2.0 < e("pf") && e("sir") * 2.0 < e("gpf"));
+    // At PSO-GPF's likelihood budget (N = 500) the plain SIR is as good (observed 0.42 m).
+    assert!(get(&r, "sir=pso-gpf").rmse < 1.2 * e("pso-gpf"));
+}
+
+#[test]
+fn rssi_lab_table() {
+    let t = Tracking::named("rssi-lab").expect("scenario");
+    let r = tracking::bench(&t, &t.particle_counts(), false);
+    // Observed (N = 100): every method within 0.77-0.86 m, 1.8-2.0x the PCRB (0.43 m): with
+    // 3 dB of RSSI noise in a 6 m room no swarm move separates from the plain filters.
+    for row in r.iter().filter(|r| !r.method.contains('=')) {
+        assert!(
+            (1.0..2.6).contains(&row.ratio),
+            "{}: {} x PCRB",
+            row.method,
+            row.ratio
+        );
+    }
 }
 
 #[test]
