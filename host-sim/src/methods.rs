@@ -4,7 +4,8 @@ use crate::scenario::Scenario;
 use foxhunt_core::fix::{init::initial_particles, intersection::MIN_CROSSING, ml, ple};
 use foxhunt_core::{
     Afsa, Bearing, BearingEkf, Error, Filter, Firefly, Gaussian, GaussianUniform, Gpf, Huber,
-    ImprovedFirefly, ParticleSet, Resampling, Roughening, Sir, SirConfig, StaticEmitter,
+    ImprovedFirefly, NoSwarm, ParticleSet, Resampling, Roughening, Sir, SirConfig, StaticEmitter,
+    Swarm,
 };
 use rand_xorshift::XorShiftRng;
 
@@ -196,51 +197,18 @@ fn sequential<const N: usize>(
         process_var: s.process_var,
     };
     let cloud = &cloud.states;
+    // The seeds' construction: their jitter and resampling, plus a swarm move.
+    let seeds = |config| -> SeedsRun<'_> { (seed_model, config, cloud, bearings) };
     match method {
-        Method::SirSeed => drive(
-            &mut *Box::new(Sir::<_, _, N, 2>::new(seed_model, Gaussian, seed_config)),
-            cloud,
-            bearings,
-            rng,
-        ),
-        Method::AfsaPf => drive(
-            &mut *Box::new(Sir::<_, _, N, 2, _>::with_swarm(
-                seed_model,
-                Gaussian,
-                seed_config,
-                Afsa::default(),
-            )),
-            cloud,
-            bearings,
-            rng,
-        ),
-        Method::FaPf => drive(
-            &mut *Box::new(Sir::<_, _, N, 2, _>::with_swarm(
-                seed_model,
-                Gaussian,
-                seed_config,
-                Firefly::default(),
-            )),
-            cloud,
-            bearings,
-            rng,
-        ),
+        Method::SirSeed => seeds_sir::<N, _>(NoSwarm, seeds(seed_config), rng),
+        Method::AfsaPf => seeds_sir::<N, _>(Afsa::default(), seeds(seed_config), rng),
+        Method::FaPf => seeds_sir::<N, _>(Firefly::default(), seeds(seed_config), rng),
         Method::FaPfImproved => {
             let config = SirConfig {
                 ess_threshold: 0.5,
                 ..seed_config
             };
-            drive(
-                &mut *Box::new(Sir::<_, _, N, 2, _>::with_swarm(
-                    seed_model,
-                    Gaussian,
-                    config,
-                    ImprovedFirefly::default(),
-                )),
-                cloud,
-                bearings,
-                rng,
-            )
+            seeds_sir::<N, _>(ImprovedFirefly::default(), seeds(config), rng)
         }
         Method::Sir => {
             let model = StaticEmitter { process_var: 0.0 };
@@ -268,6 +236,21 @@ fn sequential<const N: usize>(
         }
         _ => drive(&mut *Box::new(BearingEkf::new(0.0)), cloud, bearings, rng),
     }
+}
+
+/// The seeds' model and settings, the cloud and the bearings of one run.
+type SeedsRun<'a> = (StaticEmitter, SirConfig, &'a [[f32; 2]], &'a [Bearing]);
+
+/// A seeds-style SIR with `swarm`, driven through one run.
+fn seeds_sir<const N: usize, S: Swarm<2>>(
+    swarm: S,
+    (model, config, cloud, bearings): SeedsRun<'_>,
+    rng: &mut XorShiftRng,
+) -> Result<([f32; 2], u64), Error> {
+    let mut f = Box::new(Sir::<_, _, N, 2, S>::with_swarm(
+        model, Gaussian, config, swarm,
+    ));
+    drive(&mut *f, cloud, bearings, rng)
 }
 
 /// Initialise a filter from the cloud and step it through every bearing; rejected bearings are

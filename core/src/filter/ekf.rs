@@ -34,11 +34,7 @@ impl Filter<2> for BearingEkf {
         cloud: &[[f32; 2]],
         _rng: &mut R,
     ) -> Result<(), Error> {
-        let m = moments(cloud).ok_or(if cloud.is_empty() {
-            Error::TooFewMeasurements
-        } else {
-            Error::NonFinite
-        })?;
+        let m = moments(cloud)?;
         self.state = Some(m);
         Ok(())
     }

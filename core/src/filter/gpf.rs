@@ -132,11 +132,7 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Fi
         cloud: &[[f32; D]],
         _rng: &mut R,
     ) -> Result<(), Error> {
-        let (mean, covariance) = moments(cloud).ok_or(if cloud.is_empty() {
-            Error::TooFewMeasurements
-        } else {
-            Error::NonFinite
-        })?;
+        let (mean, covariance) = moments(cloud)?;
         self.prior = Some((mean, covariance));
         self.last = Estimate {
             mean,

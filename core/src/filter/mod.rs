@@ -58,10 +58,13 @@ pub trait Filter<const D: usize> {
     }
 }
 
-/// Mean and covariance of an equally weighted cloud; `None` for an empty or non-finite cloud.
-pub(crate) fn moments<const D: usize>(cloud: &[[f32; D]]) -> Option<([f32; D], [[f32; D]; D])> {
+/// Mean and covariance of an equally weighted cloud: the prior every filter starts from.
+/// An empty cloud is [`Error::TooFewMeasurements`], a non-finite one [`Error::NonFinite`].
+pub(crate) fn moments<const D: usize>(
+    cloud: &[[f32; D]],
+) -> Result<([f32; D], [[f32; D]; D]), Error> {
     if cloud.is_empty() {
-        return None;
+        return Err(Error::TooFewMeasurements);
     }
     let n = cloud.len() as f32;
     let mut mean = [0.0f32; D];
@@ -78,11 +81,11 @@ pub(crate) fn moments<const D: usize>(cloud: &[[f32; D]]) -> Option<([f32; D], [
             }
         }
     }
-    let ok = mean
-        .iter()
-        .chain(cov.iter().flatten())
-        .all(|v| v.is_finite());
-    ok.then_some((mean, cov))
+    if all_finite(&mean, &cov) {
+        Ok((mean, cov))
+    } else {
+        Err(Error::NonFinite)
+    }
 }
 
 /// Covariance scaled by `k` (variance inflation for a widened prior).

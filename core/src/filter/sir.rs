@@ -173,11 +173,7 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Fi
         cloud: &[[f32; D]],
         _rng: &mut R,
     ) -> Result<(), Error> {
-        let prior = moments(cloud).ok_or(if cloud.is_empty() {
-            Error::TooFewMeasurements
-        } else {
-            Error::NonFinite
-        })?;
+        let prior = moments(cloud)?;
         for (i, x) in self.particles.states.iter_mut().enumerate() {
             *x = cloud[i % cloud.len()];
         }
