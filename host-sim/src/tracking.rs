@@ -15,7 +15,7 @@
 //! same average of the PCRB, (1/M) sum_k sqrt(tr J_k^-1) over the position components.
 
 use crate::methods::PARTICLE_COUNTS;
-use crate::montecarlo::{Row, progress_bar};
+use crate::montecarlo::{Row, pool, progress_bar};
 use crate::report::paper_figure;
 use foxhunt_core::fix::pcrb::pcrb_step;
 use foxhunt_core::random;
@@ -458,19 +458,21 @@ fn measure(
     bound: f64,
     bar: &ProgressBar,
 ) -> Row {
-    let outcomes: Vec<(Option<f64>, f64, u64)> = (0..s.runs)
-        .into_par_iter()
-        .progress_with(bar.clone())
-        .map(|run| {
-            let t = Instant::now();
-            let r = dispatch(s, m, n, run);
-            let secs = t.elapsed().as_secs_f64();
-            match r {
-                Ok((sum, ev)) => (Some(sum), secs, ev),
-                Err(_) => (None, secs, 0),
-            }
-        })
-        .collect();
+    let outcomes: Vec<(Option<f64>, f64, u64)> = pool().install(|| {
+        (0..s.runs)
+            .into_par_iter()
+            .progress_with(bar.clone())
+            .map(|run| {
+                let t = Instant::now();
+                let r = dispatch(s, m, n, run);
+                let secs = t.elapsed().as_secs_f64();
+                match r {
+                    Ok((sum, ev)) => (Some(sum), secs, ev),
+                    Err(_) => (None, secs, 0),
+                }
+            })
+            .collect()
+    });
     let ok: Vec<f64> = outcomes.iter().filter_map(|o| o.0).collect();
     let error = ok.iter().sum::<f64>() / (ok.len().max(1) * s.steps) as f64;
     let runs = outcomes.len().max(1) as f64;
