@@ -4,6 +4,7 @@
 
 pub mod methods;
 pub mod montecarlo;
+pub mod perf;
 pub mod report;
 pub mod scenario;
 pub mod tracking;

@@ -49,6 +49,41 @@ enum Command {
         #[arg(long)]
         markdown: bool,
     },
+    /// Speed: the bootstrap SIR against the same filter in numpy (filterpy), single thread.
+    ///
+    /// Installs numpy, scipy and filterpy from PyPI into target/peer-venv on first use.
+    /// Example: foxhunt perf --runs 20
+    Perf {
+        /// Runs timed per particle count.
+        #[arg(long, default_value_t = 20)]
+        runs: usize,
+    },
+}
+
+/// `foxhunt perf`: the Rust SIR against the numpy peer, single thread.
+fn perf(runs: usize) -> Result<(), String> {
+    let counts = [100, 1000, 10_000];
+    let peer = foxhunt_sim::perf::peer_timings(&counts, runs)?;
+    println!(
+        "{:>8} {:>14} {:>14} {:>8} {:>16} {:>9} {:>9}",
+        "N", "rust s/run", "numpy s/run", "ratio", "rust updates/s", "rust rmse", "np rmse"
+    );
+    for p in &peer {
+        let r = foxhunt_sim::perf::rust_timing(p.particles, runs)
+            .ok_or_else(|| format!("{} particles is not a compiled size", p.particles))?;
+        let updates = (r.particles * 60) as f64 / r.seconds_per_run;
+        println!(
+            "{:>8} {:>14.3e} {:>14.3e} {:>7.1}x {:>16.3e} {:>9.3} {:>9.3}",
+            p.particles,
+            r.seconds_per_run,
+            p.seconds_per_run,
+            p.seconds_per_run / r.seconds_per_run,
+            updates,
+            r.rmse,
+            p.rmse
+        );
+    }
+    Ok(())
 }
 
 fn main() -> ExitCode {
@@ -64,6 +99,7 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<(), String> {
     match cli.command {
+        Command::Perf { runs } => perf(runs.max(1)),
         Command::Bench {
             scenario,
             scenario_file,

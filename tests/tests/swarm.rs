@@ -88,8 +88,14 @@ fn rssi_sim_table() {
     assert!(e("pso-gpf") < 0.8, "pso-gpf {}", e("pso-gpf"));
     assert!(e("pso-gpf") < e("gsa-gpf") && e("gsa-gpf") < e("sir"));
     assert!(e("sir") * 2.0 < e("pf") && e("sir") * 2.0 < e("gpf"));
-    // At PSO-GPF's likelihood budget (N = 500) the plain SIR is as good (observed 0.42 m).
-    assert!(get(&r, "sir=pso-gpf").rmse < 1.2 * e("pso-gpf"));
+    // At PSO-GPF's likelihood budget (N = 500) the plain SIR comes close but PSO-GPF still wins
+    // (observed 0.49 m vs 0.41 m; 0.42 vs 0.40 with another normal sampler): the gap is real
+    // but small, so assert only that it stays under 35 %.
+    let equal = get(&r, "sir=pso-gpf").rmse;
+    assert!(
+        equal < 1.35 * e("pso-gpf") && equal < e("gsa-gpf"),
+        "sir=pso-gpf {equal}"
+    );
 }
 
 #[test]
