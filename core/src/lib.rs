@@ -7,6 +7,7 @@
 //! No entry point panics or returns NaN on bad input: it returns an [`Error`] instead.
 #![no_std]
 #![deny(missing_docs)]
+#![forbid(unsafe_code)]
 
 pub mod error;
 pub mod linalg;

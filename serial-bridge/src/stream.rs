@@ -1,0 +1,581 @@
+//! The byte-stream demultiplexer: bytes in any chunking in, whole checked frames out.
+//!
+//! One UART may interleave NMEA sentences (`$` ... `*hh` CRLF) and TI Monitor-and-Test frames
+//! (`0xFE`, LEN, CMD0, CMD1, DATA, FCS). The demultiplexer keeps the unparsed bytes in a fixed
+//! buffer and looks only at the first one: `$` starts a sentence, `0xFE` an MT frame, anything
+//! else is garbage, skipped and counted. A candidate that fails its check costs only its first
+//! byte: scanning resumes at the next byte, so a corrupt byte never swallows the valid frames
+//! after it.
+//!
+//! An 8-bit XOR check passes one forgery in 256. A forged MT frame (a corrupt LEN, or a `0xFE`
+//! inside a damaged sentence) would span and swallow the genuine frames after it, so an MT
+//! candidate is also refused when a complete, valid frame starts strictly inside it; that
+//! decision may have to wait for the bytes of the inner candidate, at most one more MT frame.
+//! [`Demux::idle`] (the line went quiet) and [`Demux::finish`] (end of a capture) settle such a
+//! wait at once. A sentence cannot be forged across frames: its body must be printable ASCII
+//! without `$`, which the bytes of any other frame break.
+
+/// Longest NMEA sentence, `$` to LF inclusive (NMEA 0183: 82 characters).
+pub const MAX_SENTENCE: usize = 82;
+/// Longest MT frame: SOF, LEN, CMD0, CMD1, 255 data bytes, FCS.
+pub const MAX_MT_FRAME: usize = 255 + 5;
+/// Default buffer: room for an MT frame and a second one starting inside it, so every wait
+/// for more bytes ends before the buffer is full.
+pub const DEFAULT_CAPACITY: usize = 2 * MAX_MT_FRAME + 8;
+/// Start of frame of an MT frame.
+pub const MT_SOF: u8 = 0xFE;
+
+/// One checked frame, borrowed from the demultiplexer's buffer until the next call.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Frame<'a> {
+    /// An NMEA sentence whose checksum matched: the text between `$` and `*`.
+    Nmea(&'a str),
+    /// A Monitor-and-Test frame whose FCS matched.
+    Mt(MtFrame<'a>),
+}
+
+/// A Monitor-and-Test frame: command bytes and data (SOF, LEN and FCS stripped).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MtFrame<'a> {
+    /// Type (bits 7-5) and subsystem (bits 4-0).
+    pub cmd0: u8,
+    /// Command id within the subsystem.
+    pub cmd1: u8,
+    /// Payload, LEN bytes.
+    pub data: &'a [u8],
+}
+
+/// What the demultiplexer has seen and thrown away, by reason.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct StreamCounters {
+    /// Bytes received.
+    pub bytes: u64,
+    /// NMEA sentences delivered.
+    pub sentences: u32,
+    /// MT frames delivered.
+    pub mt_frames: u32,
+    /// Bytes skipped while looking for a start of frame.
+    pub garbage_bytes: u32,
+    /// Sentences whose checksum did not match.
+    pub bad_checksum: u32,
+    /// Sentences without a `*hh` checksum or with a byte outside printable ASCII.
+    pub malformed: u32,
+    /// Sentences with no line end within [`MAX_SENTENCE`] bytes.
+    pub too_long: u32,
+    /// MT frames whose FCS did not match.
+    pub bad_fcs: u32,
+    /// MT candidates refused because a valid frame starts inside them (forged by corruption).
+    pub overlapping: u32,
+    /// Unfinished frames dropped at the end of the stream.
+    pub truncated: u32,
+}
+
+impl StreamCounters {
+    /// Candidates rejected for any reason.
+    pub fn rejected(&self) -> u32 {
+        self.bad_checksum
+            .saturating_add(self.malformed)
+            .saturating_add(self.too_long)
+            .saturating_add(self.bad_fcs)
+            .saturating_add(self.overlapping)
+            .saturating_add(self.truncated)
+    }
+}
+
+/// The verdict on a candidate at the start of some bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Scan {
+    /// A valid frame of this many bytes.
+    Valid(usize),
+    /// Not a frame: why.
+    Invalid(Reject),
+    /// Cannot tell yet: more bytes needed.
+    Incomplete,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Reject {
+    Checksum,
+    Malformed,
+    TooLong,
+    Fcs,
+}
+
+fn hex_digit(b: u8) -> Option<u8> {
+    match b {
+        b'0'..=b'9' => Some(b - b'0'),
+        b'A'..=b'F' => Some(b - b'A' + 10),
+        b'a'..=b'f' => Some(b - b'a' + 10),
+        _ => None,
+    }
+}
+
+/// Check a sentence candidate starting with `$`.
+fn scan_sentence(bytes: &[u8]) -> Scan {
+    let limit = bytes.len().min(MAX_SENTENCE);
+    for i in 1..limit {
+        match bytes[i] {
+            b'\n' => return check_sentence(&bytes[..=i]),
+            b'\r' => {
+                if i + 1 < bytes.len() && bytes[i + 1] != b'\n' {
+                    return Scan::Invalid(Reject::Malformed);
+                }
+            }
+            b'$' => return Scan::Invalid(Reject::Malformed),
+            0x20..=0x7e => {}
+            _ => return Scan::Invalid(Reject::Malformed),
+        }
+    }
+    if bytes.len() >= MAX_SENTENCE {
+        Scan::Invalid(Reject::TooLong)
+    } else {
+        Scan::Incomplete
+    }
+}
+
+/// `line` runs from `$` to LF; CRLF or a bare LF both end a line.
+fn check_sentence(line: &[u8]) -> Scan {
+    let mut end = line.len() - 1;
+    if end > 0 && line[end - 1] == b'\r' {
+        end -= 1;
+    }
+    let text = &line[1..end];
+    if text.len() < 3 || text[text.len() - 3] != b'*' {
+        return Scan::Invalid(Reject::Malformed);
+    }
+    let body = &text[..text.len() - 3];
+    let (Some(hi), Some(lo)) = (
+        hex_digit(text[text.len() - 2]),
+        hex_digit(text[text.len() - 1]),
+    ) else {
+        return Scan::Invalid(Reject::Malformed);
+    };
+    if body.contains(&b'*') {
+        return Scan::Invalid(Reject::Malformed);
+    }
+    if body.iter().fold(0u8, |x, b| x ^ b) == (hi << 4 | lo) {
+        Scan::Valid(line.len())
+    } else {
+        Scan::Invalid(Reject::Checksum)
+    }
+}
+
+/// Check an MT candidate starting with `0xFE`.
+fn scan_mt(bytes: &[u8]) -> Scan {
+    let Some(&len) = bytes.get(1) else {
+        return Scan::Incomplete;
+    };
+    let total = len as usize + 5;
+    if bytes.len() < total {
+        return Scan::Incomplete;
+    }
+    let fcs = bytes[1..total - 1].iter().fold(0u8, |x, b| x ^ b);
+    if fcs == bytes[total - 1] {
+        Scan::Valid(total)
+    } else {
+        Scan::Invalid(Reject::Fcs)
+    }
+}
+
+fn scan(bytes: &[u8]) -> Scan {
+    match bytes.first() {
+        Some(b'$') => scan_sentence(bytes),
+        Some(&MT_SOF) => scan_mt(bytes),
+        _ => Scan::Invalid(Reject::Malformed),
+    }
+}
+
+/// Whether a frame ending at `at` is followed by another: a valid frame starts there, or the
+/// stream ends there. `None`: cannot tell yet.
+fn followed(bytes: &[u8], at: usize, ended: bool) -> Option<bool> {
+    if at >= bytes.len() {
+        return if ended { Some(true) } else { None };
+    }
+    match scan(&bytes[at..]) {
+        Scan::Valid(_) => Some(true),
+        Scan::Invalid(_) => Some(false),
+        Scan::Incomplete => {
+            if ended {
+                Some(false)
+            } else {
+                None
+            }
+        }
+    }
+}
+
+/// The verdict on a valid MT candidate of `len` bytes at the start of `bytes`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Overlap {
+    /// Deliver it.
+    Accept,
+    /// A better-supported frame starts inside it: it was forged.
+    Refuse,
+    /// Wait for more bytes.
+    Wait,
+}
+
+/// Resolve a valid MT candidate against the frames that may start inside it.
+///
+/// A genuine frame is normally followed by another frame; a forged one ends at a random byte.
+/// So the candidate is delivered at once when no valid frame starts inside it (the usual case)
+/// or when a valid frame follows it; it is refused when a valid inner frame is itself followed
+/// by a valid frame (or ends where the candidate does, or at the end of the stream). Each
+/// forgery must then pass two independent 8-bit checks.
+fn resolve_overlap(bytes: &[u8], len: usize, ended: bool, in_sync: bool) -> Overlap {
+    let mut inner_valid = false;
+    let mut undecided = false;
+    for i in 1..len {
+        if bytes[i] == b'$' || bytes[i] == MT_SOF {
+            match scan(&bytes[i..]) {
+                Scan::Valid(_) => inner_valid = true,
+                Scan::Incomplete if !ended => undecided = true,
+                _ => {}
+            }
+        }
+    }
+    if !inner_valid && !undecided {
+        return Overlap::Accept;
+    }
+    if followed(bytes, len, ended) == Some(true) {
+        // Out of sync, still refuse when an inner frame ends exactly where the candidate does:
+        // the candidate is then most likely a forged span over that genuine frame. In sync,
+        // the candidate wins (a payload may carry a whole frame).
+        let same_end = inner_valid
+            && !in_sync
+            && (1..len).any(|i| {
+                (bytes[i] == b'$' || bytes[i] == MT_SOF)
+                    && scan(&bytes[i..]) == Scan::Valid(len - i)
+            });
+        return if same_end {
+            Overlap::Refuse
+        } else {
+            Overlap::Accept
+        };
+    }
+    for i in 1..len {
+        if (bytes[i] == b'$' || bytes[i] == MT_SOF)
+            && let Scan::Valid(li) = scan(&bytes[i..])
+        {
+            // The end of the stream supports an inner frame only against a candidate that
+            // starts out of sync: a candidate right after a delivered frame needs a frame
+            // after the inner one to be refused.
+            let end = i + li;
+            if in_sync && end >= bytes.len() {
+                continue;
+            }
+            match followed(bytes, end, ended) {
+                Some(true) => return Overlap::Refuse,
+                None => undecided = true,
+                Some(false) => {}
+            }
+        }
+    }
+    if followed(bytes, len, ended).is_none() {
+        undecided = true;
+    }
+    if undecided {
+        Overlap::Wait
+    } else {
+        Overlap::Accept
+    }
+}
+
+/// The demultiplexer, with a buffer of `CAP` bytes (at least [`DEFAULT_CAPACITY`]).
+#[derive(Debug, Clone)]
+pub struct Demux<const CAP: usize = DEFAULT_CAPACITY> {
+    buf: [u8; CAP],
+    start: usize,
+    end: usize,
+    /// Bytes of the frame last handed out, dropped at the next call.
+    delivered: usize,
+    /// Settle waits for inner candidates now (line idle or stream ended).
+    settle: bool,
+    /// The stream has ended: unfinished frames are dropped.
+    ended: bool,
+    /// The first held byte follows a delivered frame (or starts the stream).
+    in_sync: bool,
+    counters: StreamCounters,
+}
+
+impl<const CAP: usize> Default for Demux<CAP> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const CAP: usize> Demux<CAP> {
+    const ROOM: () = assert!(
+        CAP >= DEFAULT_CAPACITY,
+        "Demux buffer under DEFAULT_CAPACITY"
+    );
+
+    /// An empty demultiplexer.
+    pub const fn new() -> Self {
+        let () = Self::ROOM;
+        Self {
+            buf: [0; CAP],
+            start: 0,
+            end: 0,
+            delivered: 0,
+            settle: false,
+            ended: false,
+            in_sync: true,
+            counters: StreamCounters {
+                bytes: 0,
+                sentences: 0,
+                mt_frames: 0,
+                garbage_bytes: 0,
+                bad_checksum: 0,
+                malformed: 0,
+                too_long: 0,
+                bad_fcs: 0,
+                overlapping: 0,
+                truncated: 0,
+            },
+        }
+    }
+
+    /// Counters so far.
+    pub fn counters(&self) -> &StreamCounters {
+        &self.counters
+    }
+
+    /// Bytes held, not yet delivered or rejected.
+    pub fn pending(&self) -> usize {
+        self.end - self.start - self.delivered
+    }
+
+    /// Take as many of `bytes` as fit; returns how many were taken. Drain frames with
+    /// [`Demux::next_frame`] until it returns `None`, then write the rest: after that drain
+    /// there is always room for at least one byte.
+    pub fn write(&mut self, bytes: &[u8]) -> usize {
+        self.release();
+        if self.end == CAP && self.start > 0 {
+            self.buf.copy_within(self.start..self.end, 0);
+            self.end -= self.start;
+            self.start = 0;
+        } else if self.start == self.end {
+            self.start = 0;
+            self.end = 0;
+        }
+        let n = bytes.len().min(CAP - self.end);
+        self.buf[self.end..self.end + n].copy_from_slice(&bytes[..n]);
+        self.end += n;
+        self.counters.bytes += n as u64;
+        if n > 0 {
+            self.settle = false;
+            self.ended = false;
+        }
+        n
+    }
+
+    /// The line went idle: deliver a frame that only waits to rule out an inner frame.
+    pub fn idle(&mut self) {
+        self.settle = true;
+    }
+
+    /// The stream ended: settle every wait and drop unfinished frames (counted as truncated).
+    pub fn finish(&mut self) {
+        self.settle = true;
+        self.ended = true;
+    }
+
+    fn release(&mut self) {
+        self.start += self.delivered;
+        self.delivered = 0;
+    }
+
+    fn drop_first(&mut self) {
+        self.start += 1;
+        self.in_sync = false;
+    }
+
+    /// The next checked frame, or `None` when more bytes are needed.
+    pub fn next_frame(&mut self) -> Option<Frame<'_>> {
+        self.release();
+        loop {
+            let data = &self.buf[self.start..self.end];
+            let first = *data.first()?;
+            let verdict = match first {
+                b'$' => scan_sentence(data),
+                MT_SOF => scan_mt(data),
+                _ => {
+                    let skip = data
+                        .iter()
+                        .position(|&b| b == b'$' || b == MT_SOF)
+                        .unwrap_or(data.len());
+                    self.counters.garbage_bytes =
+                        self.counters.garbage_bytes.saturating_add(skip as u32);
+                    self.start += skip;
+                    self.in_sync = false;
+                    continue;
+                }
+            };
+            match verdict {
+                Scan::Incomplete if self.ended => {
+                    self.counters.truncated += 1;
+                    self.drop_first();
+                }
+                Scan::Incomplete => return None,
+                Scan::Invalid(reason) => {
+                    let c = &mut self.counters;
+                    match reason {
+                        Reject::Checksum => c.bad_checksum += 1,
+                        Reject::Malformed => c.malformed += 1,
+                        Reject::TooLong => c.too_long += 1,
+                        Reject::Fcs => c.bad_fcs += 1,
+                    }
+                    self.drop_first();
+                }
+                Scan::Valid(len) if first == MT_SOF => {
+                    match resolve_overlap(data, len, self.ended, self.in_sync) {
+                        Overlap::Refuse => {
+                            self.counters.overlapping += 1;
+                            self.drop_first();
+                        }
+                        Overlap::Wait if !self.settle => return None,
+                        Overlap::Accept | Overlap::Wait => {
+                            self.counters.mt_frames += 1;
+                            self.delivered = len;
+                            self.in_sync = true;
+                            let f = &self.buf[self.start..self.start + len];
+                            return Some(Frame::Mt(MtFrame {
+                                cmd0: f[2],
+                                cmd1: f[3],
+                                data: &f[4..len - 1],
+                            }));
+                        }
+                    }
+                }
+                Scan::Valid(len) => {
+                    self.counters.sentences += 1;
+                    self.delivered = len;
+                    self.in_sync = true;
+                    let line = &self.buf[self.start..self.start + len];
+                    let star = line.iter().rposition(|&b| b == b'*').unwrap_or(1);
+                    // Printable ASCII was checked, so this never fails.
+                    let text = core::str::from_utf8(&line[1..star]).unwrap_or("");
+                    return Some(Frame::Nmea(text));
+                }
+            }
+        }
+    }
+
+    /// Feed `bytes` and hand every frame they complete to `sink`.
+    pub fn feed(&mut self, mut bytes: &[u8], sink: &mut impl FnMut(Frame<'_>)) {
+        loop {
+            while let Some(frame) = self.next_frame() {
+                sink(frame);
+            }
+            if bytes.is_empty() {
+                return;
+            }
+            let n = self.write(bytes);
+            bytes = &bytes[n..];
+        }
+    }
+
+    /// End the stream and hand every frame still held to `sink`.
+    pub fn finish_into(&mut self, sink: &mut impl FnMut(Frame<'_>)) {
+        self.finish();
+        while let Some(frame) = self.next_frame() {
+            sink(frame);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frames(stream: &[u8]) -> (std::vec::Vec<std::string::String>, StreamCounters) {
+        let mut d = Demux::<DEFAULT_CAPACITY>::new();
+        let mut out = std::vec::Vec::new();
+        let mut sink = |f: Frame<'_>| out.push(std::format!("{f:?}"));
+        d.feed(stream, &mut sink);
+        d.finish_into(&mut sink);
+        (out, *d.counters())
+    }
+
+    #[test]
+    fn sentence_and_mt_frame_interleaved_with_garbage() {
+        let mut s = std::vec::Vec::new();
+        s.extend_from_slice(
+            b"xx$GPRMC,092750.000,A,5321.6802,N,00630.3372,W,0.02,31.66,280511,,,A*43\r\n",
+        );
+        s.extend_from_slice(&[0x00, 0xFE, 0x02, 0x44, 0x81, 0xFE, 0xFE, 0x02 ^ 0x44 ^ 0x81]);
+        s.extend_from_slice(
+            b"$GPGGA,092750.000,5321.6802,N,00630.3372,W,1,8,1.03,61.7,M,55.2,M,,*76\n",
+        );
+        let (out, c) = frames(&s);
+        assert_eq!(out.len(), 3, "{out:?}");
+        assert!(out[0].starts_with("Nmea(\"GPRMC,092750.000"));
+        assert!(out[1].contains("data: [254, 254]"), "{}", out[1]);
+        assert_eq!((c.sentences, c.mt_frames, c.garbage_bytes), (2, 1, 3));
+    }
+
+    fn sentence(body: &str) -> std::string::String {
+        let mut s = std::string::String::new();
+        crate::nmea::write_sentence(&mut s, body).expect("string");
+        s
+    }
+
+    #[test]
+    fn bad_checksum_costs_one_frame() {
+        let good = sentence("GPXXX,2");
+        let s = std::format!("$GPGGA,1*00\r\n{good}");
+        let (out, c) = frames(s.as_bytes());
+        assert_eq!(c.bad_checksum, 1);
+        assert_eq!(out.len(), 1, "{out:?}");
+    }
+
+    #[test]
+    fn over_long_line_is_dropped_and_counted() {
+        let long = sentence(&"A".repeat(200));
+        let s = std::format!("{long}{}", sentence("GPXXX,2"));
+        let (out, c) = frames(s.as_bytes());
+        assert_eq!(c.too_long, 1);
+        assert_eq!(out.len(), 1);
+    }
+
+    #[test]
+    fn truncated_frame_at_the_end_is_counted() {
+        let s = std::format!("{}$GPGGA,12", sentence("GPXXX,2"));
+        let (out, c) = frames(s.as_bytes());
+        assert_eq!((out.len(), c.truncated), (1, 1));
+    }
+
+    #[test]
+    fn forged_mt_frame_cannot_swallow_the_sentences_inside_it() {
+        // A damaged sentence holds a 0xFE whose LEN spans the next sentence and ends inside the
+        // one after, where a byte happens to match its FCS: refused, because the sentence it
+        // spans is valid and followed by another.
+        let (b, d) = (sentence("GPBBB,2"), sentence("GPDDD,4"));
+        for k in 0..10_000 {
+            let c = sentence(&std::format!("GPCCC,{k}"));
+            let cmd1 = b"PpQq"[k % 4];
+            for len in b.len()..b.len() + c.len() - 1 {
+                let mut s = b"$GPAAA,1".to_vec();
+                s.extend_from_slice(&[MT_SOF, len as u8, b'G', cmd1]);
+                let o = s.len() - 4;
+                s.extend_from_slice(b.as_bytes());
+                s.extend_from_slice(c.as_bytes());
+                s.extend_from_slice(d.as_bytes());
+                if scan_mt(&s[o..]) != Scan::Valid(len + 5) {
+                    continue;
+                }
+                let (out, counters) = frames(&s);
+                assert_eq!(counters.overlapping, 1);
+                let want: std::vec::Vec<_> = [&b, &c, &d]
+                    .iter()
+                    .map(|x| std::format!("Nmea({:?})", &x[1..x.len() - 5]))
+                    .collect();
+                assert_eq!(out, want);
+                return;
+            }
+        }
+        panic!("no forgery found to test with");
+    }
+}
