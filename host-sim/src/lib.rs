@@ -7,4 +7,5 @@ pub mod montecarlo;
 pub mod perf;
 pub mod report;
 pub mod scenario;
+pub mod simulate;
 pub mod tracking;

@@ -49,6 +49,32 @@ enum Command {
         #[arg(long)]
         markdown: bool,
     },
+    /// Write a capture as the radios would send it (GGA + RMC + PFOXB for a drive).
+    ///
+    /// Local (0, 0) of the scenario sits at --origin (default 47.0,8.0). The GPS reports
+    /// each route point at a whole second, the DF unit half a second later.
+    ///
+    /// Examples:
+    ///   foxhunt simulate --scenario aoa-drive --out drive.nmea
+    ///   foxhunt simulate --scenario-file my.toml --origin 53.35,-6.26 --out my.nmea
+    #[command(verbatim_doc_comment)]
+    Simulate {
+        /// Canonical bearing scenario name.
+        #[arg(long, default_value = "aoa-drive", conflicts_with = "scenario_file")]
+        scenario: String,
+        /// A scenario file (TOML).
+        #[arg(long)]
+        scenario_file: Option<std::path::PathBuf>,
+        /// Where to write the capture.
+        #[arg(long)]
+        out: std::path::PathBuf,
+        /// Latitude,longitude of local (0, 0), decimal degrees.
+        #[arg(long, allow_hyphen_values = true)]
+        origin: Option<String>,
+        /// Which Monte Carlo run's noise to write.
+        #[arg(long, default_value_t = 0)]
+        run: usize,
+    },
     /// Speed: the bootstrap SIR against the same filter in numpy (filterpy), single thread.
     ///
     /// Installs numpy, scipy and filterpy from PyPI into target/peer-venv on first use.
@@ -58,6 +84,49 @@ enum Command {
         #[arg(long, default_value_t = 20)]
         runs: usize,
     },
+}
+
+/// `foxhunt simulate`: one run of a bearing scenario as a capture file.
+fn simulate(
+    name: &str,
+    file: Option<&std::path::Path>,
+    out: &std::path::Path,
+    origin: Option<&str>,
+    run: usize,
+) -> Result<(), String> {
+    use foxhunt_sim::simulate::{CaptureOptions, drive_capture};
+    let scenario = match file {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+            Scenario::from_toml(&text).map_err(|e| format!("{}: {e}", path.display()))?
+        }
+        None => Scenario::named(name)
+            .ok_or_else(|| format!("unknown scenario `{name}`; known: {}", NAMES.join(", ")))?,
+    };
+    let mut options = CaptureOptions {
+        run,
+        ..CaptureOptions::default()
+    };
+    if let Some(o) = origin {
+        let bad = || format!("--origin wants LAT,LON in decimal degrees, not `{o}`");
+        let (lat, lon) = o.split_once(',').ok_or_else(bad)?;
+        options.origin = foxhunt_bridge::nmea::LatLon {
+            lat: lat.trim().parse().map_err(|_| bad())?,
+            lon: lon.trim().parse().map_err(|_| bad())?,
+        };
+    }
+    let bytes = drive_capture(&scenario, &options)?;
+    std::fs::write(out, &bytes).map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+    eprintln!(
+        "wrote {} ({} bytes, {} bearings; local (0, 0) at {:.6},{:.6})",
+        out.display(),
+        bytes.len(),
+        scenario.route.len(),
+        options.origin.lat,
+        options.origin.lon
+    );
+    Ok(())
 }
 
 /// `foxhunt perf`: the Rust SIR against the numpy peer, single thread.
@@ -100,6 +169,19 @@ fn main() -> ExitCode {
 fn run(cli: Cli) -> Result<(), String> {
     match cli.command {
         Command::Perf { runs } => perf(runs.max(1)),
+        Command::Simulate {
+            scenario,
+            scenario_file,
+            out,
+            origin,
+            run,
+        } => simulate(
+            &scenario,
+            scenario_file.as_deref(),
+            &out,
+            origin.as_deref(),
+            run,
+        ),
         Command::Bench {
             scenario,
             scenario_file,

@@ -1,0 +1,126 @@
+//! A recorded drive, end to end: bytes through the bridge into a SIR filter and the ML fix.
+//!
+//! The firmware image and the host run this same function on the same capture and seed; the
+//! QEMU test compares their answers bit for bit.
+
+use crate::bridge::{BridgeConfig, BridgeCounters, Event, Receiver};
+use crate::stream::StreamCounters;
+use foxhunt_core::fix::init::initial_particles;
+use foxhunt_core::fix::intersection::MIN_CROSSING;
+use foxhunt_core::fix::ml::{MlOptions, ml};
+use foxhunt_core::{
+    Bearing, Error, Filter, Fix, Gaussian, ParticleSet, Sir, SirConfig, StaticEmitter,
+};
+use rand_core::SeedableRng;
+use rand_xorshift::XorShiftRng;
+
+/// Most bearings one replay keeps (a drive of two minutes at one bearing a second).
+pub const MAX_BEARINGS: usize = 128;
+
+/// What a replay found.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Replay {
+    /// The SIR filter's final mean, or why it has none.
+    pub sir: Result<[f32; 2], Error>,
+    /// The ML fix, or why it has none.
+    pub ml: Result<Fix, Error>,
+    /// Bearings used.
+    pub bearings: usize,
+    /// Bearings beyond [`MAX_BEARINGS`], not used.
+    pub dropped: usize,
+    /// What the demultiplexer rejected.
+    pub stream: StreamCounters,
+    /// What the bridge rejected.
+    pub bridge: BridgeCounters,
+}
+
+/// Feed `capture` in reads of `chunk` bytes through a receiver, then run a SIR filter with `N`
+/// particles (initialised from bearing pairs, as the bench does) over the first `steps`
+/// bearings (all of them with `usize::MAX`; 0 gives the cost of everything but the steps) and
+/// the ML fix.
+pub fn replay<const N: usize>(
+    capture: &[u8],
+    chunk: usize,
+    config: BridgeConfig,
+    seed: u64,
+    steps: usize,
+) -> Replay {
+    let mut rx = Receiver::<0>::new(config, []);
+    let mut bearings = heapless::Vec::<Bearing, MAX_BEARINGS>::new();
+    let mut dropped = 0;
+    let mut sink = |e: Event| {
+        if let Event::Bearing(b) = e
+            && bearings.push(b.bearing).is_err()
+        {
+            dropped += 1;
+        }
+    };
+    for piece in capture.chunks(chunk.max(1)) {
+        rx.feed(piece, &mut sink);
+    }
+    rx.finish(&mut sink);
+    let mut rng = XorShiftRng::seed_from_u64(seed);
+    let sir = run_sir::<N>(&bearings, steps, &mut rng);
+    let ml = ml(&bearings, None, &Gaussian, MlOptions::default());
+    let (stream, bridge) = rx.counters();
+    Replay {
+        sir,
+        ml,
+        bearings: bearings.len(),
+        dropped,
+        stream: *stream,
+        bridge: *bridge,
+    }
+}
+
+fn run_sir<const N: usize>(
+    bearings: &[Bearing],
+    steps: usize,
+    rng: &mut XorShiftRng,
+) -> Result<[f32; 2], Error> {
+    let mut cloud = ParticleSet::<N, 2>::new();
+    initial_particles(bearings, MIN_CROSSING, &mut cloud, rng)?;
+    let model = StaticEmitter { process_var: 0.0 };
+    let mut f = Sir::<_, _, N, 2>::new(model, Gaussian, SirConfig::default());
+    f.initialise(&cloud.states, rng)?;
+    for b in bearings.iter().take(steps) {
+        let _ = f.step(b, rng);
+    }
+    Ok(f.estimate().mean)
+}
+
+/// The lines both the firmware and the host print for a replay: the bits of every result, so
+/// two runs agree exactly or visibly not.
+pub fn write_summary(r: &Replay, out: &mut impl core::fmt::Write) -> core::fmt::Result {
+    match r.sir {
+        Ok(p) => writeln!(out, "sir {:08x} {:08x}", bits(p[0]), bits(p[1]))?,
+        Err(e) => writeln!(out, "sir error {e:?}")?,
+    }
+    match r.ml {
+        Ok(f) => writeln!(
+            out,
+            "ml {:08x} {:08x} cov {:08x} {:08x} {:08x} iterations {}",
+            bits(f.position[0]),
+            bits(f.position[1]),
+            bits(f.covariance[0][0]),
+            bits(f.covariance[0][1]),
+            bits(f.covariance[1][1]),
+            f.iterations
+        )?,
+        Err(e) => writeln!(out, "ml error {e:?}")?,
+    }
+    writeln!(
+        out,
+        "bearings {} dropped {} sentences {} rejected {} fixes {}",
+        r.bearings,
+        r.dropped,
+        r.stream.sentences,
+        r.stream.rejected(),
+        r.bridge.fixes
+    )
+}
+
+/// The bits of a result, NaN made canonical (x86 and ARM differ in NaN payloads only).
+pub fn bits(v: f32) -> u32 {
+    if v.is_nan() { 0x7fc0_0000 } else { v.to_bits() }
+}
