@@ -113,8 +113,14 @@ fn hex_digit(b: u8) -> Option<u8> {
 
 /// Check a sentence candidate starting with `$`.
 fn scan_sentence(bytes: &[u8]) -> Scan {
+    scan_sentence_from(bytes, 1)
+}
+
+/// [`scan_sentence`], skipping bytes before `from` already found plain (printable, no line
+/// end): a sentence arriving byte by byte is then scanned once, not once per byte.
+fn scan_sentence_from(bytes: &[u8], from: usize) -> Scan {
     let limit = bytes.len().min(MAX_SENTENCE);
-    for i in 1..limit {
+    for i in from.max(1)..limit {
         match bytes[i] {
             b'\n' => return check_sentence(&bytes[..=i]),
             b'\r' => {
@@ -296,6 +302,8 @@ pub struct Demux<const CAP: usize = DEFAULT_CAPACITY> {
     ended: bool,
     /// The first held byte follows a delivered frame (or starts the stream).
     in_sync: bool,
+    /// Bytes of the sentence candidate at the start already found plain.
+    plain: usize,
     counters: StreamCounters,
 }
 
@@ -322,6 +330,7 @@ impl<const CAP: usize> Demux<CAP> {
             settle: false,
             ended: false,
             in_sync: true,
+            plain: 0,
             counters: StreamCounters {
                 bytes: 0,
                 sentences: 0,
@@ -383,13 +392,17 @@ impl<const CAP: usize> Demux<CAP> {
     }
 
     fn release(&mut self) {
-        self.start += self.delivered;
-        self.delivered = 0;
+        if self.delivered > 0 {
+            self.start += self.delivered;
+            self.delivered = 0;
+            self.plain = 0;
+        }
     }
 
     fn drop_first(&mut self) {
         self.start += 1;
         self.in_sync = false;
+        self.plain = 0;
     }
 
     /// The next checked frame, or `None` when more bytes are needed.
@@ -399,7 +412,16 @@ impl<const CAP: usize> Demux<CAP> {
             let data = &self.buf[self.start..self.end];
             let first = *data.first()?;
             let verdict = match first {
-                b'$' => scan_sentence(data),
+                b'$' => {
+                    let v = scan_sentence_from(data, self.plain);
+                    if v == Scan::Incomplete {
+                        // Resume after the plain bytes next time; a trailing CR is checked
+                        // again, with the byte that follows it.
+                        let n = data.len().min(MAX_SENTENCE);
+                        self.plain = if data[n - 1] == b'\r' { n - 1 } else { n };
+                    }
+                    v
+                }
                 MT_SOF => scan_mt(data),
                 _ => {
                     let skip = data
@@ -410,6 +432,7 @@ impl<const CAP: usize> Demux<CAP> {
                         self.counters.garbage_bytes.saturating_add(skip as u32);
                     self.start += skip;
                     self.in_sync = false;
+                    self.plain = 0;
                     continue;
                 }
             };
