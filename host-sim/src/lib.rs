@@ -2,6 +2,8 @@
 //! parallel Monte Carlo benchmarks of every method against the CRLB, and reports.
 #![deny(missing_docs)]
 
+pub mod frames;
+pub mod locate;
 pub mod methods;
 pub mod montecarlo;
 pub mod perf;

@@ -49,6 +49,49 @@ enum Command {
         #[arg(long)]
         markdown: bool,
     },
+    /// Locate the emitter of a recorded drive (NMEA GGA/RMC + $PFOXB bearings).
+    ///
+    /// With no CAPTURE, locates the bundled sample drive (foxhunt simulate --scenario
+    /// aoa-drive). `-` reads standard input. Exit status: 0 with a fix, 1 when the capture
+    /// gives none (the message says why), 2 on a usage error.
+    ///
+    /// Examples:
+    ///   foxhunt locate                                  # the bundled sample drive
+    ///   foxhunt locate drive.nmea --json
+    ///   foxhunt locate drive.nmea --method sir --geojson fix.geojson
+    ///   cat /dev/ttyUSB0 | foxhunt locate - --sigma-deg 2
+    #[command(verbatim_doc_comment)]
+    Locate {
+        /// Capture files (concatenated in order), or `-` for standard input.
+        captures: Vec<std::path::PathBuf>,
+        /// Fix method.
+        #[arg(long, value_enum, default_value = "ml")]
+        method: foxhunt_sim::locate::LocateMethod,
+        /// Bearing noise of the DF unit, degrees (default: estimated from the residuals).
+        #[arg(long)]
+        sigma_deg: Option<f32>,
+        /// Print one JSON object (stable field names).
+        #[arg(long)]
+        json: bool,
+        /// Write the emitter, ellipse, track and bearing lines as GeoJSON.
+        #[arg(long)]
+        geojson: Option<std::path::PathBuf>,
+        /// Seed of the particle methods.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+    /// Every decoded frame of a capture as a JSON line, then the counters.
+    ///
+    /// Kinds: gga, rmc, pfoxb, af_incoming_msg, mt (other MT frames), nmea (other sentences);
+    /// the last line has kind counters.
+    ///
+    /// Example:
+    ///   foxhunt frames drive.nmea | grep pfoxb
+    #[command(verbatim_doc_comment)]
+    Frames {
+        /// Capture file, or `-` for standard input.
+        capture: std::path::PathBuf,
+    },
     /// Write a capture as the radios would send it (GGA + RMC + PFOXB for a drive).
     ///
     /// Local (0, 0) of the scenario sits at --origin (default 47.0,8.0). The GPS reports
@@ -74,6 +117,18 @@ enum Command {
         /// Which Monte Carlo run's noise to write.
         #[arg(long, default_value_t = 0)]
         run: usize,
+        /// Share of wild bearings, uniform over the circle (default: the scenario's).
+        #[arg(long)]
+        wild: Option<f32>,
+        /// Constant multipath bias on every bearing, degrees.
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        bias_deg: f32,
+        /// Share of bytes corrupted after writing (0.01 = 1 %).
+        #[arg(long, default_value_t = 0.0)]
+        corrupt: f32,
+        /// Share of bytes dropped after writing.
+        #[arg(long, default_value_t = 0.0)]
+        drop: f32,
     },
     /// Speed: the bootstrap SIR against the same filter in numpy (filterpy), single thread.
     ///
@@ -86,15 +141,107 @@ enum Command {
     },
 }
 
+/// The bundled sample drive (`foxhunt simulate --scenario aoa-drive`).
+const SAMPLE_DRIVE: &[u8] = include_bytes!("../../serial-bridge/captures/aoa-drive.nmea");
+
+/// The bytes of the captures, in order; none means the bundled sample; `-` is stdin.
+fn read_captures(paths: &[std::path::PathBuf]) -> Result<Vec<u8>, String> {
+    use std::io::Read;
+    if paths.is_empty() {
+        return Ok(SAMPLE_DRIVE.to_vec());
+    }
+    let mut bytes = Vec::new();
+    for p in paths {
+        if p.as_os_str() == "-" {
+            std::io::stdin()
+                .read_to_end(&mut bytes)
+                .map_err(|e| format!("cannot read standard input: {e}"))?;
+        } else {
+            let b = std::fs::read(p).map_err(|e| format!("cannot read {}: {e}", p.display()))?;
+            bytes.extend_from_slice(&b);
+        }
+    }
+    if bytes.is_empty() {
+        return Err("the capture is empty: no bytes to decode".into());
+    }
+    Ok(bytes)
+}
+
+/// `foxhunt locate`.
+fn locate(
+    paths: &[std::path::PathBuf],
+    method: foxhunt_sim::locate::LocateMethod,
+    sigma_deg: Option<f32>,
+    json: bool,
+    geojson: Option<&std::path::Path>,
+    seed: u64,
+) -> Result<(), String> {
+    use foxhunt_sim::locate as l;
+    let bytes = read_captures(paths)?;
+    let decoded = l::decode(&bytes, foxhunt_bridge::BridgeConfig::default());
+    let (report, solution) = l::locate(&decoded, method, sigma_deg, seed)?;
+    if let Some(path) = geojson {
+        let g = l::geojson(&report, &solution, &decoded);
+        std::fs::write(path, g.to_string())
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    }
+    if json {
+        println!(
+            "{}",
+            serde_json::to_string(&report).map_err(|e| e.to_string())?
+        );
+        return Ok(());
+    }
+    let r = &report;
+    println!(
+        "emitter     {:.6}, {:.6}  ({:.1} m east, {:.1} m north of {:.6}, {:.6})",
+        r.lat, r.lon, r.east_m, r.north_m, r.origin.lat, r.origin.lon
+    );
+    println!(
+        "95 % ellipse {:.1} x {:.1} m, major axis {:.0} deg from north; CEP50 {:.1} m",
+        r.ellipse.major_m, r.ellipse.minor_m, r.ellipse.orientation_deg, r.cep50_m
+    );
+    println!(
+        "CRLB        {:.1} m for this drive's geometry (best any unbiased fix can do)",
+        r.crlb_m
+    );
+    println!(
+        "method      {:?}, bearing noise {:.2} deg ({})",
+        r.method,
+        r.sigma_deg,
+        if r.sigma_estimated {
+            "estimated from the residuals"
+        } else {
+            "given"
+        }
+    );
+    let rejected: Vec<String> = r
+        .rejected
+        .iter()
+        .filter(|(_, n)| **n > 0)
+        .map(|(k, n)| format!("{k} {n}"))
+        .collect();
+    println!(
+        "bearings    {} used; rejected: {}",
+        r.used,
+        if rejected.is_empty() {
+            "none".to_string()
+        } else {
+            rejected.join(", ")
+        }
+    );
+    Ok(())
+}
+
 /// `foxhunt simulate`: one run of a bearing scenario as a capture file.
 fn simulate(
     name: &str,
     file: Option<&std::path::Path>,
     out: &std::path::Path,
     origin: Option<&str>,
-    run: usize,
+    mut options: foxhunt_sim::simulate::CaptureOptions,
 ) -> Result<(), String> {
-    use foxhunt_sim::simulate::{CaptureOptions, drive_capture};
+    use foxhunt_sim::simulate::drive_capture;
     let scenario = match file {
         Some(path) => {
             let text = std::fs::read_to_string(path)
@@ -103,10 +250,6 @@ fn simulate(
         }
         None => Scenario::named(name)
             .ok_or_else(|| format!("unknown scenario `{name}`; known: {}", NAMES.join(", ")))?,
-    };
-    let mut options = CaptureOptions {
-        run,
-        ..CaptureOptions::default()
     };
     if let Some(o) = origin {
         let bad = || format!("--origin wants LAT,LON in decimal degrees, not `{o}`");
@@ -160,8 +303,10 @@ fn main() -> ExitCode {
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
+            // One line that names the problem; 1 = the input gave no result (clap exits 2 on
+            // usage errors).
             eprintln!("foxhunt: {e}");
-            ExitCode::from(2)
+            ExitCode::from(1)
         }
     }
 }
@@ -169,19 +314,49 @@ fn main() -> ExitCode {
 fn run(cli: Cli) -> Result<(), String> {
     match cli.command {
         Command::Perf { runs } => perf(runs.max(1)),
+        Command::Locate {
+            captures,
+            method,
+            sigma_deg,
+            json,
+            geojson,
+            seed,
+        } => locate(&captures, method, sigma_deg, json, geojson.as_deref(), seed),
+        Command::Frames { capture } => {
+            let bytes = read_captures(std::slice::from_ref(&capture))?;
+            let stdout = std::io::stdout();
+            foxhunt_sim::frames::write_frames(&bytes, &mut stdout.lock())
+                .map_err(|e| format!("cannot write: {e}"))
+        }
         Command::Simulate {
             scenario,
             scenario_file,
             out,
             origin,
             run,
-        } => simulate(
-            &scenario,
-            scenario_file.as_deref(),
-            &out,
-            origin.as_deref(),
-            run,
-        ),
+            wild,
+            bias_deg,
+            corrupt,
+            drop,
+        } => {
+            let fraction = |name: &str, v: f32| {
+                if (0.0..=1.0).contains(&v) {
+                    Ok(v)
+                } else {
+                    Err(format!("--{name} is a share between 0 and 1, not {v}"))
+                }
+            };
+            let options = foxhunt_sim::simulate::CaptureOptions {
+                run,
+                wild_fraction: wild.map(|w| fraction("wild", w)).transpose()?,
+                bias_deg,
+                corrupt_fraction: fraction("corrupt", corrupt)?,
+                drop_fraction: fraction("drop", drop)?,
+                ..Default::default()
+            };
+            let (file, origin) = (scenario_file.as_deref(), origin.as_deref());
+            simulate(&scenario, file, &out, origin, options)
+        }
         Command::Bench {
             scenario,
             scenario_file,

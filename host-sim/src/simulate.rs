@@ -15,9 +15,7 @@ use foxhunt_core::model::bearing::{predicted, theta_to_azimuth, wrap};
 use foxhunt_core::random;
 use std::f32::consts::PI;
 
-/// Local (0, 0) of a simulated capture unless `--origin` says otherwise: a point in open
-/// country (47.0 N, 8.0 E); the route's first point sits there only if the route starts at
-/// (0, 0), since scenario coordinates are kept as they are.
+/// Where the route's first point sits unless `--origin` says otherwise: 47.0 N, 8.0 E.
 pub const DEFAULT_ORIGIN: LatLon = LatLon {
     lat: 47.0,
     lon: 8.0,
@@ -36,6 +34,14 @@ pub struct CaptureOptions {
     pub run: usize,
     /// Carrier frequency in the bearing sentences, MHz.
     pub freq_mhz: f64,
+    /// Share of wild bearings (uniform over the circle); `None` keeps the scenario's.
+    pub wild_fraction: Option<f32>,
+    /// A constant multipath bias added to every bearing, degrees.
+    pub bias_deg: f32,
+    /// Share of bytes corrupted (each XORed with a random non-zero byte) after writing.
+    pub corrupt_fraction: f32,
+    /// Share of bytes dropped after writing.
+    pub drop_fraction: f32,
 }
 
 impl Default for CaptureOptions {
@@ -52,6 +58,10 @@ impl Default for CaptureOptions {
             },
             run: 0,
             freq_mhz: 433.92,
+            wild_fraction: None,
+            bias_deg: 0.0,
+            corrupt_fraction: 0.0,
+            drop_fraction: 0.0,
         }
     }
 }
@@ -63,7 +73,8 @@ fn push(out: &mut Vec<u8>, body: &str) {
     out.extend_from_slice(s.as_bytes());
 }
 
-/// The capture of one run of a bearing scenario.
+/// The capture of one run of a bearing scenario. Local (0, 0) of the capture is the route's
+/// first point, at `o.origin`: the emitter lies at `emitter - route[0]` in a replay's frame.
 pub fn drive_capture(s: &Scenario, o: &CaptureOptions) -> Result<Vec<u8>, String> {
     let frame = LocalFrame::new(o.origin, 0.0).map_err(|_| "origin out of range".to_string())?;
     let n = s.route.len();
@@ -74,8 +85,11 @@ pub fn drive_capture(s: &Scenario, o: &CaptureOptions) -> Result<Vec<u8>, String
     let mut points = s.route.clone();
     let (a, b) = (s.route[n - 2], s.route[n - 1]);
     points.push([2.0 * b[0] - a[0], 2.0 * b[1] - a[1]]);
+    let start = s.route[0];
     let mut rng = s.rng(o.run);
     let sigma = s.sigma();
+    let wild = o.wild_fraction.unwrap_or(s.wild_fraction);
+    let bias = o.bias_deg.to_radians();
     let mut out = Vec::new();
     let mut line = Line::new();
     let fmt_err = |_| "sentence longer than 96 characters".to_string();
@@ -83,8 +97,10 @@ pub fn drive_capture(s: &Scenario, o: &CaptureOptions) -> Result<Vec<u8>, String
         let time = UtcTime {
             ms_of_day: o.start.ms_of_day + 1000 * k as u32,
         };
+        // The route's first point is the origin: a replay's local frame (origin: the first
+        // fix) then equals the scenario's, shifted by that point.
         let geo = frame
-            .to_geodetic([f64::from(p[0]), f64::from(p[1])])
+            .to_geodetic([f64::from(p[0] - start[0]), f64::from(p[1] - start[1])])
             .map_err(|_| "route point out of range".to_string())?;
         // Past the last point the vehicle keeps its last leg's speed and course.
         let next = points.get(k + 1).copied().unwrap_or_else(|| {
@@ -105,10 +121,10 @@ pub fn drive_capture(s: &Scenario, o: &CaptureOptions) -> Result<Vec<u8>, String
         }
         // The bearing half a second later, from halfway to the next point.
         let vehicle = [(p[0] + next[0]) / 2.0, (p[1] + next[1]) / 2.0];
-        let theta = if random::uniform(&mut rng) < s.wild_fraction {
+        let theta = if random::uniform(&mut rng) < wild {
             random::uniform_in(&mut rng, -PI, PI)
         } else {
-            wrap(predicted(&s.emitter, &vehicle) + sigma * random::normal(&mut rng))
+            wrap(predicted(&s.emitter, &vehicle) + bias + sigma * random::normal(&mut rng))
         };
         let azimuth = f64::from(theta_to_azimuth(theta).to_degrees()) % 360.0;
         let bearing = Pfoxb {
@@ -125,7 +141,28 @@ pub fn drive_capture(s: &Scenario, o: &CaptureOptions) -> Result<Vec<u8>, String
         pfoxb_body(&mut line, &bearing).map_err(fmt_err)?;
         push(&mut out, &line);
     }
+    damage(&mut out, o, &mut rng);
     Ok(out)
+}
+
+/// Corrupt and drop bytes as asked, after the capture is written.
+fn damage(bytes: &mut Vec<u8>, o: &CaptureOptions, rng: &mut rand_xorshift::XorShiftRng) {
+    use rand_core::Rng;
+    if o.corrupt_fraction <= 0.0 && o.drop_fraction <= 0.0 {
+        return;
+    }
+    let mut kept = Vec::with_capacity(bytes.len());
+    for &b in bytes.iter() {
+        if random::uniform(rng) < o.drop_fraction {
+            continue;
+        }
+        if random::uniform(rng) < o.corrupt_fraction {
+            kept.push(b ^ (1 + (rng.next_u32() % 255) as u8));
+        } else {
+            kept.push(b);
+        }
+    }
+    *bytes = kept;
 }
 
 #[cfg(test)]
@@ -155,7 +192,8 @@ mod tests {
                 let prev = s.route[k - 1];
                 [2.0 * p[0] - prev[0], 2.0 * p[1] - prev[1]]
             });
-            let mid = [(p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0];
+            let o = s.route[0];
+            let mid = [(p[0] + q[0]) / 2.0 - o[0], (p[1] + q[1]) / 2.0 - o[1]];
             let err = (b.vehicle[0] - mid[0]).hypot(b.vehicle[1] - mid[1]);
             assert!(err < 0.01, "bearing {k}: {err} m off");
         }

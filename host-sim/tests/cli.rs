@@ -66,18 +66,138 @@ fn bench_runs_a_scenario_file() {
 
     std::fs::write(&f, "emitter = [1.0, 2.0]\nroute = \"loop300\"\nspeed = 3\n").expect("write");
     let out = foxhunt(&["bench", "--scenario-file", f.to_str().expect("path")]);
-    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("speed"));
 }
 
 #[test]
 fn unknown_scenario_is_a_one_line_error() {
     let out = foxhunt(&["bench", "--scenario", "nowhere"]);
-    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
         err.contains("unknown scenario `nowhere`") && err.contains("aoa-afsa"),
         "{err}"
     );
     assert_eq!(err.trim().lines().count(), 1);
+}
+
+fn sentence(body: &str) -> String {
+    let mut s = String::new();
+    foxhunt_bridge::nmea::write_sentence(&mut s, body).expect("string");
+    s
+}
+
+#[test]
+fn locate_the_bundled_drive_as_json() {
+    let out = foxhunt(&["locate", "--json"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    for key in [
+        "lat", "lon", "east_m", "north_m", "cep50_m", "crlb_m", "method", "used", "rejected",
+    ] {
+        assert!(r.get(key).is_some(), "missing {key}: {r}");
+    }
+    for key in ["major_m", "minor_m", "orientation_deg", "confidence"] {
+        assert!(r["ellipse"].get(key).is_some(), "missing ellipse.{key}");
+    }
+    // The sample's emitter is at (1200, 800) m from the first fix; its CRLB is about 51 m.
+    let (e, n) = (
+        r["east_m"].as_f64().expect("e"),
+        r["north_m"].as_f64().expect("n"),
+    );
+    assert!((e - 1200.0).hypot(n - 800.0) < 250.0, "{r}");
+    assert_eq!(r["method"], "ml");
+}
+
+#[test]
+fn bad_captures_give_one_line_errors_and_exit_1() {
+    let dir = std::env::temp_dir().join(format!("foxhunt-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let fix = |t: &str, lon: &str| {
+        sentence(&format!(
+            "GPGGA,{t},4700.0000,N,{lon},E,1,08,1.0,0.0,M,0.0,M,,"
+        ))
+    };
+    let bearing = |t: &str| sentence(&format!("PFOXB,{t},45.0,T,80,433.92"));
+    let garbage: Vec<u8> = (0..4000u32)
+        .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8 | 0x80)
+        .collect();
+    let cases: Vec<(&str, Vec<u8>, &str)> = vec![
+        ("empty", Vec::new(), "empty"),
+        ("nofix", bearing("120000.00").into_bytes(), "no GPS fix"),
+        (
+            "nobearing",
+            fix("120000.000", "00800.0000").into_bytes(),
+            "no bearing",
+        ),
+        (
+            "onebearing",
+            [fix("120000.000", "00800.0000"), bearing("120000.00")]
+                .concat()
+                .into_bytes(),
+            "only one usable bearing",
+        ),
+        ("garbage", garbage, "no GPS fix"),
+    ];
+    for (name, bytes, expect) in cases {
+        let path = dir.join(name);
+        std::fs::write(&path, bytes).expect("write");
+        let out = foxhunt(&["locate", path.to_str().expect("path")]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{name}: {err}");
+        assert!(
+            err.contains(expect) && err.lines().count() == 1,
+            "{name}: {err}"
+        );
+        assert!(out.stdout.is_empty(), "{name}: printed a fix");
+    }
+    let out = foxhunt(&["locate", dir.join("missing").to_str().expect("path")]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read"));
+    let parallel = [
+        fix("120000.000", "00800.0000"),
+        bearing("120000.00"),
+        fix("120001.000", "00800.0000"),
+        bearing("120001.00"),
+    ]
+    .concat();
+    let path = dir.join("stationary");
+    std::fs::write(&path, parallel).expect("write");
+    let out = foxhunt(&["locate", path.to_str().expect("path")]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("never moved") || err.contains("parallel"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn frames_prints_one_object_per_frame_then_the_counters() {
+    let out = foxhunt(&["frames", "../serial-bridge/captures/aoa-drive.nmea"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("JSON line"))
+        .collect();
+    assert_eq!(lines.len(), 182 + 1);
+    assert_eq!(lines[0]["kind"], "gga");
+    assert_eq!(lines[1]["kind"], "rmc");
+    assert!(lines[1]["speed_kn"].is_number() && lines[1]["course_deg"].is_number());
+    assert_eq!(lines[2]["kind"], "pfoxb");
+    for key in ["azimuth_deg", "reference", "quality", "freq_mhz", "time"] {
+        assert!(lines[2].get(key).is_some(), "pfoxb.{key}");
+    }
+    assert_eq!(lines[182]["kind"], "counters");
+    assert_eq!(lines[182]["sentences"], 182);
 }

@@ -1,0 +1,101 @@
+//! `foxhunt frames`: every decoded frame of a capture as one JSON object per line, then the
+//! counters, for debugging a serial link. Field names are stable.
+
+use foxhunt_bridge::mt::{AfIncomingMsg, LinkQualityMap};
+use foxhunt_bridge::nmea::{LatLon, NmeaError, Reference, Sentence, UtcTime};
+use foxhunt_bridge::{Demux, Frame};
+use serde_json::{Value, json};
+
+fn time(t: UtcTime) -> String {
+    let ms = t.ms_of_day;
+    let s = ms / 1000;
+    format!(
+        "{:02}:{:02}:{:02}.{:03}",
+        s / 3600,
+        s / 60 % 60,
+        s % 60,
+        ms % 1000
+    )
+}
+
+fn position(v: &mut Value, p: LatLon) {
+    v["lat"] = json!(p.lat);
+    v["lon"] = json!(p.lon);
+}
+
+/// The JSON object of one frame.
+pub fn frame_json(f: &Frame<'_>, map: &LinkQualityMap) -> Value {
+    match f {
+        Frame::Nmea(text) => match Sentence::parse(text) {
+            Ok(Sentence::Gga(g)) => {
+                let mut v = json!({"kind": "gga", "talker": String::from_utf8_lossy(&g.talker),
+                    "time": time(g.time), "quality": g.quality, "satellites": g.satellites,
+                    "hdop": g.hdop, "altitude_m": g.altitude_m});
+                position(&mut v, g.position);
+                v
+            }
+            Ok(Sentence::Rmc(r)) => {
+                let mut v = json!({"kind": "rmc", "talker": String::from_utf8_lossy(&r.talker),
+                    "time": time(r.time), "speed_kn": r.speed_kn, "course_deg": r.course_deg,
+                    "date": r.date.map(|d| format!("{:04}-{:02}-{:02}", d.year, d.month, d.day))});
+                position(&mut v, r.position);
+                v
+            }
+            Ok(Sentence::Pfoxb(b)) => {
+                let mut v = json!({"kind": "pfoxb", "time": time(b.time),
+                    "azimuth_deg": b.azimuth_deg,
+                    "reference": match b.reference { Reference::True => "true", Reference::Relative => "relative" },
+                    "quality": b.quality, "freq_mhz": b.freq_mhz});
+                if let Some(p) = b.position {
+                    position(&mut v, p);
+                }
+                v
+            }
+            Err(e) => {
+                let kind = match text.get(2..5) {
+                    Some("GGA") => "gga",
+                    Some("RMC") => "rmc",
+                    _ if text.starts_with("PFOXB") => "pfoxb",
+                    _ => "nmea",
+                };
+                let error = match e {
+                    NmeaError::Unsupported => None,
+                    NmeaError::NoFix => Some("no_fix".to_string()),
+                    NmeaError::BadField(n) => Some(format!("bad_field_{n}")),
+                };
+                json!({"kind": kind, "sentence": text, "error": error})
+            }
+        },
+        Frame::Mt(m) => match AfIncomingMsg::parse(m) {
+            Ok(a) => json!({"kind": "af_incoming_msg", "src_addr": a.src_addr,
+                "link_quality": a.link_quality, "rssi_dbm": map.rssi_dbm(a.link_quality),
+                "timestamp": a.timestamp, "cluster_id": a.cluster_id,
+                "src_endpoint": a.src_endpoint, "trans_seq": a.trans_seq, "len": a.data.len()}),
+            Err(_) => json!({"kind": "mt", "cmd0": m.cmd0, "cmd1": m.cmd1, "len": m.data.len()}),
+        },
+    }
+}
+
+/// Every frame of `bytes` as a JSON line, then the counters line, into `out`.
+pub fn write_frames(bytes: &[u8], out: &mut impl std::io::Write) -> std::io::Result<()> {
+    let map = LinkQualityMap::default();
+    let mut demux = Demux::<600>::new();
+    let mut result = Ok(());
+    let mut sink = |f: Frame<'_>| {
+        if result.is_ok() {
+            result = writeln!(out, "{}", frame_json(&f, &map));
+        }
+    };
+    demux.feed(bytes, &mut sink);
+    demux.finish_into(&mut sink);
+    result?;
+    let c = demux.counters();
+    writeln!(
+        out,
+        "{}",
+        json!({"kind": "counters", "bytes": c.bytes, "sentences": c.sentences,
+            "mt_frames": c.mt_frames, "garbage_bytes": c.garbage_bytes,
+            "bad_checksum": c.bad_checksum, "malformed": c.malformed, "too_long": c.too_long,
+            "bad_fcs": c.bad_fcs, "overlapping": c.overlapping, "truncated": c.truncated})
+    )
+}

@@ -1,0 +1,91 @@
+//! simulate -> locate, end to end through the bytes: every canonical drive, clean and with
+//! 10 % wild bearings plus 1 % corrupted bytes, is located within 3 sigma of its CRLB ellipse.
+
+use foxhunt_core::fix::crlb::crlb;
+use foxhunt_core::linalg::inverse2;
+use foxhunt_sim::locate::{LocateMethod, decode, locate};
+use foxhunt_sim::scenario::{NAMES, Scenario};
+use foxhunt_sim::simulate::{CaptureOptions, drive_capture};
+
+fn mahalanobis(name: &str, options: CaptureOptions) -> (f32, u32) {
+    let s = Scenario::named(name).expect("scenario");
+    let bytes = drive_capture(&s, &options).expect("capture");
+    let d = decode(&bytes, Default::default());
+    let (report, _) = locate(&d, LocateMethod::Ml, None, 1).expect("a fix");
+    let truth = [s.emitter[0] - s.route[0][0], s.emitter[1] - s.route[0][1]];
+    // The bound of the bearings that came through, at the true emitter and the true noise.
+    let used: Vec<_> = d
+        .bearings
+        .iter()
+        .map(|b| foxhunt_core::Bearing {
+            sigma: s.sigma(),
+            ..*b
+        })
+        .collect();
+    let bound = crlb(&truth, &used).expect("bound");
+    let inv = inverse2(&bound.covariance).expect("invertible");
+    let e = [report.east_m - truth[0], report.north_m - truth[1]];
+    let d2 =
+        e[0] * (inv[0][0] * e[0] + inv[0][1] * e[1]) + e[1] * (inv[1][0] * e[0] + inv[1][1] * e[1]);
+    let rejected: u32 = report.rejected.values().sum();
+    (d2.sqrt(), rejected)
+}
+
+#[test]
+fn every_canonical_drive_is_located_within_three_sigma_of_its_crlb() {
+    for name in NAMES {
+        let (clean, _) = mahalanobis(name, CaptureOptions::default());
+        let damaged = CaptureOptions {
+            wild_fraction: Some(0.1),
+            corrupt_fraction: 0.01,
+            ..CaptureOptions::default()
+        };
+        let (rough, rejected) = mahalanobis(name, damaged);
+        eprintln!(
+            "{name}: {clean:.2} sigma clean, {rough:.2} sigma with wild bearings and corrupt bytes"
+        );
+        // 3 sigma of a 2-D Gaussian holds 98.9 % of fixes: one run per case, seeded.
+        assert!(clean <= 3.0, "{name}: {clean} sigma");
+        assert!(rough <= 3.0, "{name} damaged: {rough} sigma");
+        assert!(rejected > 0, "{name}: the damage was not counted");
+    }
+}
+
+#[test]
+fn the_reported_ellipse_is_honest_over_many_drives() {
+    // 100 captures of aoa-drive (the weak, long-range geometry), each located with the
+    // default method and the noise estimated from its own residuals.
+    let s = Scenario::named("aoa-drive").expect("scenario");
+    let truth = [s.emitter[0] - s.route[0][0], s.emitter[1] - s.route[0][1]];
+    let runs = 100;
+    let (mut inside, mut d2_sum) = (0, 0.0f32);
+    for run in 0..runs {
+        let bytes = drive_capture(
+            &s,
+            &CaptureOptions {
+                run,
+                ..CaptureOptions::default()
+            },
+        )
+        .expect("capture");
+        let d = decode(&bytes, Default::default());
+        let (_, fix) = locate(&d, LocateMethod::Ml, None, 1).expect("a fix");
+        let inv = inverse2(&fix.covariance).expect("invertible");
+        let e = [fix.position[0] - truth[0], fix.position[1] - truth[1]];
+        let d2 = e[0] * (inv[0][0] * e[0] + inv[0][1] * e[1])
+            + e[1] * (inv[1][0] * e[0] + inv[1][1] * e[1]);
+        d2_sum += d2;
+        // Inside the 95 % ellipse: d^2 below the chi-square(2) 95 % point.
+        if d2 <= 5.991 {
+            inside += 1;
+        }
+    }
+    let mean_d2 = d2_sum / runs as f32;
+    eprintln!(
+        "95 % ellipse holds the emitter in {inside} of {runs}; mean d^2 {mean_d2:.2} (2 if honest)"
+    );
+    // Binomial standard error at 95 % over 100 runs is 2.2 %: 88 is 3 of them below.
+    assert!(inside >= 88, "{inside} of {runs}");
+    // chi-square(2) has variance 4: the mean of 100 has standard error 0.2; 3 of them.
+    assert!((mean_d2 - 2.0).abs() < 0.6, "mean d^2 {mean_d2}");
+}
