@@ -458,7 +458,9 @@ impl<const CAP: usize> Demux<CAP> {
                             self.counters.overlapping += 1;
                             self.drop_first();
                         }
-                        Overlap::Wait if !self.settle => return None,
+                        // A decision that needs more look-ahead than the buffer holds is settled
+                    // with what it holds, so a full buffer never stalls the stream.
+                    Overlap::Wait if !self.settle && data.len() < CAP => return None,
                         Overlap::Accept | Overlap::Wait => {
                             self.counters.mt_frames += 1;
                             self.delivered = len;
@@ -600,5 +602,33 @@ mod tests {
             }
         }
         panic!("no forgery found to test with");
+    }
+
+    #[test]
+    fn a_decision_needing_more_than_the_buffer_does_not_stall() {
+        // O: an MT frame of 255 data bytes whose last data byte is 0xFE, so an inner candidate
+        // I starts there with O's FCS as its LEN (250), valid thanks to the filler after O,
+        // and followed by the start of a 260-byte candidate: deciding I's support needs bytes
+        // beyond the 528-byte buffer.
+        let mut o = std::vec![MT_SOF, 255, 0x44, 0x81];
+        o.extend(std::iter::repeat_n(0u8, 254));
+        o.push(MT_SOF);
+        let fcs_without_first = o[1..].iter().fold(0u8, |x, b| x ^ b);
+        o[4] = fcs_without_first ^ 250; // makes O's FCS 250
+        o.push(250);
+        assert_eq!(scan_mt(&o), Scan::Valid(260));
+        let i_start = o.len() - 2;
+        let mut s = o;
+        s.extend(std::iter::repeat_n(0u8, i_start + 255 - s.len()));
+        let i_fcs = s[i_start + 1..i_start + 254].iter().fold(0u8, |x, b| x ^ b);
+        s[i_start + 254] = i_fcs;
+        assert_eq!(scan_mt(&s[i_start..]), Scan::Valid(255));
+        s.extend_from_slice(&[MT_SOF, 0xFF]);
+        s.extend(std::iter::repeat_n(0x55u8, 600));
+        let mut d = Demux::<DEFAULT_CAPACITY>::new();
+        let mut n = 0;
+        d.feed(&s, &mut |_| n += 1);
+        d.finish_into(&mut |_| n += 1);
+        assert_eq!(d.counters().bytes, s.len() as u64);
     }
 }
