@@ -4,6 +4,7 @@
 
 pub mod frames;
 pub mod locate;
+pub mod maps;
 pub mod methods;
 pub mod montecarlo;
 pub mod perf;

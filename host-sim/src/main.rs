@@ -52,7 +52,8 @@ enum Command {
     /// Locate the emitter of a recorded drive (NMEA GGA/RMC + $PFOXB bearings).
     ///
     /// With no CAPTURE, locates the bundled sample drive (foxhunt simulate --scenario
-    /// aoa-drive). `-` reads standard input. Exit status: 0 with a fix, 1 when the capture
+    /// aoa-drive) and writes its maps to foxhunt-sample.{geojson,kml,svg} unless map paths
+    /// are given. `-` reads standard input. Exit status: 0 with a fix, 1 when the capture
     /// gives none (the message says why), 2 on a usage error.
     ///
     /// Examples:
@@ -76,6 +77,12 @@ enum Command {
         /// Write the emitter, ellipse, track and bearing lines as GeoJSON.
         #[arg(long)]
         geojson: Option<std::path::PathBuf>,
+        /// Write the same as KML.
+        #[arg(long)]
+        kml: Option<std::path::PathBuf>,
+        /// Draw the track, bearing rays, particle cloud, ellipse and emitter as SVG.
+        #[arg(long)]
+        svg: Option<std::path::PathBuf>,
         /// Seed of the particle methods.
         #[arg(long, default_value_t = 1)]
         seed: u64,
@@ -167,24 +174,39 @@ fn read_captures(paths: &[std::path::PathBuf]) -> Result<Vec<u8>, String> {
     Ok(bytes)
 }
 
+/// Where `locate` writes its maps.
+struct Maps {
+    geojson: Option<std::path::PathBuf>,
+    kml: Option<std::path::PathBuf>,
+    svg: Option<std::path::PathBuf>,
+}
+
 /// `foxhunt locate`.
 fn locate(
     paths: &[std::path::PathBuf],
     method: foxhunt_sim::locate::LocateMethod,
     sigma_deg: Option<f32>,
     json: bool,
-    geojson: Option<&std::path::Path>,
+    maps: &Maps,
     seed: u64,
 ) -> Result<(), String> {
-    use foxhunt_sim::locate as l;
+    use foxhunt_sim::{locate as l, maps as m};
     let bytes = read_captures(paths)?;
     let decoded = l::decode(&bytes, foxhunt_bridge::BridgeConfig::default());
     let (report, solution) = l::locate(&decoded, method, sigma_deg, seed)?;
-    if let Some(path) = geojson {
-        let g = l::geojson(&report, &solution, &decoded);
-        std::fs::write(path, g.to_string())
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-    }
+    let write = |path: &Option<std::path::PathBuf>, text: String| -> Result<(), String> {
+        if let Some(p) = path {
+            std::fs::write(p, text).map_err(|e| format!("cannot write {}: {e}", p.display()))?;
+            eprintln!("wrote {}", p.display());
+        }
+        Ok(())
+    };
+    write(
+        &maps.geojson,
+        l::geojson(&report, &solution, &decoded).to_string(),
+    )?;
+    write(&maps.kml, m::kml(&report, &solution, &decoded))?;
+    write(&maps.svg, m::svg(&report, &solution, &decoded))?;
     if json {
         println!(
             "{}",
@@ -206,8 +228,11 @@ fn locate(
         r.crlb_m
     );
     println!(
-        "method      {:?}, bearing noise {:.2} deg ({})",
-        r.method,
+        "method      {}, bearing noise {:.2} deg ({})",
+        serde_json::to_value(r.method)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_string))
+            .unwrap_or_default(),
         r.sigma_deg,
         if r.sigma_estimated {
             "estimated from the residuals"
@@ -320,8 +345,23 @@ fn run(cli: Cli) -> Result<(), String> {
             sigma_deg,
             json,
             geojson,
+            kml,
+            svg,
             seed,
-        } => locate(&captures, method, sigma_deg, json, geojson.as_deref(), seed),
+        } => {
+            let maps = if captures.is_empty() && geojson.is_none() && kml.is_none() && svg.is_none()
+            {
+                let p = |ext: &str| Some(std::path::PathBuf::from(format!("foxhunt-sample.{ext}")));
+                Maps {
+                    geojson: p("geojson"),
+                    kml: p("kml"),
+                    svg: p("svg"),
+                }
+            } else {
+                Maps { geojson, kml, svg }
+            };
+            locate(&captures, method, sigma_deg, json, &maps, seed)
+        }
         Command::Frames { capture } => {
             let bytes = read_captures(std::slice::from_ref(&capture))?;
             let stdout = std::io::stdout();

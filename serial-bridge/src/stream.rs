@@ -459,8 +459,8 @@ impl<const CAP: usize> Demux<CAP> {
                             self.drop_first();
                         }
                         // A decision that needs more look-ahead than the buffer holds is settled
-                    // with what it holds, so a full buffer never stalls the stream.
-                    Overlap::Wait if !self.settle && data.len() < CAP => return None,
+                        // with what it holds, so a full buffer never stalls the stream.
+                        Overlap::Wait if !self.settle && data.len() < CAP => return None,
                         Overlap::Accept | Overlap::Wait => {
                             self.counters.mt_frames += 1;
                             self.delivered = len;
