@@ -3,6 +3,7 @@
 #![deny(missing_docs)]
 
 pub mod frames;
+pub mod indoor;
 pub mod locate;
 pub mod maps;
 pub mod methods;

@@ -87,6 +87,31 @@ enum Command {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
+    /// Track a ZigBee node indoors from a coordinator's capture (AF_INCOMING_MSG frames).
+    ///
+    /// The anchors file (TOML) gives each anchor's short address and position, and the
+    /// room, path loss and noise. Prints the track as CSV (or --json); --svg draws it.
+    ///
+    /// Examples:
+    ///   foxhunt track serial-bridge/captures/rssi-sim.znp --anchors serial-bridge/captures/rssi-sim.anchors.toml
+    ///   foxhunt track node.cap --anchors lab.toml --json --svg track.svg
+    #[command(verbatim_doc_comment)]
+    Track {
+        /// Capture file, or `-` for standard input.
+        capture: std::path::PathBuf,
+        /// The anchors file.
+        #[arg(long)]
+        anchors: std::path::PathBuf,
+        /// Print JSON (an array of track points) instead of CSV.
+        #[arg(long)]
+        json: bool,
+        /// Draw the room, anchors and track as SVG.
+        #[arg(long)]
+        svg: Option<std::path::PathBuf>,
+        /// Seed of the particle filter.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
     /// Every decoded frame of a capture as a JSON line, then the counters.
     ///
     /// Kinds: gga, rmc, pfoxb, af_incoming_msg, mt (other MT frames), nmea (other sentences);
@@ -172,6 +197,50 @@ fn read_captures(paths: &[std::path::PathBuf]) -> Result<Vec<u8>, String> {
         return Err("the capture is empty: no bytes to decode".into());
     }
     Ok(bytes)
+}
+
+/// `foxhunt track`.
+fn track(
+    capture: &std::path::Path,
+    anchors: &std::path::Path,
+    json: bool,
+    svg: Option<&std::path::Path>,
+    seed: u64,
+) -> Result<(), String> {
+    use foxhunt_sim::indoor::{AnchorsFile, track};
+    let bytes = read_captures(&[capture.to_path_buf()])?;
+    let text = std::fs::read_to_string(anchors)
+        .map_err(|e| format!("cannot read {}: {e}", anchors.display()))?;
+    let file = AnchorsFile::from_toml(&text).map_err(|e| format!("{}: {e}", anchors.display()))?;
+    let t = track(&bytes, &file, seed)?;
+    if t.unknown.0 > 0 {
+        let addrs: Vec<String> = t.unknown.1.iter().map(|a| format!("0x{a:04x}")).collect();
+        eprintln!(
+            "foxhunt: skipped {} frames from addresses not in {}: {}",
+            t.unknown.0,
+            anchors.display(),
+            addrs.join(", ")
+        );
+    }
+    if let Some(p) = svg {
+        std::fs::write(p, foxhunt_sim::maps::track_svg(&t, &file))
+            .map_err(|e| format!("cannot write {}: {e}", p.display()))?;
+    }
+    if json {
+        println!(
+            "{}",
+            serde_json::to_string(&t.points).map_err(|e| e.to_string())?
+        );
+    } else {
+        println!("step,t_s,x_m,y_m,vx_mps,vy_mps,sd_x_m,sd_y_m,heard");
+        for p in &t.points {
+            println!(
+                "{},{:.2},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{}",
+                p.step, p.t_s, p.x_m, p.y_m, p.vx_mps, p.vy_mps, p.sd_x_m, p.sd_y_m, p.heard
+            );
+        }
+    }
+    Ok(())
 }
 
 /// Where `locate` writes its maps.
@@ -267,6 +336,25 @@ fn simulate(
     mut options: foxhunt_sim::simulate::CaptureOptions,
 ) -> Result<(), String> {
     use foxhunt_sim::simulate::drive_capture;
+    if file.is_none() && foxhunt_sim::tracking::NAMES.contains(&name) {
+        let (bytes, anchors, _) = foxhunt_sim::indoor::simulate_capture(name, options.run)?;
+        let anchors_path = out.with_extension("anchors.toml");
+        let text = format!(
+            "# Anchors of `foxhunt simulate --scenario {name}`: short address (0x0101 works as\n\
+             # well as 257), position in metres; room, epoch, noise and path loss of the model.\n{}",
+            toml::to_string(&anchors).map_err(|e| e.to_string())?
+        );
+        std::fs::write(out, &bytes).map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+        std::fs::write(&anchors_path, text)
+            .map_err(|e| format!("cannot write {}: {e}", anchors_path.display()))?;
+        eprintln!(
+            "wrote {} ({} bytes of AF_INCOMING_MSG frames) and {}",
+            out.display(),
+            bytes.len(),
+            anchors_path.display()
+        );
+        return Ok(());
+    }
     let scenario = match file {
         Some(path) => {
             let text = std::fs::read_to_string(path)
@@ -362,6 +450,13 @@ fn run(cli: Cli) -> Result<(), String> {
             };
             locate(&captures, method, sigma_deg, json, &maps, seed)
         }
+        Command::Track {
+            capture,
+            anchors,
+            json,
+            svg,
+            seed,
+        } => track(&capture, &anchors, json, svg.as_deref(), seed),
         Command::Frames { capture } => {
             let bytes = read_captures(std::slice::from_ref(&capture))?;
             let stdout = std::io::stdout();

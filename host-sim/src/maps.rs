@@ -210,6 +210,78 @@ pub fn svg(r: &LocateReport, s: &Solution, d: &Decoded) -> String {
     out
 }
 
+/// SVG of an indoor track: the room, the anchors and the estimated path, 600 x 600 pixels.
+pub fn track_svg(track: &crate::indoor::Track, anchors: &crate::indoor::AnchorsFile) -> String {
+    let mut pts: Vec<[f32; 2]> = track.points.iter().map(|p| [p.x_m, p.y_m]).collect();
+    pts.extend(anchors.anchor.iter().map(|a| [a.x, a.y]));
+    if let Some([w, d]) = anchors.room {
+        pts.extend([[0.0, 0.0], [w, d]]);
+    }
+    let (mut lo, mut hi) = ([f32::MAX; 2], [f32::MIN; 2]);
+    for p in &pts {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let span = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1.0) * 1.1;
+    let centre = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
+    let size = 600.0f32;
+    let scale = (size - 60.0) / span;
+    let px = |p: [f32; 2]| {
+        (
+            size / 2.0 + (p[0] - centre[0]) * scale,
+            size / 2.0 - (p[1] - centre[1]) * scale,
+        )
+    };
+    let mut out = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{size}\" height=\"{size}\" viewBox=\"0 0 {size} {size}\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
+    );
+    if let Some([w, d]) = anchors.room {
+        let (x0, y0) = px([0.0, d]);
+        let _ = writeln!(
+            out,
+            "<rect x=\"{x0:.1}\" y=\"{y0:.1}\" width=\"{:.1}\" height=\"{:.1}\" fill=\"none\" stroke=\"black\" stroke-width=\"2\"/>",
+            w * scale,
+            d * scale
+        );
+    }
+    let path: String = track
+        .points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let (x, y) = px([p.x_m, p.y_m]);
+            format!("{}{x:.1},{y:.1}", if i == 0 { "M" } else { " L" })
+        })
+        .collect();
+    let _ = writeln!(
+        out,
+        "<path d=\"{path}\" fill=\"none\" stroke=\"#1f4e9c\" stroke-width=\"2\"/>"
+    );
+    for a in &anchors.anchor {
+        let (x, y) = px([a.x, a.y]);
+        let _ = writeln!(
+            out,
+            "<path d=\"M{x:.1},{:.1} L{:.1},{:.1} L{:.1},{:.1} Z\" fill=\"#c0392b\"/>",
+            y - 8.0,
+            x + 7.0,
+            y + 5.0,
+            x - 7.0,
+            y + 5.0
+        );
+        let _ = writeln!(
+            out,
+            "<text x=\"{:.1}\" y=\"{:.1}\" font-family=\"sans-serif\" font-size=\"12\">0x{:04x}</text>",
+            x + 9.0,
+            y - 4.0,
+            a.addr
+        );
+    }
+    out.push_str("</svg>\n");
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::nice_length;

@@ -223,6 +223,13 @@ fn simulate(s: &Tracking, rng: &mut XorShiftRng) -> Truth {
     truth
 }
 
+/// One run of an RSSI scenario: the true states and each step's RSSI per anchor (dBm).
+pub fn simulate_rssi(s: &Tracking, run: usize) -> (Vec<[f32; 4]>, Vec<[f32; 3]>) {
+    let mut rng = s.rng(run);
+    let t = simulate(s, &mut rng);
+    (t.states, t.rssi.iter().map(|m| m.dbm).collect())
+}
+
 /// Sum over the steps of the Euclidean position error, and likelihood evaluations.
 fn run_filter<const D: usize, F: Filter<D>>(
     filter: &mut F,
@@ -265,12 +272,12 @@ fn prior_cloud<const N: usize, const D: usize>(
 }
 
 /// The tuned SIR's likelihood (see [`TrackMethod::Sir`]).
-const TUNED: Widened<Cauchy> = Widened {
+pub(crate) const TUNED: Widened<Cauchy> = Widened {
     inner: Cauchy,
     factor: 2.0,
 };
 
-fn tuned_config() -> SirConfig {
+pub(crate) fn tuned_config() -> SirConfig {
     SirConfig {
         roughening: Roughening::Shrinkage { scale: 1.0 },
         ..pf_config()

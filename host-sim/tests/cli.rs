@@ -201,3 +201,42 @@ fn frames_prints_one_object_per_frame_then_the_counters() {
     assert_eq!(lines[182]["kind"], "counters");
     assert_eq!(lines[182]["sentences"], 182);
 }
+
+#[test]
+fn track_names_unknown_anchors() {
+    let dir = std::env::temp_dir().join(format!("foxhunt-track-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let anchors = dir.join("other.toml");
+    std::fs::write(
+        &anchors,
+        "[[anchor]]\naddr = 0x0001\nx = 0.0\ny = 0.0\n[[anchor]]\naddr = 0x0002\nx = 5.0\ny = 0.0\n[[anchor]]\naddr = 0x0003\nx = 0.0\ny = 5.0\n",
+    )
+    .expect("write");
+    let out = foxhunt(&[
+        "track",
+        "../serial-bridge/captures/rssi-sim.znp",
+        "--anchors",
+        anchors.to_str().expect("path"),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("no frame from a known anchor") && err.contains("0x0101"),
+        "{err}"
+    );
+    let out = foxhunt(&[
+        "track",
+        "../serial-bridge/captures/rssi-sim.znp",
+        "--anchors",
+        "../serial-bridge/captures/rssi-sim.anchors.toml",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let points: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(points.as_array().map(Vec::len), Some(60));
+    let _ = std::fs::remove_dir_all(&dir);
+}

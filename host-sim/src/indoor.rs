@@ -1,0 +1,343 @@
+//! Indoor RSSI tracking from a ZigBee coordinator's capture: `foxhunt track`.
+//!
+//! AF_INCOMING_MSG frames carry each anchor's link quality; an anchors file says where each
+//! short address sits. Readings are grouped into epochs, one reading per anchor: a second
+//! reading from an anchor already heard starts the next epoch (unit-free, so it works
+//! whatever the receiver's timestamp ticks are). Each epoch is one step of the constant-
+//! velocity tracker, run by the tuned SIR of the bench (N = 1000).
+
+use crate::tracking::{TUNED, tuned_config};
+use foxhunt_bridge::bridge::{BridgeConfig, Event, Receiver, RssiReading};
+use foxhunt_bridge::mt::{AfIncomingMsg, LinkQualityMap};
+use foxhunt_core::{Filter, ParticleSet, PathLoss, RssiMeasurement, RssiTracker, Sir, random};
+use rand_core::SeedableRng;
+use rand_xorshift::XorShiftRng;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeSet;
+
+/// Particles of the tracker.
+pub const PARTICLES: usize = 1000;
+
+/// One anchor of the anchors file.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Anchor {
+    /// ZigBee short address (TOML takes 0x1a2b).
+    pub addr: u16,
+    /// East, metres.
+    pub x: f32,
+    /// North, metres.
+    pub y: f32,
+}
+
+/// The log-distance path loss of the anchors file.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PathLossEntry {
+    /// RSSI at the reference distance, dBm.
+    pub p0_dbm: f32,
+    /// Reference distance, metres.
+    pub d0_m: f32,
+    /// Path-loss exponent.
+    pub eta: f32,
+}
+
+fn default_dt() -> f32 {
+    0.5
+}
+fn default_sigma() -> f32 {
+    0.5
+}
+fn default_q() -> [f32; 4] {
+    [0.5, 1.0, 0.5, 1.0]
+}
+fn default_path_loss() -> PathLossEntry {
+    PathLossEntry {
+        p0_dbm: -37.8,
+        d0_m: 1.0,
+        eta: 2.3,
+    }
+}
+
+/// The anchors file (TOML).
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct AnchorsFile {
+    /// The room, [width, depth] metres from (0, 0), if the node stays inside it.
+    pub room: Option<[f32; 2]>,
+    /// Seconds per epoch.
+    #[serde(default = "default_dt")]
+    pub dt_s: f32,
+    /// RSSI noise, dB.
+    #[serde(default = "default_sigma")]
+    pub sigma_db: f32,
+    /// Process noise [x, vx, y, vy] of the constant-velocity model.
+    #[serde(default = "default_q")]
+    pub process_q: [f32; 4],
+    /// Path loss.
+    #[serde(default = "default_path_loss")]
+    pub path_loss: PathLossEntry,
+    /// The anchors.
+    pub anchor: Vec<Anchor>,
+}
+
+impl AnchorsFile {
+    /// Parse and check an anchors file.
+    pub fn from_toml(text: &str) -> Result<Self, String> {
+        let f: Self = toml::from_str(text).map_err(|e| e.to_string())?;
+        if !(3..=6).contains(&f.anchor.len()) {
+            return Err(format!("give 3 to 6 anchors, not {}", f.anchor.len()));
+        }
+        let addrs: BTreeSet<u16> = f.anchor.iter().map(|a| a.addr).collect();
+        if addrs.len() != f.anchor.len() {
+            return Err("two anchors share an address".into());
+        }
+        let finite = f.anchor.iter().all(|a| a.x.is_finite() && a.y.is_finite());
+        let positive = f.dt_s > 0.0 && f.sigma_db > 0.0 && f.path_loss.d0_m > 0.0;
+        if !finite || !positive || !f.path_loss.eta.is_finite() || f.path_loss.eta <= 0.0 {
+            return Err(
+                "anchor positions must be finite; dt_s, sigma_db, d0_m, eta positive".into(),
+            );
+        }
+        Ok(f)
+    }
+
+    fn tracker<const A: usize>(&self) -> RssiTracker<A> {
+        RssiTracker {
+            anchors: std::array::from_fn(|i| [self.anchor[i].x, self.anchor[i].y]),
+            sigma: [self.sigma_db; A],
+            path_loss: PathLoss {
+                p0: self.path_loss.p0_dbm,
+                d0: self.path_loss.d0_m,
+                eta: self.path_loss.eta,
+            },
+            dt: self.dt_s,
+            q: self.process_q,
+            room: self.room,
+        }
+    }
+}
+
+/// One step of the track.
+#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
+pub struct TrackPoint {
+    /// Epoch number from 0.
+    pub step: usize,
+    /// Time, seconds (step x dt).
+    pub t_s: f32,
+    /// East, metres.
+    pub x_m: f32,
+    /// North, metres.
+    pub y_m: f32,
+    /// Velocity east, m/s.
+    pub vx_mps: f32,
+    /// Velocity north, m/s.
+    pub vy_mps: f32,
+    /// Standard deviation of x, metres.
+    pub sd_x_m: f32,
+    /// Standard deviation of y, metres.
+    pub sd_y_m: f32,
+    /// Anchors heard in this epoch.
+    pub heard: usize,
+}
+
+/// What `track` found.
+#[derive(Debug, Clone)]
+pub struct Track {
+    /// One point per epoch.
+    pub points: Vec<TrackPoint>,
+    /// Frames from addresses the anchors file does not list, and those addresses.
+    pub unknown: (u32, BTreeSet<u16>),
+}
+
+/// Track the node of a capture.
+pub fn track(bytes: &[u8], anchors: &AnchorsFile, seed: u64) -> Result<Track, String> {
+    match anchors.anchor.len() {
+        3 => track_with::<3>(bytes, anchors, seed),
+        4 => track_with::<4>(bytes, anchors, seed),
+        5 => track_with::<5>(bytes, anchors, seed),
+        6 => track_with::<6>(bytes, anchors, seed),
+        n => Err(format!("give 3 to 6 anchors, not {n}")),
+    }
+}
+
+/// Group readings into epochs: one reading per anchor each.
+fn epochs<const A: usize>(readings: &[RssiReading]) -> Vec<RssiMeasurement<A>> {
+    let mut out = Vec::new();
+    let mut current = RssiMeasurement {
+        dbm: [0.0; A],
+        present: [false; A],
+    };
+    for r in readings {
+        if current.present[r.anchor] {
+            out.push(current);
+            current.present = [false; A];
+        }
+        current.dbm[r.anchor] = r.dbm;
+        current.present[r.anchor] = true;
+    }
+    if current.present.iter().any(|p| *p) {
+        out.push(current);
+    }
+    out
+}
+
+fn track_with<const A: usize>(
+    bytes: &[u8],
+    file: &AnchorsFile,
+    seed: u64,
+) -> Result<Track, String> {
+    let table: [(u16, [f32; 2]); A] =
+        std::array::from_fn(|i| (file.anchor[i].addr, [file.anchor[i].x, file.anchor[i].y]));
+    let mut rx = Receiver::<A>::new(BridgeConfig::default(), table);
+    let mut readings = Vec::new();
+    let mut unknown = BTreeSet::new();
+    let mut sink = |e| {
+        if let Event::Rssi(r) = e {
+            readings.push(r);
+        }
+    };
+    rx.feed(bytes, &mut sink);
+    rx.finish(&mut sink);
+    // The bridge counts unknown addresses; list them for the message.
+    let mut demux = foxhunt_bridge::Demux::<600>::new();
+    let mut note = |f: foxhunt_bridge::Frame<'_>| {
+        if let foxhunt_bridge::Frame::Mt(m) = f
+            && let Ok(msg) = AfIncomingMsg::parse(&m)
+            && !table.iter().any(|a| a.0 == msg.src_addr)
+        {
+            unknown.insert(msg.src_addr);
+        }
+    };
+    demux.feed(bytes, &mut note);
+    demux.finish_into(&mut note);
+    let unknown_frames = rx.counters().1.unknown_anchor;
+    if readings.is_empty() {
+        let heard: Vec<String> = unknown.iter().map(|a| format!("0x{a:04x}")).collect();
+        return Err(if heard.is_empty() {
+            "no AF_INCOMING_MSG frame in the capture: nothing to track".into()
+        } else {
+            format!(
+                "no frame from a known anchor: heard {} but the anchors file lists {}",
+                heard.join(", "),
+                file.anchor
+                    .iter()
+                    .map(|a| format!("0x{:04x}", a.addr))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        });
+    }
+    let z = epochs::<A>(&readings);
+    let model = file.tracker::<A>();
+    let mut rng = XorShiftRng::seed_from_u64(seed);
+    // Prior: anywhere in the room (or around the anchors), at walking speed.
+    let (centre, spread) = match file.room {
+        Some([w, d]) => ([w / 2.0, d / 2.0], w.max(d) / 3.0),
+        None => {
+            let n = A as f32;
+            let c = [
+                file.anchor.iter().map(|a| a.x).sum::<f32>() / n,
+                file.anchor.iter().map(|a| a.y).sum::<f32>() / n,
+            ];
+            let s = file
+                .anchor
+                .iter()
+                .map(|a| (a.x - c[0]).hypot(a.y - c[1]))
+                .fold(1.0, f32::max);
+            (c, s)
+        }
+    };
+    let mut cloud = Box::new(ParticleSet::<PARTICLES, 4>::new());
+    for x in cloud.states.iter_mut() {
+        let p = [
+            centre[0] + spread * random::normal(&mut rng),
+            centre[1] + spread * random::normal(&mut rng),
+        ];
+        *x = model.confine([
+            p[0],
+            0.5 * random::normal(&mut rng),
+            p[1],
+            0.5 * random::normal(&mut rng),
+        ]);
+    }
+    let mut f = Box::new(Sir::<_, _, PARTICLES, 4>::new(model, TUNED, tuned_config()));
+    f.initialise(&cloud.states, &mut rng)
+        .map_err(|e| format!("cannot start the tracker: {e}"))?;
+    let mut points = Vec::with_capacity(z.len());
+    for (k, m) in z.iter().enumerate() {
+        let e = f.step(m, &mut rng).unwrap_or_else(|_| f.estimate());
+        points.push(TrackPoint {
+            step: k,
+            t_s: k as f32 * file.dt_s,
+            x_m: e.mean[0],
+            y_m: e.mean[2],
+            vx_mps: e.mean[1],
+            vy_mps: e.mean[3],
+            sd_x_m: e.covariance[0][0].max(0.0).sqrt(),
+            sd_y_m: e.covariance[2][2].max(0.0).sqrt(),
+            heard: m.present.iter().filter(|p| **p).count(),
+        });
+    }
+    Ok(Track {
+        points,
+        unknown: (unknown_frames, unknown),
+    })
+}
+
+/// A simulated indoor capture: its bytes, its anchors file and the node's true positions.
+pub type IndoorCapture = (Vec<u8>, AnchorsFile, Vec<[f32; 2]>);
+
+/// A simulated indoor capture: AF_INCOMING_MSG frames of every anchor each epoch, and the
+/// node's true positions.
+pub fn simulate_capture(name: &str, run: usize) -> Result<IndoorCapture, String> {
+    let s = crate::tracking::Tracking::named(name)
+        .filter(|t| t.rssi.is_some())
+        .ok_or_else(|| format!("`{name}` is not an RSSI scenario (rssi-sim, rssi-lab)"))?;
+    let t = s.rssi.ok_or("no RSSI model")?;
+    let file = AnchorsFile {
+        room: t.room,
+        dt_s: t.dt,
+        sigma_db: t.sigma[0],
+        process_q: t.q,
+        path_loss: PathLossEntry {
+            p0_dbm: t.path_loss.p0,
+            d0_m: t.path_loss.d0,
+            eta: t.path_loss.eta,
+        },
+        anchor: (0..3)
+            .map(|i| Anchor {
+                addr: 0x0101 + i as u16,
+                x: t.anchors[i][0],
+                y: t.anchors[i][1],
+            })
+            .collect(),
+    };
+    let (states, dbm) = crate::tracking::simulate_rssi(&s, run);
+    let map = LinkQualityMap::default();
+    let mut out = Vec::new();
+    let mut seq = 0u8;
+    for (k, z) in dbm.iter().enumerate() {
+        for (i, a) in file.anchor.iter().enumerate() {
+            let msg = AfIncomingMsg {
+                group_id: 0,
+                cluster_id: 0x0402,
+                src_addr: a.addr,
+                src_endpoint: 1,
+                dst_endpoint: 1,
+                was_broadcast: false,
+                link_quality: map.link_quality(z[i]),
+                security_use: false,
+                timestamp: (k as f32 * t.dt * 1000.0) as u32,
+                trans_seq: seq,
+                data: &[0x18, seq, 0x0a],
+            };
+            seq = seq.wrapping_add(1);
+            let mut buf = [0u8; 64];
+            let n = msg.encode(&mut buf).map_err(|e| format!("{e:?}"))?;
+            out.extend_from_slice(&buf[..n]);
+        }
+    }
+    let truth = states.iter().map(|x| [x[0], x[2]]).collect();
+    Ok((out, file, truth))
+}
