@@ -4,6 +4,7 @@
 
 pub mod frames;
 pub mod indoor;
+pub mod live;
 pub mod locate;
 pub mod maps;
 pub mod methods;

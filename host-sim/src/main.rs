@@ -86,6 +86,14 @@ enum Command {
         /// Seed of the particle methods.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Read CAPTURE as a serial device at this baud rate, updating the fix as bytes arrive
+        /// (4800 is NMEA 0183's usual rate).
+        #[arg(long)]
+        baud: Option<u32>,
+        /// With --baud: stop after this many seconds without a byte (default: until the
+        /// device closes).
+        #[arg(long, requires = "baud")]
+        quiet_exit: Option<f32>,
     },
     /// Track a ZigBee node indoors from a coordinator's capture (AF_INCOMING_MSG frames).
     ///
@@ -189,6 +197,13 @@ fn read_captures(paths: &[std::path::PathBuf]) -> Result<Vec<u8>, String> {
                 .read_to_end(&mut bytes)
                 .map_err(|e| format!("cannot read standard input: {e}"))?;
         } else {
+            use std::os::unix::fs::FileTypeExt;
+            if std::fs::metadata(p).is_ok_and(|m| m.file_type().is_char_device()) {
+                return Err(format!(
+                    "{} is a serial device: give --baud (4800 for NMEA 0183, 115200 for a ZNP)",
+                    p.display()
+                ));
+            }
             let b = std::fs::read(p).map_err(|e| format!("cannot read {}: {e}", p.display()))?;
             bytes.extend_from_slice(&b);
         }
@@ -259,10 +274,22 @@ fn locate(
     maps: &Maps,
     seed: u64,
 ) -> Result<(), String> {
-    use foxhunt_sim::{locate as l, maps as m};
+    use foxhunt_sim::locate as l;
     let bytes = read_captures(paths)?;
     let decoded = l::decode(&bytes, foxhunt_bridge::BridgeConfig::default());
     let (report, solution) = l::locate(&decoded, method, sigma_deg, seed)?;
+    finish_locate(&report, &solution, &decoded, json, maps)
+}
+
+/// Write the maps and print the fix.
+fn finish_locate(
+    report: &foxhunt_sim::locate::LocateReport,
+    solution: &foxhunt_sim::locate::Solution,
+    decoded: &foxhunt_sim::locate::Decoded,
+    json: bool,
+    maps: &Maps,
+) -> Result<(), String> {
+    use foxhunt_sim::{locate as l, maps as m};
     let write = |path: &Option<std::path::PathBuf>, text: String| -> Result<(), String> {
         if let Some(p) = path {
             std::fs::write(p, text).map_err(|e| format!("cannot write {}: {e}", p.display()))?;
@@ -272,10 +299,10 @@ fn locate(
     };
     write(
         &maps.geojson,
-        l::geojson(&report, &solution, &decoded).to_string(),
+        l::geojson(report, solution, decoded).to_string(),
     )?;
-    write(&maps.kml, m::kml(&report, &solution, &decoded))?;
-    write(&maps.svg, m::svg(&report, &solution, &decoded))?;
+    write(&maps.kml, m::kml(report, solution, decoded))?;
+    write(&maps.svg, m::svg(report, solution, decoded))?;
     if json {
         println!(
             "{}",
@@ -436,6 +463,8 @@ fn run(cli: Cli) -> Result<(), String> {
             kml,
             svg,
             seed,
+            baud,
+            quiet_exit,
         } => {
             let maps = if captures.is_empty() && geojson.is_none() && kml.is_none() && svg.is_none()
             {
@@ -448,7 +477,28 @@ fn run(cli: Cli) -> Result<(), String> {
             } else {
                 Maps { geojson, kml, svg }
             };
-            locate(&captures, method, sigma_deg, json, &maps, seed)
+            match baud {
+                Some(baud) => {
+                    let [path] = captures.as_slice() else {
+                        return Err("--baud reads one serial device: give exactly one path".into());
+                    };
+                    let o = foxhunt_sim::live::LiveOptions {
+                        path: path.to_string_lossy().into_owned(),
+                        baud,
+                        quiet_exit: quiet_exit
+                            .map(|s| std::time::Duration::from_secs_f32(s.max(0.0))),
+                        method,
+                        sigma_deg,
+                        json,
+                        seed,
+                    };
+                    let stdout = std::io::stdout();
+                    let (report, solution, decoded) =
+                        foxhunt_sim::live::run(&o, &mut stdout.lock())?;
+                    finish_locate(&report, &solution, &decoded, json, &maps)
+                }
+                None => locate(&captures, method, sigma_deg, json, &maps, seed),
+            }
         }
         Command::Track {
             capture,

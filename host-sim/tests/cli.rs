@@ -116,7 +116,7 @@ fn locate_the_bundled_drive_as_json() {
 
 #[test]
 fn bad_captures_give_one_line_errors_and_exit_1() {
-    let dir = std::env::temp_dir().join(format!("foxhunt-cli-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("foxhunt-cli-bad-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("dir");
     let fix = |t: &str, lon: &str| {
         sentence(&format!(
@@ -239,4 +239,58 @@ fn track_names_unknown_anchors() {
     let points: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!(points.as_array().map(Vec::len), Some(60));
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn locate_reads_a_serial_line_and_updates_the_fix() {
+    use serialport::SerialPort;
+    use std::io::Write;
+    // A pseudo-terminal pair stands in for the USB serial adapter.
+    let (mut master, slave) = serialport::TTYPort::pair().expect("pty pair");
+    let path = slave.name().expect("slave path");
+    // foxhunt opens the device exclusively: let go of the test's own handle first.
+    drop(slave);
+    let child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .args([
+            "locate",
+            &path,
+            "--baud",
+            "4800",
+            "--quiet-exit",
+            "1.5",
+            "--json",
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run foxhunt");
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let capture = std::fs::read("../serial-bridge/captures/aoa-drive.nmea").expect("capture");
+    for chunk in capture.chunks(97) {
+        master.write_all(chunk).expect("write");
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    let out = child.wait_with_output().expect("foxhunt ends");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("JSON line"))
+        .collect();
+    // An update per read that brought bearings (once a fix exists), then the final fix.
+    let used: Vec<u64> = lines.iter().map(|l| l["used"].as_u64().expect("used")).collect();
+    assert!(used.len() >= 10, "only {} updates", used.len());
+    assert!(used.windows(2).all(|w| w[0] <= w[1]), "{used:?}");
+    let file = foxhunt(&[
+        "locate",
+        "../serial-bridge/captures/aoa-drive.nmea",
+        "--json",
+    ]);
+    let from_file: serde_json::Value = serde_json::from_slice(&file.stdout).expect("JSON");
+    let last = lines.last().expect("final fix");
+    assert_eq!(last["lat"], from_file["lat"]);
+    assert_eq!(last["used"], 60);
 }
