@@ -207,6 +207,7 @@ pub fn estimate_sigma(bearings: &[Bearing], p: &[f32; 2]) -> f32 {
 }
 
 /// A position with covariance, and the particle cloud if the method has one.
+#[derive(Debug, Clone)]
 pub struct Solution {
     /// Position, local metres.
     pub position: [f32; 2],

@@ -302,7 +302,26 @@ fn finish_locate(
         l::geojson(report, solution, decoded).to_string(),
     )?;
     write(&maps.kml, m::kml(report, solution, decoded))?;
-    write(&maps.svg, m::svg(report, solution, decoded))?;
+    if maps.svg.is_some() && solution.cloud.is_empty() {
+        // A batch fix has no particles: draw the SIR's cloud on the same bearings for the
+        // picture (the fix, ellipse and numbers stay the chosen method's).
+        let sigma = report.sigma_deg.to_radians();
+        let bearings: Vec<_> = decoded
+            .bearings
+            .iter()
+            .map(|b| foxhunt_core::Bearing { sigma, ..*b })
+            .collect();
+        let cloud = l::solve(l::LocateMethod::Sir, &bearings, 1)
+            .map(|s| s.cloud)
+            .unwrap_or_default();
+        let with_cloud = l::Solution {
+            cloud,
+            ..solution.clone()
+        };
+        write(&maps.svg, m::svg(report, &with_cloud, decoded))?;
+    } else {
+        write(&maps.svg, m::svg(report, solution, decoded))?;
+    }
     if json {
         println!(
             "{}",

@@ -281,7 +281,10 @@ fn locate_reads_a_serial_line_and_updates_the_fix() {
         .map(|l| serde_json::from_str(l).expect("JSON line"))
         .collect();
     // An update per read that brought bearings (once a fix exists), then the final fix.
-    let used: Vec<u64> = lines.iter().map(|l| l["used"].as_u64().expect("used")).collect();
+    let used: Vec<u64> = lines
+        .iter()
+        .map(|l| l["used"].as_u64().expect("used"))
+        .collect();
     assert!(used.len() >= 10, "only {} updates", used.len());
     assert!(used.windows(2).all(|w| w[0] <= w[1]), "{used:?}");
     let file = foxhunt(&[

@@ -42,7 +42,7 @@ fn locate_maps(dir: &std::path::Path, method: &str) -> (serde_json::Value, Strin
 fn geojson_kml_and_svg_are_valid_and_drawn() {
     let dir = std::env::temp_dir().join(format!("foxhunt-maps-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("dir");
-    let (geo, kml, svg) = locate_maps(&dir, "sir");
+    let (geo, kml, svg) = locate_maps(&dir, "ml");
 
     // RFC 7946: a FeatureCollection; positions are [longitude, latitude] in range; linear
     // rings are closed with four or more positions.
