@@ -27,6 +27,34 @@ pub fn ellipse_ring(s: &Solution) -> Vec<[f32; 2]> {
     ring
 }
 
+/// A north-up square view of `pts`: the span shown (metres, at least `min_span`, padded by
+/// `pad`), pixels per metre, and the map from local metres to pixels.
+fn view(
+    pts: &[[f32; 2]],
+    size: f32,
+    margin: f32,
+    min_span: f32,
+    pad: f32,
+) -> (f32, f32, impl Fn([f32; 2]) -> (f32, f32)) {
+    let (mut lo, mut hi) = ([f32::MAX; 2], [f32::MIN; 2]);
+    for p in pts {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let span = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(min_span) * pad;
+    let centre = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
+    let scale = (size - 2.0 * margin) / span;
+    let px = move |p: [f32; 2]| {
+        (
+            size / 2.0 + (p[0] - centre[0]) * scale,
+            size / 2.0 - (p[1] - centre[1]) * scale,
+        )
+    };
+    (span, scale, px)
+}
+
 /// How far bearing lines are drawn: past the emitter, from the farthest vehicle position.
 fn ray_length(s: &Solution, d: &Decoded) -> f32 {
     d.bearings
@@ -110,23 +138,8 @@ pub fn svg(r: &LocateReport, s: &Solution, d: &Decoded) -> String {
     pts.extend(d.bearings.iter().map(|b| b.vehicle));
     pts.push(s.position);
     pts.extend(ring.iter().copied());
-    let (mut lo, mut hi) = ([f32::MAX; 2], [f32::MIN; 2]);
-    for p in &pts {
-        for k in 0..2 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    let span = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(10.0) * 1.15;
-    let centre = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
-    let (size, margin) = (800.0f32, 40.0f32);
-    let scale = (size - 2.0 * margin) / span;
-    let px = |p: [f32; 2]| {
-        (
-            size / 2.0 + (p[0] - centre[0]) * scale,
-            size / 2.0 - (p[1] - centre[1]) * scale,
-        )
-    };
+    let size = 800.0f32;
+    let (span, scale, px) = view(&pts, size, 40.0, 10.0, 1.15);
     let path = |ps: &[[f32; 2]]| -> String {
         ps.iter()
             .enumerate()
@@ -217,23 +230,8 @@ pub fn track_svg(track: &crate::indoor::Track, anchors: &crate::indoor::AnchorsF
     if let Some([w, d]) = anchors.room {
         pts.extend([[0.0, 0.0], [w, d]]);
     }
-    let (mut lo, mut hi) = ([f32::MAX; 2], [f32::MIN; 2]);
-    for p in &pts {
-        for k in 0..2 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    let span = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1.0) * 1.1;
-    let centre = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
     let size = 600.0f32;
-    let scale = (size - 60.0) / span;
-    let px = |p: [f32; 2]| {
-        (
-            size / 2.0 + (p[0] - centre[0]) * scale,
-            size / 2.0 - (p[1] - centre[1]) * scale,
-        )
-    };
+    let (_, scale, px) = view(&pts, size, 30.0, 1.0, 1.1);
     let mut out = format!(
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{size}\" height=\"{size}\" viewBox=\"0 0 {size} {size}\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
     );

@@ -2,6 +2,13 @@
 
 use std::process::Command;
 
+/// A fresh scratch folder for one test.
+fn scratch(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("foxhunt-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    dir
+}
+
 fn foxhunt(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_foxhunt"))
         .args(args)
@@ -42,8 +49,7 @@ fn bench_json_has_the_stable_fields() {
 
 #[test]
 fn bench_runs_a_scenario_file() {
-    let dir = std::env::temp_dir().join(format!("foxhunt-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = scratch("cli");
     let f = dir.join("drive.toml");
     std::fs::write(
         &f,
@@ -116,8 +122,7 @@ fn locate_the_bundled_drive_as_json() {
 
 #[test]
 fn bad_captures_give_one_line_errors_and_exit_1() {
-    let dir = std::env::temp_dir().join(format!("foxhunt-cli-bad-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("dir");
+    let dir = scratch("bad");
     let fix = |t: &str, lon: &str| {
         sentence(&format!(
             "GPGGA,{t},4700.0000,N,{lon},E,1,08,1.0,0.0,M,0.0,M,,"
@@ -204,8 +209,7 @@ fn frames_prints_one_object_per_frame_then_the_counters() {
 
 #[test]
 fn track_names_unknown_anchors() {
-    let dir = std::env::temp_dir().join(format!("foxhunt-track-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("dir");
+    let dir = scratch("track");
     let anchors = dir.join("other.toml");
     std::fs::write(
         &anchors,

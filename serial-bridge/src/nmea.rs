@@ -475,6 +475,23 @@ impl fmt::Display for AngleField {
     }
 }
 
+/// Formats a position as the four NMEA fields `lat,N|S,lon,E|W`.
+pub struct PositionField(pub LatLon);
+
+impl fmt::Display for PositionField {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let lat = AngleField {
+            degrees: self.0.lat,
+            longitude: false,
+        };
+        let lon = AngleField {
+            degrees: self.0.lon,
+            longitude: true,
+        };
+        write!(f, "{lat},{lon}")
+    }
+}
+
 /// A fixed-capacity line buffer that implements `fmt::Write` (no allocator).
 pub type Line = heapless::String<96>;
 
@@ -488,16 +505,9 @@ pub fn gga_body(
 ) -> fmt::Result {
     write!(
         out,
-        "GPGGA,{},{},{},1,{satellites:02},{hdop:.1},0.0,M,0.0,M,,",
+        "GPGGA,{},{},1,{satellites:02},{hdop:.1},0.0,M,0.0,M,,",
         TimeField(time),
-        AngleField {
-            degrees: p.lat,
-            longitude: false
-        },
-        AngleField {
-            degrees: p.lon,
-            longitude: true
-        },
+        PositionField(p),
     )
 }
 
@@ -512,16 +522,9 @@ pub fn rmc_body(
 ) -> fmt::Result {
     write!(
         out,
-        "GPRMC,{},A,{},{},{speed_kn:.2},{course_deg:.2},{:02}{:02}{:02},,,A",
+        "GPRMC,{},A,{},{speed_kn:.2},{course_deg:.2},{:02}{:02}{:02},,,A",
         TimeField(time),
-        AngleField {
-            degrees: p.lat,
-            longitude: false
-        },
-        AngleField {
-            degrees: p.lon,
-            longitude: true
-        },
+        PositionField(p),
         date.day,
         date.month,
         date.year % 100
@@ -543,18 +546,7 @@ pub fn pfoxb_body(out: &mut Line, b: &Pfoxb) -> fmt::Result {
         b.freq_mhz
     )?;
     if let Some(p) = b.position {
-        write!(
-            out,
-            ",{},{}",
-            AngleField {
-                degrees: p.lat,
-                longitude: false
-            },
-            AngleField {
-                degrees: p.lon,
-                longitude: true
-            }
-        )?;
+        write!(out, ",{}", PositionField(p))?;
     }
     Ok(())
 }
