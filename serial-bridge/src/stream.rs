@@ -264,11 +264,11 @@ fn resolve_overlap(bytes: &[u8], len: usize, ended: bool, in_sync: bool) -> Over
         if (bytes[i] == b'$' || bytes[i] == MT_SOF)
             && let Scan::Valid(li) = scan(&bytes[i..])
         {
-            // The end of the stream supports an inner frame only against a candidate that
-            // starts out of sync: a candidate right after a delivered frame needs a frame
-            // after the inner one to be refused.
+            // Against a candidate right after a delivered frame (in sync) an inner frame
+            // counts only if it runs past the candidate's end (a payload may carry whole
+            // frames) and a frame, not just the end of the stream, follows it.
             let end = i + li;
-            if in_sync && end >= bytes.len() {
+            if in_sync && (end <= len || end >= bytes.len()) {
                 continue;
             }
             match followed(bytes, end, ended) {
@@ -630,5 +630,25 @@ mod tests {
         d.feed(&s, &mut |_| n += 1);
         d.finish_into(&mut |_| n += 1);
         assert_eq!(d.counters().bytes, s.len() as u64);
+    }
+
+    #[test]
+    fn a_payload_carrying_whole_frames_is_one_frame() {
+        // Found by cargo-fuzz: this payload holds two valid MT frames back to back; the
+        // outer frame comes first and in sync, so it is delivered whole.
+        let data = [
+            0xFE, 0xFE, 0x01, 0x01, 0xFF, 0x00, 0xFF, 0xFE, 0x01, 0x01, 0x00, 0x00, 0x00, 0xFE,
+            0xFC, 0xFF,
+        ];
+        let mut wire = [0u8; 32];
+        let n = MtFrame {
+            cmd0: 0x01,
+            cmd1: 0x81,
+            data: &data,
+        }
+        .encode(&mut wire)
+        .expect("fits");
+        let (out, _) = frames(&wire[..n]);
+        assert_eq!(out.len(), 1, "{out:?}");
     }
 }
