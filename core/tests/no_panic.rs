@@ -299,3 +299,16 @@ mod swarms {
         }
     }
 }
+
+/// Found by the property test above: a covariance near f32's range made the ellipse's axes
+/// overflow to infinity instead of failing cleanly.
+#[test]
+fn huge_covariance_gives_finite_axes_or_an_error() {
+    let a = [[3.256_047e38, 1e30], [1e30, 1e30]];
+    if let Ok(e) = ellipse::Ellipse::from_covariance(&a, 0.95) {
+        assert!(e.major.is_finite() && e.minor.is_finite());
+    }
+    if let Ok(c) = ellipse::cep50(&a) {
+        assert!(c.is_finite());
+    }
+}

@@ -28,13 +28,16 @@ impl Ellipse {
         if l2 < -1e-6 * l1.abs().max(1e-12) {
             return Err(Error::OutOfRange);
         }
-        let k = -2.0 * libm::logf(1.0 - confidence);
-        Ok(Self {
-            major: libm::sqrtf(k * l1.max(0.0)),
-            minor: libm::sqrtf(k * l2.max(0.0)),
+        // sqrt(k) sqrt(lambda), not sqrt(k lambda): the product overflows f32 near its range.
+        let k = libm::sqrtf(-2.0 * libm::logf(1.0 - confidence));
+        let e = Self {
+            major: k * libm::sqrtf(l1.max(0.0)),
+            minor: k * libm::sqrtf(l2.max(0.0)),
             orientation,
             confidence,
-        })
+        };
+        crate::error::check_finite(&[e.major, e.minor, e.orientation])?;
+        Ok(e)
     }
 }
 
