@@ -1,0 +1,91 @@
+//! Criterion benchmarks: one filter step at N = 100, 1 000 and 10 000 particles (throughput in
+//! particle updates per second), and whole canonical `aoa-afsa` runs of every method.
+//!
+//! `cargo bench -p foxhunt-sim --bench filters` (add `-- step/sir` to pick one group).
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use foxhunt_core::fix::init::initial_particles;
+use foxhunt_core::fix::intersection::MIN_CROSSING;
+use foxhunt_core::{
+    Afsa, Bearing, BearingEkf, Filter, Gaussian, Gpf, ImprovedFirefly, ParticleSet, Sir, SirConfig,
+    StaticEmitter,
+};
+use foxhunt_sim::methods::Method;
+use foxhunt_sim::scenario::Scenario;
+use rand_core::SeedableRng;
+use rand_xorshift::XorShiftRng;
+use std::hint::black_box;
+
+/// The bearings of one aoa-afsa run and a filter started from their bearing-pair cloud.
+fn setup<const N: usize, F: Filter<2, Measurement = Bearing>>(
+    make: impl Fn() -> F,
+) -> (Box<F>, Vec<Bearing>, XorShiftRng) {
+    let s = Scenario::named("aoa-afsa").expect("scenario");
+    let mut rng = s.rng(0);
+    let bearings = s.simulate(&mut rng);
+    let mut cloud = Box::new(ParticleSet::<N, 2>::new());
+    initial_particles(&bearings, MIN_CROSSING, &mut cloud, &mut rng).expect("cloud");
+    let mut f = Box::new(make());
+    f.initialise(&cloud.states, &mut rng).expect("initialise");
+    (f, bearings, XorShiftRng::seed_from_u64(7))
+}
+
+fn step_group<const N: usize, F: Filter<2, Measurement = Bearing>>(
+    c: &mut Criterion,
+    name: &str,
+    make: impl Fn() -> F,
+) {
+    let mut g = c.benchmark_group(format!("step/{name}"));
+    g.throughput(Throughput::Elements(N as u64));
+    let (mut f, bearings, mut rng) = setup::<N, F>(make);
+    let mut k = 0;
+    g.bench_function(BenchmarkId::from_parameter(N), |b| {
+        b.iter(|| {
+            k = (k + 1) % bearings.len();
+            black_box(f.step(&bearings[k], &mut rng).ok())
+        })
+    });
+    g.finish();
+}
+
+macro_rules! steps {
+    ($c:expr, $($n:literal),*) => {$(
+        let model = StaticEmitter { process_var: 0.0 };
+        step_group::<$n, _>($c, "sir", || Sir::<_, _, $n, 2>::new(model, Gaussian, SirConfig::default()));
+        step_group::<$n, _>($c, "gpf", || Gpf::<_, _, $n, 2>::new(model, Gaussian));
+        step_group::<$n, _>($c, "afsa-pf", || {
+            Sir::<_, _, $n, 2, Afsa>::with_swarm(model, Gaussian, SirConfig::default(), Afsa::default())
+        });
+        step_group::<$n, _>($c, "fa-pf-imp", || {
+            Sir::<_, _, $n, 2, ImprovedFirefly>::with_swarm(
+                model, Gaussian, SirConfig::default(), ImprovedFirefly::default())
+        });
+    )*};
+}
+
+fn filter_steps(c: &mut Criterion) {
+    steps!(c, 100, 1000, 10000);
+    step_group::<1, _>(c, "ekf", || BearingEkf::new(0.0));
+}
+
+/// Whole aoa-afsa runs (60 bearings, N = 100) of every method of its table.
+fn whole_runs(c: &mut Criterion) {
+    let s = Scenario::named("aoa-afsa").expect("scenario");
+    let mut g = c.benchmark_group("run/aoa-afsa");
+    for m in Method::for_scenario("aoa-afsa") {
+        let mut rng = s.rng(0);
+        let bearings = s.simulate(&mut rng);
+        g.bench_function(m.name(), |b| {
+            b.iter(|| black_box(m.run(&s, &bearings, &mut rng).ok()))
+        });
+    }
+    g.finish();
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().sample_size(20).warm_up_time(std::time::Duration::from_millis(500))
+        .measurement_time(std::time::Duration::from_secs(2));
+    targets = filter_steps, whole_runs
+}
+criterion_main!(benches);
