@@ -7,7 +7,7 @@
 //! velocity tracker, run by the tuned SIR of the bench (N = 1000).
 
 use crate::tracking::{TUNED, tuned_config};
-use foxhunt_bridge::bridge::{BridgeConfig, Event, Receiver, RssiReading};
+use foxhunt_bridge::bridge::{Bridge, BridgeConfig, Event, RssiReading};
 use foxhunt_bridge::mt::{AfIncomingMsg, LinkQualityMap};
 use foxhunt_core::{Filter, ParticleSet, PathLoss, RssiMeasurement, RssiTracker, Sir, random};
 use rand_core::SeedableRng;
@@ -189,29 +189,28 @@ fn track_with<const A: usize>(
 ) -> Result<Track, String> {
     let table: [(u16, [f32; 2]); A] =
         std::array::from_fn(|i| (file.anchor[i].addr, [file.anchor[i].x, file.anchor[i].y]));
-    let mut rx = Receiver::<A>::new(BridgeConfig::default(), table);
+    // One pass: frames go to the bridge, and the addresses it will skip are noted on the way
+    // for the message.
+    let mut demux = foxhunt_bridge::Demux::<600>::new();
+    let mut bridge = Bridge::<A>::new(BridgeConfig::default(), table);
     let mut readings = Vec::new();
     let mut unknown = BTreeSet::new();
-    let mut sink = |e| {
-        if let Event::Rssi(r) = e {
-            readings.push(r);
-        }
-    };
-    rx.feed(bytes, &mut sink);
-    rx.finish(&mut sink);
-    // The bridge counts unknown addresses; list them for the message.
-    let mut demux = foxhunt_bridge::Demux::<600>::new();
-    let mut note = |f: foxhunt_bridge::Frame<'_>| {
+    let mut take = |f: foxhunt_bridge::Frame<'_>| {
         if let foxhunt_bridge::Frame::Mt(m) = f
             && let Ok(msg) = AfIncomingMsg::parse(&m)
             && !table.iter().any(|a| a.0 == msg.src_addr)
         {
             unknown.insert(msg.src_addr);
         }
+        bridge.push(&f, &mut |e| {
+            if let Event::Rssi(r) = e {
+                readings.push(r);
+            }
+        });
     };
-    demux.feed(bytes, &mut note);
-    demux.finish_into(&mut note);
-    let unknown_frames = rx.counters().1.unknown_anchor;
+    demux.feed(bytes, &mut take);
+    demux.finish_into(&mut take);
+    let unknown_frames = bridge.counters().unknown_anchor;
     if readings.is_empty() {
         let heard: Vec<String> = unknown.iter().map(|a| format!("0x{a:04x}")).collect();
         return Err(if heard.is_empty() {

@@ -5,7 +5,7 @@
 //! from the second on, recomputes the fix and prints one line (a JSON object with `--json`).
 
 use crate::locate::{Decoded, LocateMethod, LocateReport, Solution, locate};
-use foxhunt_bridge::bridge::{BridgeConfig, Event, Receiver};
+use foxhunt_bridge::bridge::{BridgeConfig, Receiver};
 use std::io::{ErrorKind, Read, Write};
 use std::time::{Duration, Instant};
 
@@ -26,14 +26,6 @@ pub struct LiveOptions {
     pub json: bool,
     /// Seed of particle methods.
     pub seed: u64,
-}
-
-fn absorb(d: &mut Decoded, e: Event) {
-    match e {
-        Event::Bearing(b) => d.bearings.push(b.bearing),
-        Event::Fix(f) => d.track.push(f),
-        Event::Rssi(_) => {}
-    }
 }
 
 fn snapshot(rx: &Receiver<0>, d: &mut Decoded) {
@@ -81,10 +73,10 @@ pub fn run(
             Ok(0) => break,
             Ok(n) => {
                 last_byte = Instant::now();
-                rx.feed(&buf[..n], &mut |e| absorb(&mut d, e));
+                rx.feed(&buf[..n], &mut |e| d.absorb(e));
             }
             Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::WouldBlock => {
-                rx.idle(&mut |e| absorb(&mut d, e));
+                rx.idle(&mut |e| d.absorb(e));
                 if o.quiet_exit.is_some_and(|q| last_byte.elapsed() >= q) {
                     break;
                 }
@@ -97,7 +89,7 @@ pub fn run(
             emit(&mut d, &rx, out);
         }
     }
-    rx.finish(&mut |e| absorb(&mut d, e));
+    rx.finish(&mut |e| d.absorb(e));
     snapshot(&rx, &mut d);
     let (r, s) = locate(&d, o.method, o.sigma_deg, o.seed)?;
     Ok((r, s, d))

@@ -114,15 +114,22 @@ pub struct Decoded {
     pub bridge: BridgeCounters,
 }
 
+impl Decoded {
+    /// Keep what the bridge hands on: bearings and the vehicle track.
+    pub fn absorb(&mut self, e: Event) {
+        match e {
+            Event::Bearing(b) => self.bearings.push(b.bearing),
+            Event::Fix(f) => self.track.push(f),
+            Event::Rssi(_) => {}
+        }
+    }
+}
+
 /// Decode a capture (bytes as a UART delivered them).
 pub fn decode(bytes: &[u8], config: BridgeConfig) -> Decoded {
     let mut rx = Receiver::<0>::new(config, []);
     let mut d = Decoded::default();
-    let mut sink = |e| match e {
-        Event::Bearing(b) => d.bearings.push(b.bearing),
-        Event::Fix(f) => d.track.push(f),
-        Event::Rssi(_) => {}
-    };
+    let mut sink = |e| d.absorb(e);
     rx.feed(bytes, &mut sink);
     rx.finish(&mut sink);
     d.frame = rx.bridge.local_frame().copied();

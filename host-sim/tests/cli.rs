@@ -9,6 +9,13 @@ fn scratch(name: &str) -> std::path::PathBuf {
     dir
 }
 
+/// Write `text` to `name` in `dir`; its path.
+fn scratch_file(dir: &std::path::Path, name: &str, text: impl AsRef<[u8]>) -> String {
+    let f = dir.join(name);
+    std::fs::write(&f, text).expect("write");
+    f.to_str().expect("path").to_string()
+}
+
 fn foxhunt(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_foxhunt"))
         .args(args)
@@ -50,18 +57,12 @@ fn bench_json_has_the_stable_fields() {
 #[test]
 fn bench_runs_a_scenario_file() {
     let dir = scratch("cli");
-    let f = dir.join("drive.toml");
-    std::fs::write(
-        &f,
+    let f = scratch_file(
+        &dir,
+        "drive.toml",
         "name = \"mine\"\nemitter = [800.0, 600.0]\npoints = [[0.0, 0.0], [100.0, 0.0], [200.0, 50.0], [250.0, 150.0]]\nruns = 3\n",
-    )
-    .expect("write");
-    let out = foxhunt(&[
-        "bench",
-        "--scenario-file",
-        f.to_str().expect("path"),
-        "--markdown",
-    ]);
+    );
+    let out = foxhunt(&["bench", "--scenario-file", &f, "--markdown"]);
     assert!(
         out.status.success(),
         "{}",
@@ -70,8 +71,12 @@ fn bench_runs_a_scenario_file() {
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("| mine | ml |"), "{text}");
 
-    std::fs::write(&f, "emitter = [1.0, 2.0]\nroute = \"loop300\"\nspeed = 3\n").expect("write");
-    let out = foxhunt(&["bench", "--scenario-file", f.to_str().expect("path")]);
+    let f = scratch_file(
+        &dir,
+        "drive.toml",
+        "emitter = [1.0, 2.0]\nroute = \"loop300\"\nspeed = 3\n",
+    );
+    let out = foxhunt(&["bench", "--scenario-file", &f]);
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("speed"));
 }
@@ -150,9 +155,8 @@ fn bad_captures_give_one_line_errors_and_exit_1() {
         ("garbage", garbage, "no GPS fix"),
     ];
     for (name, bytes, expect) in cases {
-        let path = dir.join(name);
-        std::fs::write(&path, bytes).expect("write");
-        let out = foxhunt(&["locate", path.to_str().expect("path")]);
+        let path = scratch_file(&dir, name, bytes);
+        let out = foxhunt(&["locate", &path]);
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{name}: {err}");
         assert!(
@@ -171,9 +175,8 @@ fn bad_captures_give_one_line_errors_and_exit_1() {
         bearing("120001.00"),
     ]
     .concat();
-    let path = dir.join("stationary");
-    std::fs::write(&path, parallel).expect("write");
-    let out = foxhunt(&["locate", path.to_str().expect("path")]);
+    let path = scratch_file(&dir, "stationary", parallel);
+    let out = foxhunt(&["locate", &path]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(
@@ -210,17 +213,16 @@ fn frames_prints_one_object_per_frame_then_the_counters() {
 #[test]
 fn track_names_unknown_anchors() {
     let dir = scratch("track");
-    let anchors = dir.join("other.toml");
-    std::fs::write(
-        &anchors,
+    let anchors = scratch_file(
+        &dir,
+        "other.toml",
         "[[anchor]]\naddr = 0x0001\nx = 0.0\ny = 0.0\n[[anchor]]\naddr = 0x0002\nx = 5.0\ny = 0.0\n[[anchor]]\naddr = 0x0003\nx = 0.0\ny = 5.0\n",
-    )
-    .expect("write");
+    );
     let out = foxhunt(&[
         "track",
         "../serial-bridge/captures/rssi-sim.znp",
         "--anchors",
-        anchors.to_str().expect("path"),
+        &anchors,
     ]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{err}");
