@@ -10,6 +10,7 @@
 #![forbid(unsafe_code)]
 
 pub mod error;
+pub mod fastmath;
 pub mod linalg;
 pub mod particles;
 pub mod random;

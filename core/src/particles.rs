@@ -1,6 +1,7 @@
 //! The particle set: states and weights in fixed arrays sized by const generics.
 
 use crate::error::Error;
+use crate::fastmath;
 use crate::linalg;
 use crate::random;
 use crate::resample::Resampling;
@@ -52,72 +53,53 @@ impl<const N: usize, const D: usize> ParticleSet<N, D> {
     /// are rebased to the logs of the normalised weights and the effective sample size is
     /// returned.
     pub fn normalise(&mut self) -> Result<f32, Error> {
-        let max = self
-            .log_weights
-            .iter()
-            .copied()
-            .filter(|v| !v.is_nan())
-            .fold(f32::NEG_INFINITY, f32::max);
+        // f32::max ignores NaN, so NaN log-weights never become the maximum.
+        let max = lane_fold(N, f32::NEG_INFINITY, f32::max, |i| self.log_weights[i]);
         if !max.is_finite() {
             self.set_uniform_weights();
             return Err(Error::WeightCollapse);
         }
-        let mut sum = 0.0f32;
+        // Plain maps and separate reductions: each loop vectorises on its own.
         for (w, lw) in self.weights.iter_mut().zip(self.log_weights.iter()) {
-            *w = if lw.is_nan() {
-                0.0
-            } else {
-                libm::expf(lw - max)
-            };
-            sum += *w;
+            let e = fastmath::exp_nonpositive(lw - max);
+            *w = if e.is_nan() { 0.0 } else { e };
         }
+        let sum = lane_sum(N, |i| self.weights[i]);
         // The maximum contributes exp(0) = 1, so 1 <= sum <= N here.
         let inv = 1.0 / sum;
-        let ln_sum = libm::logf(sum);
+        let shift = max + libm::logf(sum);
         for (w, lw) in self.weights.iter_mut().zip(self.log_weights.iter_mut()) {
             *w *= inv;
             *lw = if *w > 0.0 {
-                *lw - max - ln_sum
+                *lw - shift
             } else {
                 f32::NEG_INFINITY
             };
         }
-        Ok(self.ess())
+        let sum_sq = lane_sum(N, |i| self.weights[i] * self.weights[i]);
+        Ok(if sum_sq > 0.0 { 1.0 / sum_sq } else { 0.0 })
     }
 
     /// Effective sample size 1 / sum w^2 of the normalised weights, in [1, N].
     pub fn ess(&self) -> f32 {
-        let s: f32 = self.weights.iter().map(|w| w * w).sum();
+        let s = lane_sum(N, |i| self.weights[i] * self.weights[i]);
         if s > 0.0 { 1.0 / s } else { 0.0 }
     }
 
     /// Weighted mean of the states.
     pub fn mean(&self) -> [f32; D] {
-        let mut m = [0.0f32; D];
-        for (x, w) in self.states.iter().zip(self.weights.iter()) {
-            for (mj, xj) in m.iter_mut().zip(x.iter()) {
-                *mj += w * xj;
-            }
-        }
-        m
+        core::array::from_fn(|j| lane_sum(N, |i| self.weights[i] * self.states[i][j]))
     }
 
     /// Weighted covariance of the states about `mean`.
     pub fn covariance(&self, mean: &[f32; D]) -> [[f32; D]; D] {
         let mut c = [[0.0f32; D]; D];
-        for (x, w) in self.states.iter().zip(self.weights.iter()) {
-            let mut d = [0.0f32; D];
-            for j in 0..D {
-                d[j] = x[j] - mean[j];
-            }
-            for i in 0..D {
-                for j in 0..=i {
-                    c[i][j] += w * d[i] * d[j];
-                }
-            }
-        }
         for i in 0..D {
-            for j in 0..i {
+            for j in 0..=i {
+                c[i][j] = lane_sum(N, |k| {
+                    let x = &self.states[k];
+                    self.weights[k] * (x[i] - mean[i]) * (x[j] - mean[j])
+                });
                 c[j][i] = c[i][j];
             }
         }
@@ -182,6 +164,43 @@ impl<const N: usize, const D: usize> ParticleSet<N, D> {
         self.set_uniform_weights();
         Ok(())
     }
+}
+
+/// Accumulators of the reductions over particles. One running sum fixes the order of the
+/// additions and so forbids the compiler to vectorise; eight interleaved ones give it four- or
+/// eight-wide registers to fill. The order is fixed by the code, so every target gets the same
+/// bits.
+const LANES: usize = 8;
+
+/// `f(0) + ... + f(n - 1)` in [`LANES`] interleaved partial sums.
+#[inline(always)]
+fn lane_sum(n: usize, f: impl FnMut(usize) -> f32) -> f32 {
+    lane_fold(n, 0.0, |a, b| a + b, f)
+}
+
+/// Fold `f(0), ..., f(n - 1)` with `op` (associative and commutative up to rounding) in
+/// [`LANES`] interleaved accumulators, combined pairwise at the end.
+#[inline(always)]
+fn lane_fold(
+    n: usize,
+    init: f32,
+    op: impl Fn(f32, f32) -> f32,
+    mut f: impl FnMut(usize) -> f32,
+) -> f32 {
+    let mut acc = [init; LANES];
+    let full = n - n % LANES;
+    let mut i = 0;
+    while i < full {
+        for (k, a) in acc.iter_mut().enumerate() {
+            *a = op(*a, f(i + k));
+        }
+        i += LANES;
+    }
+    for (a, i) in acc.iter_mut().zip(full..n) {
+        *a = op(*a, f(i));
+    }
+    let [a0, a1, a2, a3, a4, a5, a6, a7] = acc;
+    op(op(op(a0, a4), op(a2, a6)), op(op(a1, a5), op(a3, a7)))
 }
 
 #[cfg(test)]

@@ -1,6 +1,7 @@
 //! Resampling schemes. Each turns normalised weights into copy counts (sum N) in O(N), without
 //! a scratch array: the particle set then replicates in place.
 
+use crate::fastmath;
 use crate::random;
 use rand_core::Rng;
 
@@ -27,16 +28,17 @@ impl Resampling {
         rng: &mut R,
         counts: &mut [u32; N],
     ) {
-        *counts = [0; N];
         if N == 0 {
             return;
         }
         let n = N as f32;
+        if self == Resampling::Systematic {
+            // Writes every count: no zeroing first.
+            return systematic(weights, random::uniform(rng), counts);
+        }
+        *counts = [0; N];
         match self {
-            Resampling::Systematic => {
-                let u0 = random::uniform(rng);
-                walk(weights, 1.0, N, |i| (i as f32 + u0) / n, counts);
-            }
+            Resampling::Systematic => {}
             Resampling::Stratified => {
                 walk(
                     weights,
@@ -68,6 +70,31 @@ impl Resampling {
                 }
             }
         }
+    }
+}
+
+/// Systematic resampling without a search: the points (i + u0) / N below a cumulative weight
+/// C number ceil(N C - u0) (clamped to [0, N]), so particle j gets the difference of that count
+/// at its two cumulative edges. Branch-free, one pass; the last edge is N exactly, so the counts
+/// always sum to N whatever the rounding in the running sum.
+fn systematic<const N: usize>(weights: &[f32; N], u0: f32, counts: &mut [u32; N]) {
+    let n = N as f32;
+    let mut cum = 0.0f32;
+    let mut below = 0u32;
+    for (j, (c, w)) in counts.iter_mut().zip(weights).enumerate() {
+        cum += *w;
+        let upto = if j + 1 == N {
+            N as u32
+        } else {
+            // ceil as the nearest integer plus one when below; v is in [-1, N] for
+            // normalised weights (N < 2^22), and the clamp keeps rounding past 1 within N.
+            let v = n * cum - u0;
+            let (r, ri) = fastmath::round_to_int(v);
+            (ri + i32::from(r < v)).clamp(0, N as i32) as u32
+        };
+        let upto = upto.max(below);
+        *c = upto - below;
+        below = upto;
     }
 }
 

@@ -170,14 +170,24 @@ enum Command {
         #[arg(long, default_value_t = 0.0)]
         drop: f32,
     },
-    /// Speed: the bootstrap SIR against the same filter in numpy (filterpy), single thread.
+    /// Speed: the bootstrap SIR against the same filter in numpy (filterpy), and how every
+    /// filter's step time grows with N (100 to 100 000). Single thread; markdown tables.
     ///
     /// Installs numpy, scipy and filterpy from PyPI into target/peer-venv on first use.
     /// Example: foxhunt perf --runs 20
     Perf {
-        /// Runs timed per particle count.
+        /// Runs timed per particle count against the numpy peer.
         #[arg(long, default_value_t = 20)]
         runs: usize,
+        /// Seconds spent timing each cell of the growth table.
+        #[arg(long, default_value_t = 0.5)]
+        budget: f64,
+        /// Skip a growth cell whose extrapolated step time exceeds this many seconds.
+        #[arg(long, default_value_t = 30.0)]
+        limit: f64,
+        /// Only the numpy comparison.
+        #[arg(long)]
+        no_growth: bool,
     },
 }
 
@@ -431,20 +441,22 @@ fn simulate(
     Ok(())
 }
 
-/// `foxhunt perf`: the Rust SIR against the numpy peer, single thread.
-fn perf(runs: usize) -> Result<(), String> {
+/// `foxhunt perf`: the Rust SIR against the numpy peer, then the growth table.
+fn perf(runs: usize, growth: Option<(f64, f64)>) -> Result<(), String> {
+    use foxhunt_sim::perf::{GROWTH_SIZES, StepTime};
     let counts = [100, 1000, 10_000];
     let peer = foxhunt_sim::perf::peer_timings(&counts, runs)?;
+    println!("Bootstrap SIR on aoa-afsa (60 bearings), {runs} runs each, one thread:\n");
     println!(
-        "{:>8} {:>14} {:>14} {:>8} {:>16} {:>9} {:>9}",
-        "N", "rust s/run", "numpy s/run", "ratio", "rust updates/s", "rust rmse", "np rmse"
+        "| N | Rust s/run | numpy s/run | Rust / numpy speed | Rust particle updates/s | Rust rmse m | numpy rmse m |"
     );
+    println!("|---:|---:|---:|---:|---:|---:|---:|");
     for p in &peer {
         let r = foxhunt_sim::perf::rust_timing(p.particles, runs)
             .ok_or_else(|| format!("{} particles is not a compiled size", p.particles))?;
         let updates = (r.particles * 60) as f64 / r.seconds_per_run;
         println!(
-            "{:>8} {:>14.3e} {:>14.3e} {:>7.1}x {:>16.3e} {:>9.3} {:>9.3}",
+            "| {} | {:.3e} | {:.3e} | {:.1}x | {:.3e} | {:.2} | {:.2} |",
             p.particles,
             r.seconds_per_run,
             p.seconds_per_run,
@@ -454,7 +466,56 @@ fn perf(runs: usize) -> Result<(), String> {
             p.rmse
         );
     }
+    let Some((budget, limit)) = growth else {
+        return Ok(());
+    };
+    let bar = indicatif::ProgressBar::new(
+        (foxhunt_sim::perf::GROWTH_FILTERS.len() * GROWTH_SIZES.len()) as u64,
+    );
+    let rows = foxhunt_sim::perf::growth(budget, limit, |f, n| {
+        bar.set_message(format!("{f} N={n}"));
+        bar.inc(1);
+    });
+    bar.finish_and_clear();
+    println!("\nStep time against N on aoa-afsa's bearings (one thread; time per step, then");
+    println!("million particle updates per second):\n");
+    let header: Vec<String> = GROWTH_SIZES.iter().map(|n| format!("N = {n}")).collect();
+    println!("| filter | {} | exponent |", header.join(" | "));
+    println!("|---|{}---:|", "---:|".repeat(GROWTH_SIZES.len()));
+    for row in rows {
+        let cells: Vec<String> = row
+            .times
+            .iter()
+            .map(|(n, t)| match t {
+                StepTime::Measured { seconds, .. } => format!(
+                    "{} ({:.3})",
+                    human_seconds(*seconds),
+                    *n as f64 / seconds / 1e6
+                ),
+                StepTime::Skipped { predicted } => {
+                    format!("not run (~{})", human_seconds(*predicted))
+                }
+            })
+            .collect();
+        println!(
+            "| {} | {} | {:.2} |",
+            row.filter,
+            cells.join(" | "),
+            row.exponent
+        );
+    }
     Ok(())
+}
+
+/// Seconds in the unit that keeps 3 significant digits readable.
+fn human_seconds(s: f64) -> String {
+    if s < 1e-3 {
+        format!("{:.1} us", s * 1e6)
+    } else if s < 1.0 {
+        format!("{:.2} ms", s * 1e3)
+    } else {
+        format!("{s:.2} s")
+    }
 }
 
 fn main() -> ExitCode {
@@ -472,7 +533,12 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<(), String> {
     match cli.command {
-        Command::Perf { runs } => perf(runs.max(1)),
+        Command::Perf {
+            runs,
+            budget,
+            limit,
+            no_growth,
+        } => perf(runs.max(1), (!no_growth).then_some((budget, limit))),
         Command::Locate {
             captures,
             method,

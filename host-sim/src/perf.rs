@@ -10,7 +10,8 @@ use crate::montecarlo::pool;
 use foxhunt_core::Bearing;
 use foxhunt_core::model::bearing::{predicted, wrap};
 use foxhunt_core::{
-    Filter, Gaussian, ParticleSet, Resampling, Roughening, Sir, SirConfig, StaticEmitter, random,
+    Filter, Gaussian, Gpf, ParticleSet, Resampling, Roughening, Sir, SirConfig, StaticEmitter,
+    random,
 };
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
@@ -148,4 +149,191 @@ pub fn peer_timings(counts: &[usize], runs: usize) -> Result<Vec<Timing>, String
         .lines()
         .map(|l| serde_json::from_str(l).map_err(|e| format!("peer output {l:?}: {e}")))
         .collect()
+}
+
+/// The filters of the growth table, on the bearing model (aoa-afsa's bearings).
+pub const GROWTH_FILTERS: [&str; 7] = [
+    "sir",
+    "gpf",
+    "fa-pf-imp",
+    "pso-gpf",
+    "gsa-gpf",
+    "afsa-pf",
+    "fa-pf",
+];
+
+/// Particle counts of the growth table (compiled sizes).
+pub const GROWTH_SIZES: [usize; 4] = [100, 1000, 10_000, 100_000];
+
+/// Mean seconds per step of one filter at one N.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StepTime {
+    /// Measured over `steps` steps.
+    Measured {
+        /// Mean seconds per step.
+        seconds: f64,
+        /// Steps timed.
+        steps: usize,
+    },
+    /// Not run: the exponent so far predicts more than the time limit per step.
+    Skipped {
+        /// Predicted seconds per step.
+        predicted: f64,
+    },
+}
+
+/// One filter's row: step time at each N and the fitted exponent of time ~ N^k.
+#[derive(Debug, Clone)]
+pub struct GrowthRow {
+    /// Filter name.
+    pub filter: &'static str,
+    /// (N, time) pairs in ascending N.
+    pub times: Vec<(usize, StepTime)>,
+    /// Least-squares slope of log time against log N over the measured N >= 1 000 (at N = 100
+    /// fixed per-step costs still show).
+    pub exponent: f64,
+}
+
+/// Step `filter` (started from aoa-afsa's bearing-pair cloud) over the scenario's bearings,
+/// cyclically, until `budget` has passed (at least one step).
+fn time_steps<const N: usize, F: Filter<2, Measurement = Bearing>>(
+    make: impl FnOnce() -> F,
+    budget: f64,
+) -> StepTime {
+    use foxhunt_core::fix::{init::initial_particles, intersection::MIN_CROSSING};
+    let s = crate::scenario::Scenario::named("aoa-afsa").expect("aoa-afsa is built in");
+    let mut rng = s.rng(0);
+    let bearings = s.simulate(&mut rng);
+    let mut cloud = Box::new(ParticleSet::<N, 2>::new());
+    if initial_particles(&bearings, MIN_CROSSING, &mut cloud, &mut rng).is_err() {
+        return StepTime::Skipped { predicted: 0.0 };
+    }
+    let mut f = Box::new(make());
+    let _ = f.initialise(&cloud.states, &mut rng);
+    let start = Instant::now();
+    let mut steps = 0;
+    while steps == 0 || start.elapsed().as_secs_f64() < budget {
+        let _ = std::hint::black_box(f.step(&bearings[steps % bearings.len()], &mut rng));
+        steps += 1;
+    }
+    StepTime::Measured {
+        seconds: start.elapsed().as_secs_f64() / steps as f64,
+        steps,
+    }
+}
+
+/// Time one filter at one compiled N.
+fn step_time<const N: usize>(filter: &str, budget: f64) -> Option<StepTime> {
+    use foxhunt_core::{Afsa, Firefly, Gsa, ImprovedFirefly, Pso};
+    let model = StaticEmitter { process_var: 0.0 };
+    let config = SirConfig::default();
+    Some(match filter {
+        "sir" => time_steps::<N, _>(|| Sir::<_, _, N, 2>::new(model, Gaussian, config), budget),
+        "gpf" => time_steps::<N, _>(|| Gpf::<_, _, N, 2>::new(model, Gaussian), budget),
+        "afsa-pf" => time_steps::<N, _>(
+            || Sir::<_, _, N, 2, _>::with_swarm(model, Gaussian, config, Afsa::default()),
+            budget,
+        ),
+        "fa-pf" => time_steps::<N, _>(
+            || Sir::<_, _, N, 2, _>::with_swarm(model, Gaussian, config, Firefly::default()),
+            budget,
+        ),
+        "fa-pf-imp" => time_steps::<N, _>(
+            || {
+                Sir::<_, _, N, 2, _>::with_swarm(
+                    model,
+                    Gaussian,
+                    config,
+                    ImprovedFirefly::default(),
+                )
+            },
+            budget,
+        ),
+        "pso-gpf" => time_steps::<N, _>(
+            || Gpf::<_, _, N, 2, _>::with_swarm(model, Gaussian, Pso::default()),
+            budget,
+        ),
+        "gsa-gpf" => time_steps::<N, _>(
+            || Gpf::<_, _, N, 2, _>::with_swarm(model, Gaussian, Gsa::default()),
+            budget,
+        ),
+        _ => return None,
+    })
+}
+
+/// Slope of log t against log N (least squares) over measured points with N >= 1 000.
+fn exponent(times: &[(usize, StepTime)]) -> f64 {
+    let pts: Vec<(f64, f64)> = times
+        .iter()
+        .filter_map(|(n, t)| match t {
+            StepTime::Measured { seconds, .. } if *n >= 1000 => {
+                Some(((*n as f64).ln(), seconds.ln()))
+            }
+            _ => None,
+        })
+        .collect();
+    if pts.len() < 2 {
+        return f64::NAN;
+    }
+    let k = pts.len() as f64;
+    let (mx, my) = (
+        pts.iter().map(|p| p.0).sum::<f64>() / k,
+        pts.iter().map(|p| p.1).sum::<f64>() / k,
+    );
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
+    sxy / sxx
+}
+
+/// Time every filter of [`GROWTH_FILTERS`] at every N of [`GROWTH_SIZES`], each cell for about
+/// `budget` seconds, single thread. A cell whose time, extrapolated from the previous two,
+/// exceeds `limit` seconds per step is skipped (and the larger N after it).
+pub fn growth(budget: f64, limit: f64, mut progress: impl FnMut(&str, usize)) -> Vec<GrowthRow> {
+    GROWTH_FILTERS
+        .iter()
+        .map(|&filter| {
+            let mut times: Vec<(usize, StepTime)> = Vec::new();
+            for &n in &GROWTH_SIZES {
+                let predicted = predict(&times, n);
+                if predicted > limit {
+                    times.push((n, StepTime::Skipped { predicted }));
+                    continue;
+                }
+                progress(filter, n);
+                // Big filters are built on the stack before boxing: run on the big-stack pool.
+                let t = pool().install(|| match n {
+                    100 => step_time::<100>(filter, budget),
+                    1000 => step_time::<1000>(filter, budget),
+                    10_000 => step_time::<10_000>(filter, budget),
+                    _ => step_time::<100_000>(filter, budget),
+                });
+                if let Some(t) = t {
+                    times.push((n, t));
+                }
+            }
+            let exponent = exponent(&times);
+            GrowthRow {
+                filter,
+                times,
+                exponent,
+            }
+        })
+        .collect()
+}
+
+/// Time per step at `n` extrapolated from the last two entries (measured or predicted), or 0
+/// when there are fewer than two.
+fn predict(times: &[(usize, StepTime)], n: usize) -> f64 {
+    let secs = |t: &StepTime| match t {
+        StepTime::Measured { seconds, .. } => *seconds,
+        StepTime::Skipped { predicted } => *predicted,
+    };
+    match times {
+        [.., (n0, t0), (n1, t1)] => {
+            let (a, b) = (secs(t0), secs(t1));
+            let k = ((b / a).ln() / (*n1 as f64 / *n0 as f64).ln()).max(1.0);
+            b * (n as f64 / *n1 as f64).powf(k)
+        }
+        _ => 0.0,
+    }
 }

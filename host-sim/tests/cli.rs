@@ -16,8 +16,11 @@ fn scratch_file(dir: &std::path::Path, name: &str, text: impl AsRef<[u8]>) -> St
     f.to_str().expect("path").to_string()
 }
 
+/// Run the command in a scratch folder: `locate` writes its maps to the working directory,
+/// which must not be the source tree.
 fn foxhunt(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .current_dir(scratch("cwd"))
         .args(args)
         .output()
         .expect("run foxhunt")
@@ -188,7 +191,13 @@ fn bad_captures_give_one_line_errors_and_exit_1() {
 
 #[test]
 fn frames_prints_one_object_per_frame_then_the_counters() {
-    let out = foxhunt(&["frames", "../serial-bridge/captures/aoa-drive.nmea"]);
+    let out = foxhunt(&[
+        "frames",
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../serial-bridge/captures/aoa-drive.nmea"
+        ),
+    ]);
     assert!(
         out.status.success(),
         "{}",
@@ -220,7 +229,10 @@ fn track_names_unknown_anchors() {
     );
     let out = foxhunt(&[
         "track",
-        "../serial-bridge/captures/rssi-sim.znp",
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../serial-bridge/captures/rssi-sim.znp"
+        ),
         "--anchors",
         &anchors,
     ]);
@@ -232,9 +244,15 @@ fn track_names_unknown_anchors() {
     );
     let out = foxhunt(&[
         "track",
-        "../serial-bridge/captures/rssi-sim.znp",
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../serial-bridge/captures/rssi-sim.znp"
+        ),
         "--anchors",
-        "../serial-bridge/captures/rssi-sim.anchors.toml",
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../serial-bridge/captures/rssi-sim.anchors.toml"
+        ),
         "--json",
     ]);
     assert!(
@@ -271,7 +289,11 @@ fn locate_reads_a_serial_line_and_updates_the_fix() {
         .spawn()
         .expect("run foxhunt");
     std::thread::sleep(std::time::Duration::from_millis(300));
-    let capture = std::fs::read("../serial-bridge/captures/aoa-drive.nmea").expect("capture");
+    let capture = std::fs::read(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../serial-bridge/captures/aoa-drive.nmea"
+    ))
+    .expect("capture");
     for chunk in capture.chunks(97) {
         master.write_all(chunk).expect("write");
         std::thread::sleep(std::time::Duration::from_millis(2));
@@ -295,7 +317,10 @@ fn locate_reads_a_serial_line_and_updates_the_fix() {
     assert!(used.windows(2).all(|w| w[0] <= w[1]), "{used:?}");
     let file = foxhunt(&[
         "locate",
-        "../serial-bridge/captures/aoa-drive.nmea",
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../serial-bridge/captures/aoa-drive.nmea"
+        ),
         "--json",
     ]);
     let from_file: serde_json::Value = serde_json::from_slice(&file.stdout).expect("JSON");

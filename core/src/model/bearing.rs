@@ -7,6 +7,7 @@
 
 use super::Model;
 use crate::error::{Error, check_finite};
+use crate::fastmath;
 use crate::likelihood::Likelihood;
 use crate::random;
 use core::f32::consts::{FRAC_PI_2, PI, TAU};
@@ -114,9 +115,46 @@ impl Model<2> for StaticEmitter {
         }
     }
 
+    /// Two particles (four coordinates) per draw of the four-lane generator.
+    fn propagate_all<R: Rng + ?Sized>(&self, states: &mut [[f32; 2]], z: &Bearing, rng: &mut R) {
+        if !(self.process_var > 0.0) {
+            return;
+        }
+        let s = libm::sqrtf(self.process_var);
+        let mut lanes = random::Lanes::seed_from(rng);
+        let mut pairs = states.chunks_exact_mut(2);
+        for pair in &mut pairs {
+            let n = lanes.normals(rng);
+            pair[0][0] += s * n[0];
+            pair[0][1] += s * n[1];
+            pair[1][0] += s * n[2];
+            pair[1][1] += s * n[3];
+        }
+        for x in pairs.into_remainder() {
+            self.propagate(x, z, rng);
+        }
+    }
     #[inline]
     fn ln_likelihood<L: Likelihood>(&self, x: &[f32; 2], z: &Bearing, lik: &L) -> f32 {
         lik.ln(z.residual(x), z.sigma)
+    }
+
+    /// The residual z - h(p) as one angle: rotate the vehicle-to-particle vector by -theta and
+    /// take its angle, already in [-pi, pi] (no wrap), with the branch-free atan2.
+    fn add_ln_likelihoods<L: Likelihood>(
+        &self,
+        states: &[[f32; 2]],
+        z: &Bearing,
+        lik: &L,
+        log_weights: &mut [f32],
+    ) {
+        let (s, c) = libm::sincosf(z.theta);
+        let [vx, vy] = z.vehicle;
+        for (p, lw) in states.iter().zip(log_weights.iter_mut()) {
+            let (dx, dy) = (p[0] - vx, p[1] - vy);
+            let r = fastmath::atan2(s * dx - c * dy, c * dx + s * dy);
+            *lw += lik.ln(r, z.sigma);
+        }
     }
 }
 

@@ -17,6 +17,32 @@ pub trait Model<const D: usize> {
     /// Move one state forward to the time of measurement `z`, process noise included (the
     /// measurement carries its time: the UNGM's step index, say).
     fn propagate<R: Rng + ?Sized>(&self, x: &mut [f32; D], z: &Self::Measurement, rng: &mut R);
+    /// Move every state forward to the time of `z`: the filters' other hot loop. Models
+    /// override it to draw their noise in bulk ([`crate::random::Lanes`]).
+    fn propagate_all<R: Rng + ?Sized>(
+        &self,
+        states: &mut [[f32; D]],
+        z: &Self::Measurement,
+        rng: &mut R,
+    ) {
+        for x in states.iter_mut() {
+            self.propagate(x, z, rng);
+        }
+    }
     /// Log-likelihood of `z` given the state, under `lik`.
     fn ln_likelihood<L: Likelihood>(&self, x: &[f32; D], z: &Self::Measurement, lik: &L) -> f32;
+    /// Add the log-likelihood of `z` to each particle's log-weight: the filters' hot loop.
+    /// Models override it to hoist per-measurement work (a bearing's sine and cosine) out of
+    /// the loop; the result must agree with [`Model::ln_likelihood`] to a few ulp.
+    fn add_ln_likelihoods<L: Likelihood>(
+        &self,
+        states: &[[f32; D]],
+        z: &Self::Measurement,
+        lik: &L,
+        log_weights: &mut [f32],
+    ) {
+        for (x, lw) in states.iter().zip(log_weights.iter_mut()) {
+            *lw += self.ln_likelihood(x, z, lik);
+        }
+    }
 }

@@ -2,7 +2,7 @@
 //! a SIR filter (N = 100) and the ML fix; the results go out over semihosting and the image
 //! exits 0. On the host this binary is an empty stub (the library is what the host runs).
 //!
-//! Run it: `cargo run --release -p foxhunt-bridge --bin foxhunt-firmware --target
+//! Run it: `cargo run --profile firmware -p foxhunt-bridge --bin foxhunt-firmware --target
 //! thumbv7em-none-eabihf` (the runner in .cargo/config.toml starts QEMU netduinoplus2).
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
