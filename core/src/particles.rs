@@ -158,8 +158,19 @@ impl<const N: usize, const D: usize> ParticleSet<N, D> {
     ) -> Result<(), Error> {
         let l = linalg::cholesky(cov).ok_or(Error::NonFinite)?;
         crate::error::check_finite(mean)?;
+        // Normals four at a time from independent lanes (see random::Lanes).
+        let mut lanes = random::Lanes::seed_from(rng);
+        let (mut four, mut used) = ([0.0f32; 4], 4);
         for x in self.states.iter_mut() {
-            *x = random::gaussian(rng, mean, &l);
+            let z = core::array::from_fn(|_| {
+                if used == 4 {
+                    four = lanes.normals(rng);
+                    used = 0;
+                }
+                used += 1;
+                four[used - 1]
+            });
+            *x = random::correlate(mean, &l, &z);
         }
         self.set_uniform_weights();
         Ok(())

@@ -156,10 +156,13 @@ pub fn gaussian<R: Rng + ?Sized, const D: usize>(
     mean: &[f32; D],
     l: &[[f32; D]; D],
 ) -> [f32; D] {
-    let mut z = [0.0f32; D];
-    for v in z.iter_mut() {
-        *v = normal(rng);
-    }
+    let z = core::array::from_fn(|_| normal(rng));
+    correlate(mean, l, &z)
+}
+
+/// mean + L z: standard normals `z` turned into a draw from N(mean, L L^T).
+#[inline]
+pub fn correlate<const D: usize>(mean: &[f32; D], l: &[[f32; D]; D], z: &[f32; D]) -> [f32; D] {
     let mut x = *mean;
     for (i, xi) in x.iter_mut().enumerate() {
         for (lij, zj) in l[i].iter().zip(z.iter()).take(i + 1) {

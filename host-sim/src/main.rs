@@ -488,13 +488,14 @@ fn perf(runs: usize, growth: Option<(f64, f64)>) -> Result<(), String> {
             .iter()
             .map(|(n, t)| match t {
                 StepTime::Measured { seconds, .. } => format!(
-                    "{} ({:.3})",
+                    "{} ({:.1})",
                     human_seconds(*seconds),
                     *n as f64 / seconds / 1e6
                 ),
                 StepTime::Skipped { predicted } => {
                     format!("not run (~{})", human_seconds(*predicted))
                 }
+                StepTime::Unsupported => "n/a (u16 fish index)".to_string(),
             })
             .collect();
         println!(

@@ -80,8 +80,10 @@ impl<const D: usize> Swarm<D> for Afsa {
                     if xj[0] > xi[0] + v {
                         break;
                     }
-                    let d = distance(&xi, &xj);
-                    if d > 0.0 && d < v {
+                    // Squared distances: no square root per pair (a software routine on the
+                    // Cortex-M4F, whose FPU square root stable Rust cannot reach in no_std).
+                    let d2 = distance_sq(&xi, &xj);
+                    if d2 > 0.0 && d2 < v * v {
                         n_f += 1;
                         for k in 0..D {
                             centre[k] += xj[k];
@@ -135,9 +137,8 @@ impl<const D: usize> Swarm<D> for Afsa {
     }
 }
 
-fn distance<const D: usize>(a: &[f32; D], b: &[f32; D]) -> f32 {
-    let s: f32 = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum();
-    libm::sqrtf(s)
+fn distance_sq<const D: usize>(a: &[f32; D], b: &[f32; D]) -> f32 {
+    a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum()
 }
 
 /// x += r s (target - x) / |target - x|, r ~ U(0, 1).
@@ -147,7 +148,7 @@ fn step_toward<R: Rng + ?Sized, const D: usize>(
     s: f32,
     rng: &mut R,
 ) {
-    let d = distance(x, target);
+    let d = libm::sqrtf(distance_sq(x, target));
     if d > 0.0 && d.is_finite() {
         let r = random::uniform(rng);
         for k in 0..D {

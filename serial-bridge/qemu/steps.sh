@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Instructions per particle per step of every filter on the emulated Cortex-M4F (N = 100), from
+# the counting QEMU plugin: the step-bench image runs each filter with 0 steps and with 60, and
+# the difference is the steps' cost. Prints a markdown table with each whole 60-step run in
+# instructions and in milliseconds at 168 MHz (one instruction per cycle: a lower bound, flash
+# wait states and divisions cost more).
+#
+# Needs: qemu-system-arm, gcc. Run from anywhere: bash serial-bridge/qemu/steps.sh
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+out=target/footprint
+mkdir -p "$out"
+gcc -O2 -shared -fPIC -o "$out/libicount.so" serial-bridge/qemu/icount.c
+CARGO_TARGET_DIR="$out/steps" cargo build -q --profile firmware -p foxhunt-bridge \
+  --bin foxhunt-step-bench --target thumbv7em-none-eabihf
+elf="$out/steps/thumbv7em-none-eabihf/firmware/foxhunt-step-bench"
+particles=100
+steps=60
+
+count() { # $1 = filter, $2 = steps
+  timeout 600 qemu-system-arm -machine netduinoplus2 -nographic \
+    -semihosting-config "enable=on,target=native,arg=step-bench,arg=$1,arg=$2" \
+    -plugin "$out/libicount.so" -kernel "$elf" 2>&1 >/dev/null | sed -n 's/^instructions //p'
+}
+
+echo "| filter (N = $particles, $steps steps) | instructions per particle per step | whole run, M instructions | at 168 MHz |"
+echo "|---|---:|---:|---:|"
+for f in sir gpf ekf fa-pf-imp pso-gpf gsa-gpf afsa-pf fa-pf gsa-gpf-rssi; do
+  base=$(count "$f" 0)
+  full=$(count "$f" "$steps")
+  run=$((full - base))
+  per=$((run / (particles * steps)))
+  [ "$f" = ekf ] && per="- (no particles; $((run / steps)) per step)"
+  awk -v f="$f" -v per="$per" -v run="$run" \
+    'BEGIN { printf "| %s | %s | %.2f | %.1f ms |\n", f, per, run / 1e6, run / 168e3 }'
+done
