@@ -32,14 +32,11 @@ impl Resampling {
             return;
         }
         let n = N as f32;
-        if self == Resampling::Systematic {
-            // Writes every count: no zeroing first.
-            return systematic(weights, random::uniform(rng), counts);
-        }
-        *counts = [0; N];
+        // Systematic and residual write every count; the walks add to zeroed ones.
         match self {
-            Resampling::Systematic => {}
+            Resampling::Systematic => systematic(weights, random::uniform(rng), counts),
             Resampling::Stratified => {
+                *counts = [0; N];
                 walk(
                     weights,
                     1.0,
@@ -48,7 +45,10 @@ impl Resampling {
                     counts,
                 );
             }
-            Resampling::Multinomial => multinomial(weights, 1.0, N, rng, counts),
+            Resampling::Multinomial => {
+                *counts = [0; N];
+                multinomial(weights, 1.0, N, rng, counts)
+            }
             Resampling::Residual => {
                 let mut assigned = 0usize;
                 let mut remainders = [0.0f32; N];

@@ -16,6 +16,22 @@ fn scratch_file(dir: &std::path::Path, name: &str, text: impl AsRef<[u8]>) -> St
     f.to_str().expect("path").to_string()
 }
 
+/// A bundled capture's absolute path (the command runs in a scratch folder).
+fn capture(name: &str) -> String {
+    format!(
+        "{}/../serial-bridge/captures/{name}",
+        env!("CARGO_MANIFEST_DIR")
+    )
+}
+
+/// The command's standard output as one JSON value per line.
+fn json_lines(out: &std::process::Output) -> Vec<serde_json::Value> {
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("JSON line"))
+        .collect()
+}
+
 /// Run the command in a scratch folder: `locate` writes its maps to the working directory,
 /// which must not be the source tree.
 fn foxhunt(args: &[&str]) -> std::process::Output {
@@ -191,22 +207,13 @@ fn bad_captures_give_one_line_errors_and_exit_1() {
 
 #[test]
 fn frames_prints_one_object_per_frame_then_the_counters() {
-    let out = foxhunt(&[
-        "frames",
-        concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../serial-bridge/captures/aoa-drive.nmea"
-        ),
-    ]);
+    let out = foxhunt(&["frames", &capture("aoa-drive.nmea")]);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
-        .lines()
-        .map(|l| serde_json::from_str(l).expect("JSON line"))
-        .collect();
+    let lines = json_lines(&out);
     assert_eq!(lines.len(), 182 + 1);
     assert_eq!(lines[0]["kind"], "gga");
     assert_eq!(lines[1]["kind"], "rmc");
@@ -227,15 +234,7 @@ fn track_names_unknown_anchors() {
         "other.toml",
         "[[anchor]]\naddr = 0x0001\nx = 0.0\ny = 0.0\n[[anchor]]\naddr = 0x0002\nx = 5.0\ny = 0.0\n[[anchor]]\naddr = 0x0003\nx = 0.0\ny = 5.0\n",
     );
-    let out = foxhunt(&[
-        "track",
-        concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../serial-bridge/captures/rssi-sim.znp"
-        ),
-        "--anchors",
-        &anchors,
-    ]);
+    let out = foxhunt(&["track", &capture("rssi-sim.znp"), "--anchors", &anchors]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(
@@ -244,15 +243,9 @@ fn track_names_unknown_anchors() {
     );
     let out = foxhunt(&[
         "track",
-        concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../serial-bridge/captures/rssi-sim.znp"
-        ),
+        &capture("rssi-sim.znp"),
         "--anchors",
-        concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../serial-bridge/captures/rssi-sim.anchors.toml"
-        ),
+        &capture("rssi-sim.anchors.toml"),
         "--json",
     ]);
     assert!(
@@ -289,12 +282,8 @@ fn locate_reads_a_serial_line_and_updates_the_fix() {
         .spawn()
         .expect("run foxhunt");
     std::thread::sleep(std::time::Duration::from_millis(300));
-    let capture = std::fs::read(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../serial-bridge/captures/aoa-drive.nmea"
-    ))
-    .expect("capture");
-    for chunk in capture.chunks(97) {
+    let bytes = std::fs::read(capture("aoa-drive.nmea")).expect("capture");
+    for chunk in bytes.chunks(97) {
         master.write_all(chunk).expect("write");
         std::thread::sleep(std::time::Duration::from_millis(2));
     }
@@ -304,10 +293,7 @@ fn locate_reads_a_serial_line_and_updates_the_fix() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
-        .lines()
-        .map(|l| serde_json::from_str(l).expect("JSON line"))
-        .collect();
+    let lines = json_lines(&out);
     // An update per read that brought bearings (once a fix exists), then the final fix.
     let used: Vec<u64> = lines
         .iter()
@@ -315,14 +301,7 @@ fn locate_reads_a_serial_line_and_updates_the_fix() {
         .collect();
     assert!(used.len() >= 10, "only {} updates", used.len());
     assert!(used.windows(2).all(|w| w[0] <= w[1]), "{used:?}");
-    let file = foxhunt(&[
-        "locate",
-        concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../serial-bridge/captures/aoa-drive.nmea"
-        ),
-        "--json",
-    ]);
+    let file = foxhunt(&["locate", &capture("aoa-drive.nmea"), "--json"]);
     let from_file: serde_json::Value = serde_json::from_slice(&file.stdout).expect("JSON");
     let last = lines.last().expect("final fix");
     assert_eq!(last["lat"], from_file["lat"]);
