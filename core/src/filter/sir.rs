@@ -197,12 +197,8 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Fi
         self.config.check()?;
         self.model.check(z)?;
         self.model.propagate_all(&mut self.particles.states, z, rng);
-        let (model, likelihood) = (&self.model, &self.likelihood);
-        let spent = self.swarm.optimise(
-            &mut self.particles,
-            |x| model.ln_likelihood(x, z, likelihood),
-            rng,
-        );
+        let fitness = self.model.fitness(z, &self.likelihood);
+        let spent = self.swarm.optimise(&mut self.particles, fitness, rng);
         self.evaluations += spent as u64;
         self.update(z, rng)
     }

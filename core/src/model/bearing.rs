@@ -143,7 +143,23 @@ impl Model<2> for StaticEmitter {
     }
 
     /// The residual z - h(p) as one angle: rotate the vehicle-to-particle vector by -theta and
-    /// take its angle, already in [-pi, pi] (no wrap), with the branch-free atan2.
+    /// take its angle, already in [-pi, pi] (no wrap), with the branch-free atan2. One sine and
+    /// cosine per measurement.
+    fn fitness<'a, L: Likelihood>(
+        &'a self,
+        z: &'a Bearing,
+        lik: &'a L,
+    ) -> impl Fn(&[f32; 2]) -> f32 + 'a {
+        let (s, c) = libm::sincosf(z.theta);
+        // Copies, not references into `z`: the loops that call this can then keep them in
+        // registers instead of reloading them after every store.
+        let ([vx, vy], sigma) = (z.vehicle, z.sigma);
+        move |p| {
+            let (dx, dy) = (p[0] - vx, p[1] - vy);
+            lik.ln(fastmath::atan2(s * dx - c * dy, c * dx + s * dy), sigma)
+        }
+    }
+
     fn add_ln_likelihoods<L: Likelihood>(
         &self,
         states: &[[f32; 2]],
@@ -151,12 +167,9 @@ impl Model<2> for StaticEmitter {
         lik: &L,
         log_weights: &mut [f32],
     ) {
-        let (s, c) = libm::sincosf(z.theta);
-        let [vx, vy] = z.vehicle;
+        let fitness = self.fitness(z, lik);
         for (p, lw) in states.iter().zip(log_weights.iter_mut()) {
-            let (dx, dy) = (p[0] - vx, p[1] - vy);
-            let r = fastmath::atan2(s * dx - c * dy, c * dx + s * dy);
-            *lw += lik.ln(r, z.sigma);
+            *lw += fitness(p);
         }
     }
 }

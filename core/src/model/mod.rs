@@ -31,6 +31,16 @@ pub trait Model<const D: usize> {
     }
     /// Log-likelihood of `z` given the state, under `lik`.
     fn ln_likelihood<L: Likelihood>(&self, x: &[f32; D], z: &Self::Measurement, lik: &L) -> f32;
+    /// The log-likelihood of `z` as a function of the state alone: what the swarms evaluate,
+    /// thousands of times per step. Models override it to do the per-measurement work once (a
+    /// bearing's sine and cosine); it must agree with [`Model::ln_likelihood`] to a few ulp.
+    fn fitness<'a, L: Likelihood>(
+        &'a self,
+        z: &'a Self::Measurement,
+        lik: &'a L,
+    ) -> impl Fn(&[f32; D]) -> f32 + 'a {
+        move |x| self.ln_likelihood(x, z, lik)
+    }
     /// Add the log-likelihood of `z` to each particle's log-weight: the filters' hot loop.
     /// Models override it to hoist per-measurement work (a bearing's sine and cosine) out of
     /// the loop; the result must agree with [`Model::ln_likelihood`] to a few ulp.

@@ -7,7 +7,7 @@
 
 use super::{Swarm, argmax, axis_scale, evaluate, sane};
 use crate::particles::ParticleSet;
-use crate::random;
+use crate::{fastmath, random};
 use rand_core::Rng;
 
 /// Standard firefly: every firefly moves toward every brighter one,
@@ -16,7 +16,7 @@ use rand_core::Rng;
 pub struct Firefly {
     /// Attraction at zero distance.
     pub beta0: f32,
-    /// Light absorption.
+    /// Light absorption, >= 0 (a negative or NaN one disables the move: the swarm returns 0).
     pub gamma: f32,
     /// Random step (in cloud standard deviations).
     pub alpha: f32,
@@ -46,7 +46,7 @@ impl Default for Firefly {
 pub struct ImprovedFirefly {
     /// Attraction at zero distance.
     pub beta0: f32,
-    /// Light absorption.
+    /// Light absorption, >= 0 (a negative or NaN one disables the move: the swarm returns 0).
     pub gamma: f32,
     /// Random step (in cloud standard deviations).
     pub alpha: f32,
@@ -91,6 +91,9 @@ impl<const D: usize> Swarm<D> for Firefly {
         mut fitness: F,
         rng: &mut R,
     ) -> u32 {
+        if !(self.gamma >= 0.0) {
+            return 0;
+        }
         let scale = axis_scale(set, 1e-6);
         let mut light = evaluate(set, &mut fitness);
         let mut evals = N as u32;
@@ -102,8 +105,8 @@ impl<const D: usize> Swarm<D> for Firefly {
                     if light[j] > light[i] {
                         let xj = set.states[j];
                         let xi = &mut set.states[i];
-                        let beta =
-                            self.beta0 * libm::expf(-self.gamma * scaled_r2(xi, &xj, &scale));
+                        let beta = self.beta0
+                            * fastmath::exp_nonpositive(-self.gamma * scaled_r2(xi, &xj, &scale));
                         for k in 0..D {
                             xi[k] += beta * (xj[k] - xi[k])
                                 + alpha * scale[k] * (random::uniform(rng) - 0.5);
@@ -129,6 +132,9 @@ impl<const D: usize> Swarm<D> for ImprovedFirefly {
         mut fitness: F,
         rng: &mut R,
     ) -> u32 {
+        if !(self.gamma >= 0.0) {
+            return 0;
+        }
         let scale = axis_scale(set, 1e-6);
         let mut light = evaluate(set, &mut fitness);
         let mut evals = N as u32;
@@ -145,10 +151,10 @@ impl<const D: usize> Swarm<D> for ImprovedFirefly {
                     continue;
                 }
                 // Relative brightness I_i / I_best in [0, 1]: dimmer fireflies are pulled harder.
-                let rel = libm::expf(light[i] - l_best);
+                let rel = fastmath::exp_nonpositive(light[i] - l_best);
                 let xi = &mut set.states[i];
                 let beta = self.beta0 / (1.0 + rel)
-                    * libm::expf(-self.gamma * scaled_r2(xi, &g, &scale))
+                    * fastmath::exp_nonpositive(-self.gamma * scaled_r2(xi, &g, &scale))
                     * eps;
                 for k in 0..D {
                     xi[k] +=
@@ -160,5 +166,36 @@ impl<const D: usize> Swarm<D> for ImprovedFirefly {
             alpha *= self.alpha_decay;
         }
         evals
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand_core::SeedableRng;
+    use rand_xorshift::XorShiftRng;
+
+    /// A negative absorption would pull harder the farther apart: no move, no evaluations.
+    #[test]
+    fn negative_gamma_leaves_the_swarm_alone() {
+        let mut rng = XorShiftRng::seed_from_u64(1);
+        let mut set = ParticleSet::<8, 2>::new();
+        set.states = core::array::from_fn(|i| [i as f32, 0.0]);
+        let before = set.states;
+        let fitness = |x: &[f32; 2]| -x[0] * x[0];
+        let mut standard = Firefly {
+            gamma: -1.0,
+            ..Firefly::default()
+        };
+        assert_eq!(standard.optimise(&mut set, fitness, &mut rng), 0);
+        let mut improved = ImprovedFirefly {
+            gamma: f32::NAN,
+            ..ImprovedFirefly::default()
+        };
+        assert_eq!(improved.optimise(&mut set, fitness, &mut rng), 0);
+        assert_eq!(set.states, before);
+        // And a valid one does move them.
+        assert!(Firefly::default().optimise(&mut set, fitness, &mut rng) > 0);
+        assert_ne!(set.states, before);
     }
 }

@@ -7,9 +7,9 @@
 //! All forces of an iteration are computed from the same positions. O(N K) per iteration,
 //! O(N^2) over a move.
 
-use super::{Swarm, evaluate, sane};
+use super::{Swarm, each_axis, evaluate, sane};
 use crate::particles::ParticleSet;
-use crate::random;
+use crate::{fastmath, random};
 use rand_core::Rng;
 
 /// GSA parameters (seed 003's values by default).
@@ -57,7 +57,8 @@ impl<const D: usize> Swarm<D> for Gsa {
             if !best.is_finite() {
                 break;
             }
-            let fit: [f32; N] = core::array::from_fn(|i| libm::expf(ln_fit[i] - best));
+            let fit: [f32; N] =
+                core::array::from_fn(|i| fastmath::exp_nonpositive(ln_fit[i] - best));
             let worst = fit.iter().copied().fold(f32::INFINITY, f32::min);
             let spread = 1.0 - worst;
             let mut mass: [f32; N] = core::array::from_fn(|i| {
@@ -92,12 +93,12 @@ impl<const D: usize> Swarm<D> for Gsa {
                         continue;
                     }
                     let xj = set.states[j];
-                    let r: f32 =
-                        libm::sqrtf((0..D).map(|d| (xj[d] - xi[d]) * (xj[d] - xi[d])).sum());
-                    let f = g * random::uniform(rng) * mass[j] / (r + self.softening);
-                    for d in 0..D {
-                        accel[i][d] += f * (xj[d] - xi[d]);
-                    }
+                    let mut r2 = 0.0;
+                    each_axis::<D>(|d| r2 += (xj[d] - xi[d]) * (xj[d] - xi[d]));
+                    let f =
+                        g * random::uniform(rng) * mass[j] / (fastmath::sqrt(r2) + self.softening);
+                    let a = &mut accel[i];
+                    each_axis::<D>(|d| a[d] += f * (xj[d] - xi[d]));
                 }
             }
             for i in 0..N {

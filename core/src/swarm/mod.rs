@@ -57,6 +57,22 @@ pub(crate) fn sane(l: f32) -> f32 {
     if l.is_nan() { f32::NEG_INFINITY } else { l }
 }
 
+/// `f(0); f(1); ..; f(D - 1)` with the first two calls written out: at the MCU image's
+/// opt-level "s" the compiler keeps even a two-trip loop, and the swarms run these once per
+/// particle pair or trial point.
+#[inline(always)]
+pub(crate) fn each_axis<const D: usize>(mut f: impl FnMut(usize)) {
+    if D > 0 {
+        f(0);
+    }
+    if D > 1 {
+        f(1);
+    }
+    for c in 2..D {
+        f(c);
+    }
+}
+
 /// Index and value of the largest entry.
 pub(crate) fn argmax(v: &[f32]) -> (usize, f32) {
     v.iter()
