@@ -2,7 +2,8 @@
 # The firmware image's footprint on the emulated Cortex-M4F: flash, static RAM, painted-stack
 # high-water mark, and exact instructions per particle per SIR step (N = 100), from a counting
 # QEMU plugin. The step cost is the difference between the image and its `baseline` build,
-# which skips the filter steps, divided by particles x steps.
+# which skips the filter steps, divided by particles x steps. The image streams the bundled
+# drive from the host over semihosting (as from a UART), so the flash figure is the product's.
 #
 # Needs: qemu-system-arm, binutils-arm-none-eabi (arm-none-eabi-size), gcc.
 # Run from anywhere: bash serial-bridge/qemu/footprint.sh
@@ -29,13 +30,12 @@ full=$(count full)
 base=$(count baseline)
 stack=$(sed -n 's/^stack //p' "$out/full.out")
 read -r text data bss _ < <(arm-none-eabi-size "$full_elf" | tail -1)
-capture=$(stat -c %s serial-bridge/captures/aoa-drive.nmea)
 particles=100
 steps=$(sed -n 's/^bearings \([0-9]*\).*/\1/p' "$out/full.out")
 
 echo "| quantity | value |"
 echo "|---|---|"
-echo "| flash (text + rodata + data) | $((text + data)) B, of which the embedded capture $capture B |"
+echo "| flash (text + rodata + data) | $((text + data)) B |"
 echo "| static RAM (data + bss) | $((data + bss)) B |"
 echo "| stack high-water mark (painted) | $stack B |"
 echo "| instructions, whole run (bridge + SIR + ML) | $full |"

@@ -34,17 +34,42 @@ pub struct Replay {
     pub bridge: BridgeCounters,
 }
 
-/// Feed `capture` in reads of `chunk` bytes through a receiver, then run a SIR filter with `N`
-/// particles (initialised from bearing pairs, as the bench does) over the first `steps`
-/// bearings (all of them with `usize::MAX`; 0 gives the cost of everything but the steps) and
-/// the ML fix.
+/// Feed `capture` in reads of `chunk` bytes (1 to [`READ_BUFFER`]) through a receiver, then
+/// run a SIR filter with `N` particles (initialised from bearing pairs, as the bench does) over
+/// the first `steps` bearings (all of them with `usize::MAX`; 0 gives the cost of everything
+/// but the steps) and the ML fix.
 pub fn replay<const N: usize>(
-    capture: &[u8],
+    mut capture: &[u8],
     chunk: usize,
     config: BridgeConfig,
     seed: u64,
     steps: usize,
 ) -> Replay {
+    let read = |buf: &mut [u8]| {
+        let n = buf.len().min(capture.len());
+        buf[..n].copy_from_slice(&capture[..n]);
+        capture = &capture[n..];
+        Ok::<usize, core::convert::Infallible>(n)
+    };
+    match replay_from::<N, _>(read, chunk, config, seed, steps) {
+        Ok(r) => r,
+        Err(never) => match never {},
+    }
+}
+
+/// Largest read [`replay_from`] asks for: a UART driver's DMA buffer.
+pub const READ_BUFFER: usize = 64;
+
+/// [`replay`] from a byte source: `read` fills the buffer it is given (at most `chunk` bytes)
+/// and returns how many it wrote, 0 at the end, as a serial driver or a file does. A read
+/// error ends the replay with that error.
+pub fn replay_from<const N: usize, E>(
+    mut read: impl FnMut(&mut [u8]) -> Result<usize, E>,
+    chunk: usize,
+    config: BridgeConfig,
+    seed: u64,
+    steps: usize,
+) -> Result<Replay, E> {
     let mut rx = Receiver::<0>::new(config, []);
     let mut bearings = heapless::Vec::<Bearing, MAX_BEARINGS>::new();
     let mut dropped = 0;
@@ -55,22 +80,28 @@ pub fn replay<const N: usize>(
             dropped += 1;
         }
     };
-    for piece in capture.chunks(chunk.max(1)) {
-        rx.feed(piece, &mut sink);
+    let mut buf = [0u8; READ_BUFFER];
+    let buf = &mut buf[..chunk.clamp(1, READ_BUFFER)];
+    loop {
+        let n = read(buf)?.min(buf.len());
+        if n == 0 {
+            break;
+        }
+        rx.feed(&buf[..n], &mut sink);
     }
     rx.finish(&mut sink);
     let mut rng = XorShiftRng::seed_from_u64(seed);
     let sir = run_sir::<N>(&bearings, steps, &mut rng);
     let ml = ml(&bearings, None, &Gaussian, MlOptions::default());
     let (stream, bridge) = rx.counters();
-    Replay {
+    Ok(Replay {
         sir,
         ml,
         bearings: bearings.len(),
         dropped,
         stream: *stream,
         bridge: *bridge,
-    }
+    })
 }
 
 fn run_sir<const N: usize>(

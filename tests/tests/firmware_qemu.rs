@@ -42,6 +42,8 @@ fn firmware_fix_equals_the_host_fix_bit_for_bit() {
         .expect("cargo runs");
     assert!(build.success(), "firmware build failed");
     let image = target_dir.join("thumbv7em-none-eabihf/firmware/foxhunt-firmware");
+    // The image reads the drive from this host file over semihosting, as it would from a UART.
+    let capture = workspace().join("serial-bridge/captures/aoa-drive.nmea");
     let run = Command::new("timeout")
         .args([
             "120",
@@ -50,7 +52,12 @@ fn firmware_fix_equals_the_host_fix_bit_for_bit() {
             "netduinoplus2",
             "-nographic",
         ])
-        .args(["-semihosting-config", "enable=on,target=native", "-kernel"])
+        .arg("-semihosting-config")
+        .arg(format!(
+            "enable=on,target=native,arg=foxhunt-firmware,arg={}",
+            capture.display()
+        ))
+        .arg("-kernel")
         .arg(&image)
         .output()
         .expect("qemu runs");
@@ -65,7 +72,7 @@ fn firmware_fix_equals_the_host_fix_bit_for_bit() {
         sigma_rad: 0.019_496,
         ..BridgeConfig::default()
     };
-    // Fed one byte at a time, as the image does, and in 64-byte reads: same answer.
+    // Fed one byte at a time and in 64-byte reads, as the image does: same answer.
     let host = replay::<100>(CAPTURE, 1, config, 1, usize::MAX);
     assert_eq!(host, replay::<100>(CAPTURE, 64, config, 1, usize::MAX));
     let mut expected = String::new();

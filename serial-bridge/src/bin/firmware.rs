@@ -1,9 +1,14 @@
-//! The MCU image: a recorded drive, embedded in flash, fed byte by byte through the bridge into
-//! a SIR filter (N = 100) and the ML fix; the results go out over semihosting and the image
-//! exits 0. On the host this binary is an empty stub (the library is what the host runs).
+//! The MCU image: a recorded drive streamed in 64-byte reads (as from a UART's DMA buffer)
+//! through the bridge into a SIR filter (N = 100) and the ML fix; the results go out over
+//! semihosting and the image exits 0. On the host this binary is an empty stub (the library is
+//! what the host runs).
 //!
-//! Run it: `cargo run --profile firmware -p foxhunt-bridge --bin foxhunt-firmware --target
-//! thumbv7em-none-eabihf` (the runner in .cargo/config.toml starts QEMU netduinoplus2).
+//! The bytes come from a host file over semihosting, standing in for the serial port: the
+//! path is the image's first semihosting argument, by default the bundled drive
+//! `serial-bridge/captures/aoa-drive.nmea` (relative to where QEMU runs). So the flash holds
+//! the product, not a recording. Run it from the workspace root: `cargo run --profile firmware
+//! -p foxhunt-bridge --bin foxhunt-firmware --target thumbv7em-none-eabihf` (the runner in
+//! .cargo/config.toml starts QEMU netduinoplus2).
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 /// Particles of the image's SIR filter.
@@ -15,11 +20,30 @@ mod image {
     use cortex_m as _;
     use cortex_m_rt::entry;
     use foxhunt_bridge::BridgeConfig;
-    use foxhunt_bridge::replay::{replay, write_summary};
-    use semihosting::{print, process};
+    use foxhunt_bridge::replay::{READ_BUFFER, replay_from, write_summary};
+    use semihosting::{fs::File, io::Read, print, println, process};
 
-    /// The drive: `foxhunt simulate --scenario aoa-drive` (run 0, default origin).
-    static CAPTURE: &[u8] = include_bytes!("../../captures/aoa-drive.nmea");
+    /// The drive when no path is given: `foxhunt simulate --scenario aoa-drive` (run 0).
+    const DEFAULT_CAPTURE: &str = "serial-bridge/captures/aoa-drive.nmea";
+
+    /// The capture file named by the first semihosting argument (or the default), opened.
+    /// A command line too long for the buffer, a path not UTF-8 or not openable is an error.
+    fn open_capture() -> Result<File, semihosting::io::Error> {
+        use semihosting::io::ErrorKind::InvalidInput;
+        let args = semihosting::experimental::env::args::<512>()?;
+        let mut it = &args;
+        let _program = it.next();
+        let path = it
+            .next()
+            .unwrap_or(Ok(DEFAULT_CAPTURE))
+            .map_err(|_| InvalidInput)?;
+        let mut c_path = [0u8; 512];
+        if path.len() >= c_path.len() {
+            return Err(InvalidInput.into());
+        }
+        c_path[..path.len()].copy_from_slice(path.as_bytes());
+        File::open(core::ffi::CStr::from_bytes_until_nul(&c_path).map_err(|_| InvalidInput)?)
+    }
 
     /// Bytes in, formatted out, through semihosting.
     struct Console;
@@ -45,7 +69,21 @@ mod image {
         } else {
             usize::MAX
         };
-        let r = replay::<{ super::PARTICLES }>(CAPTURE, 1, config, 1, steps);
+        let mut capture = match open_capture() {
+            Ok(file) => file,
+            Err(e) => {
+                println!("capture error: {e}");
+                process::exit(2)
+            }
+        };
+        let read = |buf: &mut [u8]| capture.read(buf);
+        let r = match replay_from::<{ super::PARTICLES }, _>(read, READ_BUFFER, config, 1, steps) {
+            Ok(r) => r,
+            Err(e) => {
+                println!("capture error: {e}");
+                process::exit(2)
+            }
+        };
         let _ = write_summary(&r, &mut Console);
         let _ = core::fmt::Write::write_fmt(
             &mut Console,
