@@ -1,14 +1,17 @@
-//! Criterion benchmarks: one filter step at N = 100, 1 000 and 10 000 particles (throughput in
-//! particle updates per second), and whole canonical `aoa-afsa` runs of every method.
+//! Criterion benchmarks: one step of every filter at N = 100, 1 000 and 10 000 particles
+//! (throughput in particle updates per second), and whole canonical `aoa-afsa` runs of every
+//! method.
 //!
-//! `cargo bench -p foxhunt-sim --bench filters` (add `-- step/sir` to pick one group).
+//! `cargo bench -p foxhunt-sim --bench filters` (add `-- step/sir` to pick one group). The
+//! O(N^2) swarms (gsa-gpf, fa-pf) take seconds to minutes per step at N = 10 000, so the full
+//! set runs for a long while; `foxhunt perf` gives the same growth with a time limit.
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use foxhunt_core::fix::init::initial_particles;
 use foxhunt_core::fix::intersection::MIN_CROSSING;
 use foxhunt_core::{
-    Afsa, Bearing, BearingEkf, Filter, Gaussian, Gpf, ImprovedFirefly, ParticleSet, Sir, SirConfig,
-    StaticEmitter,
+    Afsa, Bearing, BearingEkf, Filter, Firefly, Gaussian, Gpf, Gsa, ImprovedFirefly, ParticleSet,
+    Pso, Sir, SirConfig, StaticEmitter,
 };
 use foxhunt_sim::methods::Method;
 use foxhunt_sim::scenario::Scenario;
@@ -37,6 +40,10 @@ fn step_group<const N: usize, F: Filter<2, Measurement = Bearing>>(
 ) {
     let mut g = c.benchmark_group(format!("step/{name}"));
     g.throughput(Throughput::Elements(N as u64));
+    if N >= 10_000 {
+        // Criterion's least: the O(N^2) swarms' steps take seconds here.
+        g.sample_size(10);
+    }
     let (mut f, bearings, mut rng) = setup::<N, F>(make);
     let mut k = 0;
     g.bench_function(BenchmarkId::from_parameter(N), |b| {
@@ -51,14 +58,24 @@ fn step_group<const N: usize, F: Filter<2, Measurement = Bearing>>(
 macro_rules! steps {
     ($c:expr, $($n:literal),*) => {$(
         let model = StaticEmitter { process_var: 0.0 };
-        step_group::<$n, _>($c, "sir", || Sir::<_, _, $n, 2>::new(model, Gaussian, SirConfig::default()));
+        let config = SirConfig::default();
+        step_group::<$n, _>($c, "sir", || Sir::<_, _, $n, 2>::new(model, Gaussian, config));
         step_group::<$n, _>($c, "gpf", || Gpf::<_, _, $n, 2>::new(model, Gaussian));
         step_group::<$n, _>($c, "afsa-pf", || {
-            Sir::<_, _, $n, 2, Afsa>::with_swarm(model, Gaussian, SirConfig::default(), Afsa::default())
+            Sir::<_, _, $n, 2, _>::with_swarm(model, Gaussian, config, Afsa::default())
         });
         step_group::<$n, _>($c, "fa-pf-imp", || {
-            Sir::<_, _, $n, 2, ImprovedFirefly>::with_swarm(
-                model, Gaussian, SirConfig::default(), ImprovedFirefly::default())
+            Sir::<_, _, $n, 2, _>::with_swarm(model, Gaussian, config, ImprovedFirefly::default())
+        });
+        step_group::<$n, _>($c, "pso-gpf", || {
+            Gpf::<_, _, $n, 2, _>::with_swarm(model, Gaussian, Pso::default())
+        });
+        // The O(N^2) swarms: seconds to minutes per step at N = 10 000.
+        step_group::<$n, _>($c, "gsa-gpf", || {
+            Gpf::<_, _, $n, 2, _>::with_swarm(model, Gaussian, Gsa::default())
+        });
+        step_group::<$n, _>($c, "fa-pf", || {
+            Sir::<_, _, $n, 2, _>::with_swarm(model, Gaussian, config, Firefly::default())
         });
     )*};
 }
