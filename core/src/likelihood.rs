@@ -10,6 +10,13 @@ use core::f32::consts::PI;
 pub trait Likelihood: Copy {
     /// log L(r) up to an additive constant, for residual `r` with scale `sigma` (> 0).
     fn ln(&self, r: f32, sigma: f32) -> f32;
+    /// [`Likelihood::ln`] at one `sigma`, for the loops over every particle: implementations
+    /// hoist what depends on `sigma` alone (the Gaussian multiplies by -1 / (2 sigma^2) instead
+    /// of dividing per residual). Agrees with `ln` to a few ulp.
+    fn ln_at(&self, sigma: f32) -> impl Fn(f32) -> f32 {
+        let lik = *self;
+        move |r| lik.ln(r, sigma)
+    }
     /// IRLS weight -d ln L / du / u in [0, 1] for the normalised residual u = r / sigma
     /// (1 for a Gaussian).
     fn irls_weight(&self, u: f32) -> f32;
@@ -24,6 +31,11 @@ impl Likelihood for Gaussian {
     fn ln(&self, r: f32, sigma: f32) -> f32 {
         let u = r / sigma;
         -0.5 * u * u
+    }
+    #[inline]
+    fn ln_at(&self, sigma: f32) -> impl Fn(f32) -> f32 {
+        let k = -0.5 / (sigma * sigma);
+        move |r| k * r * r
     }
     #[inline]
     fn irls_weight(&self, _u: f32) -> f32 {
@@ -179,6 +191,15 @@ mod tests {
         assert!(l.ln(3.0, 0.01).is_finite());
         let w = l.irls_weight(10.0);
         assert!((0.0..=1.0).contains(&w));
+        // The hoisted form agrees with the plain one to a few ulp.
+        for sigma in [0.001f32, 0.0195, 1.0, 30.0] {
+            let ln = l.ln_at(sigma);
+            for k in -200..=200 {
+                let r = sigma * k as f32 * 0.05;
+                let (a, b) = (ln(r), l.ln(r, sigma));
+                assert!((a - b).abs() <= 4e-7 * b.abs().max(1.0), "{r} {sigma}: {a} {b}");
+            }
+        }
     }
 
     #[test]

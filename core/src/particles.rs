@@ -131,21 +131,33 @@ impl<const N: usize, const D: usize> ParticleSet<N, D> {
         self.set_uniform_weights();
     }
 
-    /// Replicate particle j `counts[j]` times, in place: survivors stay where they are and
-    /// their extra copies fill the slots of the particles that died. No second state array.
+    /// Replicate particle j `counts[j]` times, in place and without a branch per copy: slot k
+    /// gets ancestor a_k, nondecreasing in k (each particle marks the first slot of its run and
+    /// a running maximum fills the rest). Then two passes copy with no second state array:
+    /// ascending where a_k >= k (that source is not yet overwritten), descending where a_k < k
+    /// (nor is that one: a_{a_k} <= a_k, so its slot kept its particle). Counts summing to
+    /// more than N stop at N; to fewer, the last ancestor fills the remaining slots.
     pub fn apply_counts(&mut self, counts: &[u32; N]) {
-        let mut free = 0usize;
-        for j in 0..N {
-            for _ in 1..counts[j] {
-                while free < N && counts[free] != 0 {
-                    free += 1;
-                }
-                if free >= N {
-                    return;
-                }
-                self.states[free] = self.states[j];
-                free += 1;
+        let mut ancestor = [0u32; N];
+        let mut start = 0usize;
+        for (j, &c) in counts.iter().enumerate() {
+            if let Some(a) = ancestor.get_mut(start) {
+                *a = j as u32;
             }
+            start = start.saturating_add(c as usize);
+        }
+        let mut run = 0;
+        for a in ancestor.iter_mut() {
+            run = run.max(*a);
+            *a = run;
+        }
+        for k in 0..N {
+            let a = ancestor[k] as usize;
+            self.states[k] = self.states[if a >= k { a } else { k }];
+        }
+        for k in (0..N).rev() {
+            let a = ancestor[k] as usize;
+            self.states[k] = self.states[if a < k { a } else { k }];
         }
     }
 
@@ -254,8 +266,41 @@ mod tests {
         let mut p = ParticleSet::<5, 1>::new();
         p.states = [[0.0], [1.0], [2.0], [3.0], [4.0]];
         p.apply_counts(&[0, 3, 0, 2, 0]);
-        let mut s: [f32; 5] = core::array::from_fn(|i| p.states[i][0]);
-        s.sort_by(f32::total_cmp);
-        assert_eq!(s, [1.0, 1.0, 1.0, 3.0, 3.0]);
+        assert_eq!(p.states, [[1.0], [1.0], [1.0], [3.0], [3.0]]);
+        // Survivors moving both ways, and counts that overrun N.
+        p.states = [[0.0], [1.0], [2.0], [3.0], [4.0]];
+        p.apply_counts(&[2, 0, 0, 0, 3]);
+        assert_eq!(p.states, [[0.0], [0.0], [4.0], [4.0], [4.0]]);
+        p.states = [[0.0], [1.0], [2.0], [3.0], [4.0]];
+        p.apply_counts(&[0, 0, 1, 9, 9]);
+        assert_eq!(p.states, [[2.0], [3.0], [3.0], [3.0], [3.0]]);
+    }
+
+    /// Every count vector of a 6-particle set against the obvious out-of-place copy.
+    #[test]
+    fn apply_counts_matches_a_plain_copy() {
+        let mut counts = [0u32; 6];
+        loop {
+            if counts.iter().sum::<u32>() == 6 {
+                let mut p = ParticleSet::<6, 1>::new();
+                p.states = core::array::from_fn(|i| [i as f32]);
+                let mut expected = [[0.0f32]; 6];
+                let mut k = 0;
+                for (j, &c) in counts.iter().enumerate() {
+                    for _ in 0..c {
+                        expected[k] = [j as f32];
+                        k += 1;
+                    }
+                }
+                p.apply_counts(&counts);
+                assert_eq!(p.states, expected, "{counts:?}");
+            }
+            // Next vector in base 7.
+            let Some(i) = counts.iter().position(|&c| c < 6) else {
+                break;
+            };
+            counts[i] += 1;
+            counts[..i].fill(0);
+        }
     }
 }

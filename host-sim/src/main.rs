@@ -443,20 +443,25 @@ fn simulate(
 
 /// `foxhunt perf`: the Rust SIR against the numpy peer, then the growth table.
 fn perf(runs: usize, growth: Option<(f64, f64)>) -> Result<(), String> {
+    use foxhunt_sim::perf::runs_at;
     use foxhunt_sim::perf::{GROWTH_SIZES, StepTime};
-    let counts = [100, 1000, 10_000];
-    let peer = foxhunt_sim::perf::peer_timings(&counts, runs)?;
-    println!("Bootstrap SIR on aoa-afsa (60 bearings), {runs} runs each, one thread:\n");
     println!(
-        "| N | Rust s/run | numpy s/run | Rust / numpy speed | Rust particle updates/s | Rust rmse m | numpy rmse m |"
+        "Bootstrap SIR on aoa-afsa (60 bearings), one thread, the same runs on both sides \
+         (at least {runs}; more below N = 1 000):\n"
     );
-    println!("|---:|---:|---:|---:|---:|---:|---:|");
-    for p in &peer {
-        let r = foxhunt_sim::perf::rust_timing(p.particles, runs)
-            .ok_or_else(|| format!("{} particles is not a compiled size", p.particles))?;
+    println!(
+        "| N | runs | Rust s/run | numpy s/run | Rust / numpy speed | Rust particle updates/s | Rust rmse m | numpy rmse m |"
+    );
+    println!("|---:|---:|---:|---:|---:|---:|---:|---:|");
+    for n in [100, 1000, 10_000] {
+        let runs = runs_at(n, runs);
+        let peer = foxhunt_sim::perf::peer_timings(&[n], runs)?;
+        let p = peer.first().ok_or("the numpy peer printed nothing")?;
+        let r = foxhunt_sim::perf::rust_timing(n, runs)
+            .ok_or_else(|| format!("{n} particles is not a compiled size"))?;
         let updates = (r.particles * 60) as f64 / r.seconds_per_run;
         println!(
-            "| {} | {:.3e} | {:.3e} | {:.1}x | {:.3e} | {:.2} | {:.2} |",
+            "| {} | {runs} | {:.3e} | {:.3e} | {:.1}x | {:.3e} | {:.2} | {:.2} |",
             p.particles,
             r.seconds_per_run,
             p.seconds_per_run,

@@ -90,6 +90,13 @@ fn rust_sir<const N: usize>(runs: usize) -> Timing {
     }
 }
 
+/// Runs to time at `n` particles: at least `runs`, and below N = 1 000 proportionally more, so
+/// that every row times at least as many particle updates as the N = 1 000 row (20 runs at
+/// N = 100 are about a millisecond of Rust: too little to time against clock and frequency noise).
+pub fn runs_at(n: usize, runs: usize) -> usize {
+    runs.max(runs * 1000 / n.max(1))
+}
+
 /// Time the Rust SIR at `n` particles (a compiled size: 100, 1000, 10 000 or 100 000).
 pub fn rust_timing(n: usize, runs: usize) -> Option<Timing> {
     // Run on the big-stack pool: a 100 000-particle filter is built on the stack before boxing.

@@ -151,12 +151,13 @@ impl Model<2> for StaticEmitter {
         lik: &'a L,
     ) -> impl Fn(&[f32; 2]) -> f32 + 'a {
         let (s, c) = libm::sincosf(z.theta);
-        // Copies, not references into `z`: the loops that call this can then keep them in
-        // registers instead of reloading them after every store.
-        let ([vx, vy], sigma) = (z.vehicle, z.sigma);
+        // A copy, not a reference into `z`: the loops that call this can then keep it in
+        // registers instead of reloading it after every store.
+        let [vx, vy] = z.vehicle;
+        let ln = lik.ln_at(z.sigma);
         move |p| {
             let (dx, dy) = (p[0] - vx, p[1] - vy);
-            lik.ln(fastmath::atan2(s * dx - c * dy, c * dx + s * dy), sigma)
+            ln(fastmath::atan2(s * dx - c * dy, c * dx + s * dy))
         }
     }
 
