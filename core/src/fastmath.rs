@@ -51,13 +51,29 @@ pub fn exp_nonpositive(x: f32) -> f32 {
     }
 }
 
-/// sqrt(x), within 2 ulp. On the Cortex-M4F `libm::sqrtf` is a software loop of about a
-/// hundred instructions (the FPU's VSQRT needs `unsafe` asm, which this crate forbids), and
-/// the swarms take one per particle pair. This is the exponent-halving guess of 1/sqrt(x), two
-/// Newton steps and one correction of the product x / sqrt(x): a dozen multiplies. Zero,
-/// subnormals, infinity, negatives and NaN take `libm` (exact, and rare).
+/// sqrt(x), within 2 ulp. Where the target has a square-root instruction that `libm`
+/// reaches (SSE2, AArch64 NEON) this is `libm::sqrtf`, correctly rounded. Elsewhere (the
+/// Cortex-M4F: its VSQRT needs `unsafe` asm, which this crate forbids) `libm::sqrtf` is a
+/// software loop of about a hundred instructions and the swarms take one per particle pair, so
+/// this is [`sqrt_newton`]: a dozen multiplies. The swarms' moves may then differ in the last
+/// bits between such a target and the host; the SIR path takes no square root per particle.
 #[inline(always)]
 pub fn sqrt(x: f32) -> f32 {
+    if cfg!(any(
+        target_feature = "sse2",
+        all(target_arch = "aarch64", target_feature = "neon")
+    )) {
+        libm::sqrtf(x)
+    } else {
+        sqrt_newton(x)
+    }
+}
+
+/// sqrt(x) within 2 ulp by multiplies alone: the exponent-halving guess of 1/sqrt(x), two
+/// Newton steps and one correction of the product x / sqrt(x). Zero, subnormals, infinity,
+/// negatives and NaN take `libm` (exact, and rare).
+#[inline(always)]
+pub fn sqrt_newton(x: f32) -> f32 {
     if !(f32::MIN_POSITIVE..f32::INFINITY).contains(&x) {
         return libm::sqrtf(x);
     }
@@ -178,16 +194,16 @@ mod tests {
             for k in 0..4000 {
                 let v = x * (1.0 + k as f32 / 4000.0);
                 let exact = libm::sqrt(v as f64);
-                worst = worst.max(((sqrt(v) as f64 - exact) / exact).abs());
+                worst = worst.max(((sqrt_newton(v) as f64 - exact) / exact).abs());
             }
             x *= 2.0;
         }
         // 2 ulp at worst (1 ulp is 1.2e-7 relative at most).
         assert!(worst < 2.4e-7, "worst relative error {worst}");
         for v in [0.0f32, -0.0, 1e-40, 1.0, 4.0, f32::INFINITY] {
-            assert_eq!(sqrt(v), libm::sqrtf(v), "{v}");
+            assert_eq!(sqrt_newton(v), libm::sqrtf(v), "{v}");
         }
-        assert!((sqrt(f32::MAX) / libm::sqrtf(f32::MAX) - 1.0).abs() < 2.4e-7);
-        assert!(sqrt(-1.0).is_nan() && sqrt(f32::NAN).is_nan());
+        assert!((sqrt_newton(f32::MAX) / libm::sqrtf(f32::MAX) - 1.0).abs() < 2.4e-7);
+        assert!(sqrt_newton(-1.0).is_nan() && sqrt_newton(f32::NAN).is_nan());
     }
 }

@@ -197,7 +197,10 @@ mod tests {
             for k in -200..=200 {
                 let r = sigma * k as f32 * 0.05;
                 let (a, b) = (ln(r), l.ln(r, sigma));
-                assert!((a - b).abs() <= 4e-7 * b.abs().max(1.0), "{r} {sigma}: {a} {b}");
+                assert!(
+                    (a - b).abs() <= 4e-7 * b.abs().max(1.0),
+                    "{r} {sigma}: {a} {b}"
+                );
             }
         }
     }

@@ -150,9 +150,11 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Fi
         }
         self.model.check(z)?;
         self.predict(z, rng)?;
-        let fitness = self.model.fitness(z, &self.likelihood);
-        let spent = self.swarm.optimise(&mut self.samples, fitness, rng);
-        self.evaluations += spent as u64;
+        if S::MOVES {
+            let fitness = self.model.fitness(z, &self.likelihood);
+            let spent = self.swarm.optimise(&mut self.samples, fitness, rng);
+            self.evaluations += spent as u64;
+        }
         self.update(z, rng)
     }
 

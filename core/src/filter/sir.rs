@@ -197,9 +197,11 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Fi
         self.config.check()?;
         self.model.check(z)?;
         self.model.propagate_all(&mut self.particles.states, z, rng);
-        let fitness = self.model.fitness(z, &self.likelihood);
-        let spent = self.swarm.optimise(&mut self.particles, fitness, rng);
-        self.evaluations += spent as u64;
+        if S::MOVES {
+            let fitness = self.model.fitness(z, &self.likelihood);
+            let spent = self.swarm.optimise(&mut self.particles, fitness, rng);
+            self.evaluations += spent as u64;
+        }
         self.update(z, rng)
     }
 

@@ -17,6 +17,9 @@ use rand_core::Rng;
 
 /// Moves particles toward higher fitness.
 pub trait Swarm<const D: usize> {
+    /// False for [`NoSwarm`]: the filters then skip preparing a fitness function (a bearing's
+    /// sine and cosine, a thousand soft-float instructions on the MCU) that nothing would call.
+    const MOVES: bool = true;
     /// Move the states of `set` toward higher `fitness` (a log-likelihood: larger is better).
     /// Returns the number of fitness evaluations spent, the currency of equal-cost comparisons.
     fn optimise<const N: usize, R: Rng + ?Sized, F: FnMut(&[f32; D]) -> f32>(
@@ -32,6 +35,8 @@ pub trait Swarm<const D: usize> {
 pub struct NoSwarm;
 
 impl<const D: usize> Swarm<D> for NoSwarm {
+    const MOVES: bool = false;
+
     #[inline]
     fn optimise<const N: usize, R: Rng + ?Sized, F: FnMut(&[f32; D]) -> f32>(
         &mut self,
