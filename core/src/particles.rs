@@ -53,8 +53,10 @@ impl<const N: usize, const D: usize> ParticleSet<N, D> {
     /// are rebased to the logs of the normalised weights and the effective sample size is
     /// returned.
     pub fn normalise(&mut self) -> Result<f32, Error> {
-        // f32::max ignores NaN, so NaN log-weights never become the maximum.
-        let max = lane_fold(N, f32::NEG_INFINITY, f32::max, |i| self.log_weights[i]);
+        // A comparison is false for NaN, so NaN log-weights never become the maximum. (Not
+        // f32::max: on the MCU that is a call to fmaxf per particle.)
+        let larger = |m: f32, x: f32| if x > m { x } else { m };
+        let max = lane_fold(N, f32::NEG_INFINITY, larger, |i| self.log_weights[i]);
         if !max.is_finite() {
             self.set_uniform_weights();
             return Err(Error::WeightCollapse);
@@ -210,15 +212,32 @@ fn lane_fold(
     op: impl Fn(f32, f32) -> f32,
     mut f: impl FnMut(usize) -> f32,
 ) -> f32 {
-    let mut acc = [init; LANES];
+    // Written out, not a loop over the lanes: at the MCU's opt-level "s" a loop would stay a
+    // loop, with the accumulators in memory.
+    let [
+        mut a0,
+        mut a1,
+        mut a2,
+        mut a3,
+        mut a4,
+        mut a5,
+        mut a6,
+        mut a7,
+    ] = [init; LANES];
     let full = n - n % LANES;
     let mut i = 0;
     while i < full {
-        for (k, a) in acc.iter_mut().enumerate() {
-            *a = op(*a, f(i + k));
-        }
+        a0 = op(a0, f(i));
+        a1 = op(a1, f(i + 1));
+        a2 = op(a2, f(i + 2));
+        a3 = op(a3, f(i + 3));
+        a4 = op(a4, f(i + 4));
+        a5 = op(a5, f(i + 5));
+        a6 = op(a6, f(i + 6));
+        a7 = op(a7, f(i + 7));
         i += LANES;
     }
+    let mut acc = [a0, a1, a2, a3, a4, a5, a6, a7];
     for (a, i) in acc.iter_mut().zip(full..n) {
         *a = op(*a, f(i));
     }

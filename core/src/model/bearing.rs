@@ -150,7 +150,7 @@ impl Model<2> for StaticEmitter {
         z: &'a Bearing,
         lik: &'a L,
     ) -> impl Fn(&[f32; 2]) -> f32 + 'a {
-        let (s, c) = libm::sincosf(z.theta);
+        let (s, c) = fastmath::sincos(z.theta);
         // A copy, not a reference into `z`: the loops that call this can then keep it in
         // registers instead of reloading it after every store.
         let [vx, vy] = z.vehicle;
