@@ -1,6 +1,6 @@
 //! Criterion benchmarks: one step of every filter at N = 100, 1 000 and 10 000 particles
-//! (throughput in particle updates per second), and whole canonical `aoa-afsa` runs of every
-//! method.
+//! (throughput in particle updates per second), and whole canonical runs of every method of
+//! every scenario (bearing and tracking).
 //!
 //! `cargo bench -p foxhunt-sim --bench filters` (add `-- step/sir` to pick one group). The
 //! O(N^2) swarms (gsa-gpf, fa-pf) take seconds to minutes per step at N = 10 000, so the full
@@ -15,6 +15,7 @@ use foxhunt_core::{
 };
 use foxhunt_sim::methods::Method;
 use foxhunt_sim::scenario::Scenario;
+use foxhunt_sim::tracking::{self, Tracking};
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 use std::hint::black_box;
@@ -85,18 +86,34 @@ fn filter_steps(c: &mut Criterion) {
     step_group::<1, _>(c, "ekf", || BearingEkf::new(0.0));
 }
 
-/// Whole aoa-afsa runs (60 bearings, N = 100) of every method of its table.
+/// Whole canonical runs of every method of every scenario's table: the bearing scenarios at
+/// their N (aoa-afsa 100, aoa-firefly 80, ...) and the tracking ones at their first N.
 fn whole_runs(c: &mut Criterion) {
-    let s = Scenario::named("aoa-afsa").expect("scenario");
-    let mut g = c.benchmark_group("run/aoa-afsa");
-    for m in Method::for_scenario("aoa-afsa") {
-        let mut rng = s.rng(0);
-        let bearings = s.simulate(&mut rng);
-        g.bench_function(m.name(), |b| {
-            b.iter(|| black_box(m.run(&s, &bearings, &mut rng).ok()))
-        });
+    for name in foxhunt_sim::scenario::NAMES {
+        let s = Scenario::named(name).expect("scenario");
+        let mut g = c.benchmark_group(format!("run/{name}"));
+        g.sample_size(10);
+        for m in Method::for_scenario(name) {
+            let mut rng = s.rng(0);
+            let bearings = s.simulate(&mut rng);
+            g.bench_function(m.name(), |b| {
+                b.iter(|| black_box(m.run(&s, &bearings, &mut rng).ok()))
+            });
+        }
+        g.finish();
     }
-    g.finish();
+    for name in tracking::NAMES {
+        let s = Tracking::named(name).expect("scenario");
+        let n = s.particle_counts()[0];
+        let mut g = c.benchmark_group(format!("run/{name}/N={n}"));
+        g.sample_size(10);
+        for m in s.methods() {
+            g.bench_function(m.name(), |b| {
+                b.iter(|| black_box(tracking::dispatch(&s, m, n, 0).ok()))
+            });
+        }
+        g.finish();
+    }
 }
 
 criterion_group! {

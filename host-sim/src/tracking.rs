@@ -381,7 +381,10 @@ fn gpf<const N: usize, const D: usize, M: Model<D>, S: Swarm<D>>(
     run_filter(&mut *f, cloud, z, x, D == 4, rng)
 }
 
-fn dispatch(s: &Tracking, m: TrackMethod, n: usize, run: usize) -> Result<(f64, u64), Error> {
+/// One seeded run of method `m` with `n` particles (a compiled size: 50 to 10 000): the run's
+/// error figure and the likelihood evaluations it spent. What the bench averages, and what the
+/// criterion benches time.
+pub fn dispatch(s: &Tracking, m: TrackMethod, n: usize, run: usize) -> Result<(f64, u64), Error> {
     match n {
         50 => one_run::<50>(s, m, run),
         100 => one_run::<100>(s, m, run),
