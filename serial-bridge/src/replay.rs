@@ -155,3 +155,46 @@ pub fn write_summary(r: &Replay, out: &mut impl core::fmt::Write) -> core::fmt::
 pub fn bits(v: f32) -> u32 {
     if v.is_nan() { 0x7fc0_0000 } else { v.to_bits() }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const CAPTURE: &[u8] = include_bytes!("../captures/aoa-drive.nmea");
+
+    /// A byte source that hands out `step` bytes per read (fewer than asked, as a UART does)
+    /// and fails after `fail_after` bytes.
+    fn source(
+        step: usize,
+        fail_after: usize,
+    ) -> impl FnMut(&mut [u8]) -> Result<usize, &'static str> {
+        let mut at = 0;
+        move |buf: &mut [u8]| {
+            if at >= fail_after {
+                return Err("line dropped");
+            }
+            let n = step.min(buf.len()).min(CAPTURE.len() - at);
+            buf[..n].copy_from_slice(&CAPTURE[at..at + n]);
+            at += n;
+            Ok(n)
+        }
+    }
+
+    #[test]
+    fn short_reads_give_the_same_replay() {
+        let config = BridgeConfig::default();
+        let whole = replay::<20>(CAPTURE, READ_BUFFER, config, 3, usize::MAX);
+        assert_eq!(whole.bearings, 60);
+        for step in [1, 7, 64] {
+            let r =
+                replay_from::<20, _>(source(step, usize::MAX), READ_BUFFER, config, 3, usize::MAX);
+            assert_eq!(r, Ok(whole), "reads of {step}");
+        }
+    }
+
+    #[test]
+    fn a_read_error_ends_the_replay_with_it() {
+        let r = replay_from::<20, _>(source(64, 1000), 64, BridgeConfig::default(), 3, usize::MAX);
+        assert_eq!(r, Err("line dropped"));
+    }
+}
