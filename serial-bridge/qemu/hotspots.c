@@ -2,9 +2,6 @@
  * A QEMU TCG plugin that counts executions of every translated block, inline (no callback per
  * block run). At exit it writes "pc instructions executions" per block to the file named by
  * the plugin argument out=PATH (default hotspots.txt); hotspots.sh maps the blocks to symbols.
- *
- * As in icount.c, the few declarations of plugin API version 1 this needs are written out:
- * Debian ships QEMU without qemu-plugin.h.
  */
 #include <inttypes.h>
 #include <stddef.h>
@@ -13,20 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-typedef uint64_t qemu_plugin_id_t;
-struct qemu_plugin_tb;
-typedef void (*qemu_plugin_vcpu_tb_trans_cb_t)(qemu_plugin_id_t id, struct qemu_plugin_tb *tb);
-typedef void (*qemu_plugin_udata_cb_t)(qemu_plugin_id_t id, void *userdata);
-enum qemu_plugin_op { QEMU_PLUGIN_INLINE_ADD_U64 };
-
-void qemu_plugin_register_vcpu_tb_trans_cb(qemu_plugin_id_t id, qemu_plugin_vcpu_tb_trans_cb_t cb);
-void qemu_plugin_register_vcpu_tb_exec_inline(struct qemu_plugin_tb *tb, enum qemu_plugin_op op,
-                                              void *ptr, uint64_t imm);
-size_t qemu_plugin_tb_n_insns(const struct qemu_plugin_tb *tb);
-uint64_t qemu_plugin_tb_vaddr(const struct qemu_plugin_tb *tb);
-void qemu_plugin_register_atexit_cb(qemu_plugin_id_t id, qemu_plugin_udata_cb_t cb, void *userdata);
-
-__attribute__((visibility("default"))) int qemu_plugin_version = 1;
+#include "plugin-api.h"
 
 struct block {
     uint64_t pc, insns, runs;

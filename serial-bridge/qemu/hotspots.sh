@@ -12,15 +12,9 @@ cd "$(dirname "$0")/../.."
 filter=${1:?usage: hotspots.sh <filter> [steps] [rows]}
 steps=${2:-60}
 rows=${3:-20}
-out=target/footprint
-mkdir -p "$out"
-gcc -O2 -shared -fPIC -o "$out/libhotspots.so" serial-bridge/qemu/hotspots.c
-CARGO_TARGET_DIR="$out/steps" cargo build -q --profile firmware -p foxhunt-bridge \
-  --bin foxhunt-step-bench --target thumbv7em-none-eabihf
-elf="$out/steps/thumbv7em-none-eabihf/firmware/foxhunt-step-bench"
-timeout 600 qemu-system-arm -machine netduinoplus2 -nographic \
-  -semihosting-config "enable=on,target=native,arg=step-bench,arg=$filter,arg=$steps" \
-  -plugin "$out/libhotspots.so,out=$out/blocks.txt" -kernel "$elf" > /dev/null
+source serial-bridge/qemu/step-bench.sh
+build_step_bench hotspots
+run_step_bench "$filter" "$steps" "$out/libhotspots.so,out=$out/blocks.txt" > /dev/null
 # Function start addresses (Thumb bit cleared), then each block charged to the function that
 # contains it.
 arm-none-eabi-nm -n -C --defined-only "$elf" | awk '$2 ~ /^[tTwW]$/ {

@@ -8,19 +8,13 @@
 # Needs: qemu-system-arm, gcc. Run from anywhere: bash serial-bridge/qemu/steps.sh
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-out=target/footprint
-mkdir -p "$out"
-gcc -O2 -shared -fPIC -o "$out/libicount.so" serial-bridge/qemu/icount.c
-CARGO_TARGET_DIR="$out/steps" cargo build -q --profile firmware -p foxhunt-bridge \
-  --bin foxhunt-step-bench --target thumbv7em-none-eabihf
-elf="$out/steps/thumbv7em-none-eabihf/firmware/foxhunt-step-bench"
+source serial-bridge/qemu/step-bench.sh
+build_step_bench icount
 particles=100
 steps=60
 
 count() { # $1 = filter, $2 = steps
-  timeout 600 qemu-system-arm -machine netduinoplus2 -nographic \
-    -semihosting-config "enable=on,target=native,arg=step-bench,arg=$1,arg=$2" \
-    -plugin "$out/libicount.so" -kernel "$elf" 2>&1 >/dev/null | sed -n 's/^instructions //p'
+  run_step_bench "$1" "$2" "$out/libicount.so" | sed -n 's/^instructions //p'
 }
 
 echo "| filter (N = $particles, $steps steps) | instructions per particle per step | whole run, M instructions | at 168 MHz |"
