@@ -28,6 +28,9 @@ mod ziggurat {
 }
 use ziggurat::{ZIG_F, ZIG_K, ZIG_R, ZIG_W};
 
+/// Range of a draw's magnitude (its top 23 bits): x = magnitude * ZIG_W[layer].
+const MAGNITUDES: u32 = 1 << 23;
+
 /// Standard normal draw by the ziggurat method (Marsaglia and Tsang 2000, 256 layers; tables
 /// generated at build time). 98.5 % of draws cost one `u32`, two table reads and a
 /// compare, inlined into the caller's loop; the rest take the wedge test or the exact tail out
@@ -90,7 +93,7 @@ fn normal_slow<R: Rng + ?Sized>(rng: &mut R, mut u: u32) -> f32 {
 /// points are decided without the exponential.
 fn under_density(layer: usize, x: f32, y: f32) -> bool {
     let (f0, f1) = (ZIG_F[layer], ZIG_F[layer + 1]);
-    let x0 = ZIG_W[layer] * 8_388_608.0;
+    let x0 = ZIG_W[layer] * MAGNITUDES as f32;
     let x1 = ZIG_K[layer] as f32 * ZIG_W[layer];
     let chord = f0 + (f1 - f0) * (x0 - x) / (x0 - x1);
     let tangent = f0 * (1.0 + x0 * (x0 - x));
@@ -265,7 +268,7 @@ mod tests {
         for layer in 1..256 {
             let (f0, f1) = (ZIG_F[layer], ZIG_F[layer + 1]);
             for _ in 0..2000 {
-                let magnitude = ZIG_K[layer] + rng.next_u32() % (8_388_608 - ZIG_K[layer]);
+                let magnitude = ZIG_K[layer] + rng.next_u32() % (MAGNITUDES - ZIG_K[layer]);
                 let x = magnitude as f32 * ZIG_W[layer];
                 let y = f0 + uniform(&mut rng) * (f1 - f0);
                 let exact = libm::exp(-0.5 * (x as f64) * (x as f64));

@@ -4,13 +4,14 @@
 //! not too crowded: Y_c / n_f > delta Y_i) or preys: it tries up to `tries` random points within
 //! the visual range and steps toward the first better one, or makes a random move if none is.
 //!
-//! Neighbour search: the fish are sorted by their first coordinate once per iteration and each
-//! fish scans only the window [x - v, x + v] (the fish are taken in that order, so the window's
-//! start only moves forward). Cost per iteration is O(N log N) for the sort plus O(N k) for the
-//! scans, k the fish per window: linear in N while the visual range is small against the cloud,
-//! O(N^2) only when every fish sees every other. The likelihood calls (up to `tries` per preying fish) dominate in practice.
+//! Neighbour search: once per iteration the fish are sorted by their first coordinate and
+//! each pair closer than v in it is visited once, from its left member scanning right while
+//! the first coordinates stay within v. Cost per iteration is O(N log N) for the sort plus
+//! O(N k), k the fish per window: linear in N while the visual range is small against the
+//! cloud, O(N^2) only when every fish sees every other. The likelihood calls (up to `tries`
+//! per preying fish) dominate in practice.
 
-use super::{Swarm, argmax, each_axis, evaluate, sane};
+use super::{Swarm, argmax, distance_sq, each_axis, evaluate, sane};
 use crate::particles::ParticleSet;
 use crate::{fastmath, random};
 use rand_core::Rng;
@@ -149,8 +150,7 @@ fn neighbour_sums<const N: usize, const D: usize>(
             if !(xj[0] <= xk[0] + v) {
                 break;
             }
-            let mut d2 = 0.0;
-            each_axis::<D>(|c| d2 += (xj[c] - xk[c]) * (xj[c] - xk[c]));
+            let d2 = distance_sq(xk, xj);
             if d2 > 0.0 && d2 < v * v {
                 n += 1.0;
                 *n_j += 1.0;
@@ -164,10 +164,6 @@ fn neighbour_sums<const N: usize, const D: usize>(
         each_axis::<D>(|c| left[k][c] += sum[c]);
     }
     (sums, counts)
-}
-
-fn distance_sq<const D: usize>(a: &[f32; D], b: &[f32; D]) -> f32 {
-    a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum()
 }
 
 /// x += r s (target - x) / |target - x|, r ~ U(0, 1).

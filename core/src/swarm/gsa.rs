@@ -7,7 +7,7 @@
 //! All forces of an iteration are computed from the same positions. O(N K) per iteration,
 //! O(N^2) over a move.
 
-use super::{Swarm, each_axis, evaluate, sane};
+use super::{Swarm, distance_sq, each_axis, evaluate, sane};
 use crate::particles::ParticleSet;
 use crate::{fastmath, random};
 use rand_core::Rng;
@@ -93,8 +93,7 @@ impl<const D: usize> Swarm<D> for Gsa {
                         continue;
                     }
                     let xj = set.states[j];
-                    let mut r2 = 0.0;
-                    each_axis::<D>(|d| r2 += (xj[d] - xi[d]) * (xj[d] - xi[d]));
+                    let r2 = distance_sq(&xi, &xj);
                     let f =
                         g * random::uniform(rng) * mass[j] / (fastmath::sqrt(r2) + self.softening);
                     let a = &mut accel[i];

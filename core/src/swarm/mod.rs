@@ -78,6 +78,14 @@ pub(crate) fn each_axis<const D: usize>(mut f: impl FnMut(usize)) {
     }
 }
 
+/// Squared Euclidean distance, the axes written out (see [`each_axis`]).
+#[inline(always)]
+pub(crate) fn distance_sq<const D: usize>(a: &[f32; D], b: &[f32; D]) -> f32 {
+    let mut d2 = 0.0;
+    each_axis::<D>(|c| d2 += (a[c] - b[c]) * (a[c] - b[c]));
+    d2
+}
+
 /// Index and value of the largest entry.
 pub(crate) fn argmax(v: &[f32]) -> (usize, f32) {
     v.iter()
