@@ -33,6 +33,9 @@ pub enum Error {
     NotInitialised,
     /// The DF unit rated the bearing at or below the quality gate.
     LowQuality,
+    /// The method does not apply here (a Kalman filter asked for particles, a particle count
+    /// that is not compiled in, a batch fix asked to step).
+    Unsupported,
 }
 
 impl fmt::Display for Error {
@@ -50,6 +53,7 @@ impl fmt::Display for Error {
             Error::WeightCollapse => "every particle weight vanished; re-initialised",
             Error::NotInitialised => "the filter was not initialised",
             Error::LowQuality => "the bearing's DF quality is below the gate",
+            Error::Unsupported => "the method does not apply here",
         };
         f.write_str(text)
     }

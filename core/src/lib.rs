@@ -18,7 +18,7 @@ pub mod resample;
 
 pub use error::Error;
 pub use particles::ParticleSet;
-pub use resample::Resampling;
+pub use resample::{ResamplePolicy, Resampling};
 pub mod likelihood;
 pub mod model;
 
@@ -33,16 +33,19 @@ pub use fix::Fix;
 pub mod filter;
 pub mod roughen;
 
+pub use estimator::{Method, PARTICLE_COUNTS, WithFilter};
 pub use filter::ekf::BearingEkf;
 pub use filter::gpf::Gpf;
 pub use filter::sir::{Sir, SirConfig};
 pub use filter::{Estimate, Filter, StepStatus};
 pub use roughen::Roughening;
+pub mod canonical;
+pub mod estimator;
 pub mod preprocess;
 pub mod swarm;
 
 pub use swarm::afsa::Afsa;
-pub use swarm::firefly::{Firefly, ImprovedFirefly};
+pub use swarm::firefly::{Firefly, FireflyParams, ImprovedFirefly};
 pub use swarm::gsa::Gsa;
 pub use swarm::pso::Pso;
 pub use swarm::{NoSwarm, Swarm};

@@ -20,6 +20,42 @@ pub enum Resampling {
     Residual,
 }
 
+/// When a particle filter resamples.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ResamplePolicy {
+    /// After every update, as the seeds' filters do.
+    Always,
+    /// When the effective sample size falls below this fraction of N (0.5 is the textbook
+    /// choice: a half-degenerate cloud is refreshed, a healthy one keeps its weights' memory).
+    BelowEss(f32),
+}
+
+impl Default for ResamplePolicy {
+    fn default() -> Self {
+        ResamplePolicy::BelowEss(0.5)
+    }
+}
+
+impl ResamplePolicy {
+    /// Whether a cloud of `n` particles with effective sample size `ess` is due.
+    #[inline]
+    pub fn due(self, ess: f32, n: usize) -> bool {
+        match self {
+            ResamplePolicy::Always => true,
+            ResamplePolicy::BelowEss(fraction) => ess < fraction * n as f32,
+        }
+    }
+
+    /// `Ok` when the fraction is a number in [0, 1] (0 never resamples, 1 nearly always).
+    pub fn check(self) -> Result<(), crate::Error> {
+        match self {
+            ResamplePolicy::Always => Ok(()),
+            ResamplePolicy::BelowEss(f) if (0.0..=1.0).contains(&f) => Ok(()),
+            ResamplePolicy::BelowEss(_) => Err(crate::Error::OutOfRange),
+        }
+    }
+}
+
 impl Resampling {
     /// Copy counts for each particle given normalised `weights`; `counts` sums to N.
     pub fn counts<R: Rng + ?Sized, const N: usize>(

@@ -155,7 +155,7 @@ proptest! {
     #[test]
     fn filters(cloud in prop::collection::vec(prop::array::uniform2(wild()), 0..6), zs in prop::collection::vec(bearing(), 0..8), q in wild(), k in wild()) {
         let mut rng = XorShiftRng::seed_from_u64(9);
-        let config = SirConfig { ess_threshold: k, roughening: Roughening::Shrinkage { scale: k }, ..Default::default() };
+        let config = SirConfig { policy: foxhunt_core::ResamplePolicy::BelowEss(k), roughening: Roughening::Shrinkage { scale: k }, ..Default::default() };
         let mut sir = Sir::<_, _, 16, 2>::new(StaticEmitter { process_var: q }, Cauchy, config);
         let mut gpf = Gpf::<_, _, 16, 2>::new(StaticEmitter { process_var: q }, Gaussian);
         let mut ekf = BearingEkf::new(q);
@@ -218,27 +218,22 @@ mod swarms {
         cloud: &[[f32; D]],
         zs: &[M::Measurement],
     ) {
+        let quick = foxhunt_core::FireflyParams {
+            iterations: 2,
+            ..Default::default()
+        };
         let afsa = Afsa {
             tries: 3,
             iterations: 2,
             ..Afsa::default()
         };
         run_sir(model, lik, afsa, cloud, zs);
-        run_sir(
-            model,
-            lik,
-            Firefly {
-                iterations: 2,
-                ..Firefly::default()
-            },
-            cloud,
-            zs,
-        );
+        run_sir(model, lik, Firefly { params: quick }, cloud, zs);
         run_sir(
             model,
             lik,
             ImprovedFirefly {
-                iterations: 2,
+                params: quick,
                 ..Default::default()
             },
             cloud,

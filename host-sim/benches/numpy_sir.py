@@ -2,8 +2,9 @@
 
 Same scenario (aoa-afsa: emitter (1200, 800) m, 60 bearings on a 300 m circle, sigma^2 =
 3.801e-4 rad^2), same algorithm (1 m^2 jitter per step, Gaussian likelihood of the wrapped
-residual, systematic resampling by filterpy when ESS < N/2, weighted mean), same initial cloud
-distribution (N(emitter, 50^2 I)). Prints one JSON object per particle count.
+residual, systematic resampling by filterpy after every step, weighted mean: the registry's
+`sir-seed`), same initial cloud distribution (N(emitter, 50^2 I)). Prints one JSON object per
+particle count.
 
 Usage: python numpy_sir.py --runs R N [N ...]
 """
@@ -42,11 +43,11 @@ def sir(n, vehicles, theta, rng):
         weights *= np.exp(-0.5 * (r / SIGMA) ** 2)
         weights += 1e-300
         weights /= weights.sum()
-        if 1.0 / np.sum(weights**2) < n / 2:
-            idx = systematic_resample(weights)
-            particles = particles[idx]
-            weights.fill(1.0 / n)
-    return np.average(particles, weights=weights, axis=0)
+        estimate = np.average(particles, weights=weights, axis=0)
+        idx = systematic_resample(weights)
+        particles = particles[idx]
+        weights.fill(1.0 / n)
+    return estimate
 
 
 def main():

@@ -4,16 +4,18 @@
 //! short address sits. Readings are grouped into epochs, one reading per anchor: a second
 //! reading from an anchor already heard starts the next epoch (unit-free, so it works
 //! whatever the receiver's timestamp ticks are). Each epoch is one step of the constant-
-//! velocity tracker, run by the tuned SIR of the bench (N = 1000).
+//! velocity tracker, run by the registry's `sir-wide` (the bench's tracking SIR, N = 1000).
 
-use crate::tracking::{TUNED, tuned_config};
+use crate::runs::Steps;
 use foxhunt_bridge::bridge::{Bridge, BridgeConfig, Event, RssiReading};
 use foxhunt_bridge::mt::{AfIncomingMsg, LinkQualityMap};
-use foxhunt_core::{Filter, ParticleSet, PathLoss, RssiMeasurement, RssiTracker, Sir, random};
+use foxhunt_core::estimator::with_particle_filter;
+use foxhunt_core::{Estimate, Method, ParticleSet, PathLoss, RssiMeasurement, RssiTracker, random};
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeSet;
+use std::fmt::Write;
 
 /// Particles of the tracker.
 pub const PARTICLES: usize = 1000;
@@ -82,9 +84,10 @@ pub struct AnchorsFile {
 }
 
 impl AnchorsFile {
-    /// Parse and check an anchors file.
+    /// Parse and check an anchors file: every number finite, every scale positive, the
+    /// error naming the key.
     pub fn from_toml(text: &str) -> Result<Self, String> {
-        let f: Self = toml::from_str(text).map_err(|e| e.to_string())?;
+        let f: Self = crate::io::parse_toml(text)?;
         if !(3..=6).contains(&f.anchor.len()) {
             return Err(format!("give 3 to 6 anchors, not {}", f.anchor.len()));
         }
@@ -92,14 +95,54 @@ impl AnchorsFile {
         if addrs.len() != f.anchor.len() {
             return Err("two anchors share an address".into());
         }
-        let finite = f.anchor.iter().all(|a| a.x.is_finite() && a.y.is_finite());
-        let positive = f.dt_s > 0.0 && f.sigma_db > 0.0 && f.path_loss.d0_m > 0.0;
-        if !finite || !positive || !f.path_loss.eta.is_finite() || f.path_loss.eta <= 0.0 {
-            return Err(
-                "anchor positions must be finite; dt_s, sigma_db, d0_m, eta positive".into(),
-            );
+        for a in &f.anchor {
+            if !(a.x.is_finite() && a.y.is_finite()) {
+                return Err(format!(
+                    "anchor 0x{:04x}: position ({}, {}) must be finite",
+                    a.addr, a.x, a.y
+                ));
+            }
+        }
+        let positive = |key: &str, v: f32| {
+            if v > 0.0 && v.is_finite() {
+                Ok(())
+            } else {
+                Err(format!("`{key}` must be a finite positive number, not {v}"))
+            }
+        };
+        positive("dt_s", f.dt_s)?;
+        positive("sigma_db", f.sigma_db)?;
+        positive("path_loss.d0_m", f.path_loss.d0_m)?;
+        positive("path_loss.eta", f.path_loss.eta)?;
+        if !f.path_loss.p0_dbm.is_finite() {
+            return Err(format!(
+                "`path_loss.p0_dbm` must be finite, not {}",
+                f.path_loss.p0_dbm
+            ));
+        }
+        for q in f.process_q {
+            positive("process_q", q)?;
+        }
+        if let Some([w, d]) = f.room {
+            positive("room", w)?;
+            positive("room", d)?;
         }
         Ok(f)
+    }
+
+    /// The file's text as `foxhunt simulate --scenario NAME` writes it.
+    pub fn to_toml(&self, scenario: &str) -> Result<String, String> {
+        Ok(format!(
+            "# Anchors of `foxhunt simulate --scenario {scenario}`: short address (0x0101 works as\n\
+             # well as 257), position in metres; room, epoch, noise and path loss of the model.\n{}",
+            toml::to_string(self).map_err(|e| e.to_string())?
+        ))
+    }
+
+    /// An anchors file from disk; errors name the file.
+    pub fn load(path: &std::path::Path) -> Result<Self, String> {
+        let text = crate::io::read_text(path)?;
+        Self::from_toml(&text).map_err(|e| format!("{}: {e}", path.display()))
     }
 
     fn tracker<const A: usize>(&self) -> RssiTracker<A> {
@@ -260,12 +303,8 @@ fn track_with<const A: usize>(
             0.5 * random::normal(&mut rng),
         ]);
     }
-    let mut f = Box::new(Sir::<_, _, PARTICLES, 4>::new(model, TUNED, tuned_config()));
-    f.initialise(&cloud.states, &mut rng)
-        .map_err(|e| format!("cannot start the tracker: {e}"))?;
     let mut points = Vec::with_capacity(z.len());
-    for (k, m) in z.iter().enumerate() {
-        let e = f.step(m, &mut rng).unwrap_or_else(|_| f.estimate());
+    let each = |k: usize, e: &Estimate<4>| {
         points.push(TrackPoint {
             step: k,
             t_s: k as f32 * file.dt_s,
@@ -275,9 +314,20 @@ fn track_with<const A: usize>(
             vy_mps: e.mean[3],
             sd_x_m: e.covariance[0][0].max(0.0).sqrt(),
             sd_y_m: e.covariance[2][2].max(0.0).sqrt(),
-            heard: m.present.iter().filter(|p| **p).count(),
-        });
-    }
+            heard: z[k].present.iter().filter(|p| **p).count(),
+        })
+    };
+    let steps = Steps {
+        cloud: &cloud.states,
+        measurements: &z,
+        rng: &mut rng,
+        each,
+        keep_cloud: false,
+    };
+    crate::montecarlo::pool()
+        .install(|| with_particle_filter::<PARTICLES, 4, _, _>(Method::SirWide, model, steps))
+        .and_then(|r| r)
+        .map_err(|e| format!("cannot track: {e}"))?;
     Ok(Track {
         points,
         unknown: (unknown_frames, unknown),
@@ -290,10 +340,19 @@ pub type IndoorCapture = (Vec<u8>, AnchorsFile, Vec<[f32; 2]>);
 /// A simulated indoor capture: AF_INCOMING_MSG frames of every anchor each epoch, and the
 /// node's true positions.
 pub fn simulate_capture(name: &str, run: usize) -> Result<IndoorCapture, String> {
-    let s = crate::tracking::Tracking::named(name)
-        .filter(|t| t.rssi.is_some())
+    use crate::scenario::{Scenario, ScenarioModel};
+    let s = Scenario::named(name)
         .ok_or_else(|| format!("`{name}` is not an RSSI scenario (rssi-sim, rssi-lab)"))?;
-    let t = s.rssi.ok_or("no RSSI model")?;
+    let ScenarioModel::Rssi {
+        tracker: t,
+        start,
+        steps,
+    } = s.model
+    else {
+        return Err(format!(
+            "`{name}` is not an RSSI scenario (rssi-sim, rssi-lab)"
+        ));
+    };
     let file = AnchorsFile {
         room: t.room,
         dt_s: t.dt,
@@ -312,7 +371,8 @@ pub fn simulate_capture(name: &str, run: usize) -> Result<IndoorCapture, String>
             })
             .collect(),
     };
-    let (states, dbm) = crate::tracking::simulate_rssi(&s, run);
+    let (states, readings) = crate::tracking::simulate_rssi(&t, start, steps, &mut s.rng(run));
+    let dbm: Vec<[f32; 3]> = readings.iter().map(|m| m.dbm).collect();
     let map = LinkQualityMap::default();
     let mut out = Vec::new();
     let mut seq = 0u8;
@@ -333,10 +393,27 @@ pub fn simulate_capture(name: &str, run: usize) -> Result<IndoorCapture, String>
             };
             seq = seq.wrapping_add(1);
             let mut buf = [0u8; 64];
-            let n = msg.encode(&mut buf).map_err(|e| format!("{e:?}"))?;
+            let n = msg
+                .encode(&mut buf)
+                .map_err(|_| "an AF_INCOMING_MSG frame did not fit 64 bytes".to_string())?;
             out.extend_from_slice(&buf[..n]);
         }
     }
     let truth = states.iter().map(|x| [x[0], x[2]]).collect();
     Ok((out, file, truth))
+}
+
+impl Track {
+    /// The track as CSV: a header, then one line per step.
+    pub fn csv(&self) -> String {
+        let mut out = String::from("step,t_s,x_m,y_m,vx_mps,vy_mps,sd_x_m,sd_y_m,heard\n");
+        for p in &self.points {
+            let _ = writeln!(
+                out,
+                "{},{:.2},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{}",
+                p.step, p.t_s, p.x_m, p.y_m, p.vx_mps, p.vy_mps, p.sd_x_m, p.sd_y_m, p.heard
+            );
+        }
+        out
+    }
 }

@@ -1,16 +1,19 @@
-//! foxhunt-sim: the host side of foxhunt. Simulation of the canonical scenarios, seeded
-//! parallel Monte Carlo benchmarks of every method against the CRLB, and reports.
+//! foxhunt-sim: the host side of foxhunt, the `foxhunt` command. Fixes of recorded and live
+//! drives, indoor tracking, simulated captures, and seeded parallel Monte Carlo benchmarks of
+//! every method of the core's registry against the CRLB.
 #![deny(missing_docs)]
 
+pub mod cmd;
 pub mod frames;
 pub mod indoor;
+pub mod io;
 pub mod live;
 pub mod locate;
 pub mod maps;
-pub mod methods;
 pub mod montecarlo;
 pub mod perf;
 pub mod report;
+pub mod runs;
 pub mod scenario;
 pub mod simulate;
 pub mod tracking;

@@ -1,96 +1,153 @@
-//! `foxhunt locate` on a serial device: the fix is updated as the bytes arrive.
+//! `foxhunt locate` on a live line (a serial device, or standard input fed by `cat
+//! /dev/ttyUSB0 | foxhunt locate -`): the fix is updated as the bytes arrive.
 //!
-//! Reads with a short timeout; a timeout tells the demultiplexer the line is idle (so a frame
-//! waiting on look-ahead is delivered) and counts towards `--quiet-exit`. Every new bearing,
-//! from the second on, recomputes the fix and prints one line (a JSON object with `--json`).
+//! A reader thread hands the bytes over in chunks as the line delivers them; the decoder takes
+//! every chunk already waiting, then, if new bearings arrived, recomputes the fix and prints
+//! one line (a JSON object with `--json`): the fix, or why there is none yet (`{"used": n,
+//! "error": "..."}`). A slow line gets an update per bearing; a fast pipe
+//! gets one per batch, so a replayed hour of bearings costs a few solves, not one per bearing.
+//! When no byte comes for 100 ms the demultiplexer is told the line is idle (a frame waiting
+//! on look-ahead is delivered), and `--quiet-exit` counts from the last byte.
 
-use crate::locate::{Decoded, LocateMethod, LocateReport, Solution, locate};
-use foxhunt_bridge::bridge::{BridgeConfig, Receiver};
-use std::io::{ErrorKind, Read, Write};
+use crate::io::{Out, Stop};
+use crate::locate::{Decoded, Decoder, LocateOptions, locate};
+use foxhunt_bridge::BridgeConfig;
+use std::io::{ErrorKind, Read};
+use std::sync::mpsc;
 use std::time::{Duration, Instant};
+
+/// Where live bytes come from.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum LiveSource {
+    /// A serial device at a baud rate.
+    Serial {
+        /// Device path.
+        path: String,
+        /// Baud rate.
+        baud: u32,
+    },
+    /// Standard input.
+    Stdin,
+}
 
 /// How to read a live line.
 #[derive(Debug, Clone)]
 pub struct LiveOptions {
-    /// Serial device path.
-    pub path: String,
-    /// Baud rate.
-    pub baud: u32,
-    /// Stop after this long without a byte (`None`: read until the device closes).
+    /// The line.
+    pub source: LiveSource,
+    /// Stop after this long without a byte (`None`: read until the line closes).
     pub quiet_exit: Option<Duration>,
-    /// Fix method.
-    pub method: LocateMethod,
-    /// Bearing noise, degrees, or estimated.
-    pub sigma_deg: Option<f32>,
+    /// How fixes are computed.
+    pub locate: LocateOptions,
     /// Print updates as JSON lines.
     pub json: bool,
-    /// Seed of particle methods.
-    pub seed: u64,
+    /// Keep the vehicle track (for maps at the end).
+    pub keep_track: bool,
 }
 
-fn snapshot(rx: &Receiver<0>, d: &mut Decoded) {
-    d.frame = rx.bridge.local_frame().copied();
-    let (s, b) = rx.counters();
-    d.stream = *s;
-    d.bridge = *b;
+/// A read's outcome, sent from the reader thread.
+enum Chunk {
+    Bytes(Vec<u8>),
+    End,
+    Failed(String),
 }
 
-/// Read the line until it closes or stays quiet; print each updated fix to `out`; return the
-/// last fix (or why there is none).
-pub fn run(
-    o: &LiveOptions,
-    out: &mut impl Write,
-) -> Result<(LocateReport, Solution, Decoded), String> {
-    let mut port = serialport::new(&o.path, o.baud)
-        .timeout(Duration::from_millis(100))
-        .open()
-        .map_err(|e| format!("cannot open {} at {} baud: {e}", o.path, o.baud))?;
-    let mut rx = Receiver::<0>::new(BridgeConfig::default(), []);
-    let mut d = Decoded::default();
-    let mut buf = [0u8; 512];
-    let mut last_byte = Instant::now();
-    let emit = |d: &mut Decoded, rx: &Receiver<0>, out: &mut dyn Write| {
-        snapshot(rx, d);
-        if d.bearings.len() < 2 {
-            return;
-        }
-        if let Ok((r, _)) = locate(d, o.method, o.sigma_deg, o.seed) {
-            let line = if o.json {
-                serde_json::to_string(&r).unwrap_or_default()
-            } else {
-                format!(
-                    "{} bearings: {:.6}, {:.6}  CEP50 {:.1} m, CRLB {:.1} m",
-                    r.used, r.lat, r.lon, r.cep50_m, r.crlb_m
-                )
-            };
-            let _ = writeln!(out, "{line}");
-            let _ = out.flush();
-        }
+/// How long a read waits before the line counts as idle.
+const IDLE: Duration = Duration::from_millis(100);
+
+/// Start the thread that reads the line.
+fn reader(source: &LiveSource) -> Result<mpsc::Receiver<Chunk>, String> {
+    let (tx, rx) = mpsc::sync_channel::<Chunk>(16);
+    let (mut port, name): (Box<dyn Read + Send>, String) = match source {
+        LiveSource::Serial { path, baud } => (
+            serialport::new(path, *baud)
+                .timeout(IDLE)
+                .open()
+                .map_err(|e| format!("cannot open {path} at {baud} baud: {e}"))?,
+            path.clone(),
+        ),
+        LiveSource::Stdin => (Box::new(std::io::stdin()), "standard input".into()),
     };
-    loop {
-        let before = d.bearings.len();
-        match port.read(&mut buf) {
-            Ok(0) => break,
-            Ok(n) => {
-                last_byte = Instant::now();
-                rx.feed(&buf[..n], &mut |e| d.absorb(e));
+    std::thread::Builder::new()
+        .name("foxhunt-line".into())
+        .spawn(move || {
+            let mut buf = vec![0u8; 4096];
+            loop {
+                let msg = match port.read(&mut buf) {
+                    Ok(0) => Chunk::End,
+                    Ok(n) => Chunk::Bytes(buf[..n].to_vec()),
+                    Err(e) if matches!(e.kind(), ErrorKind::TimedOut | ErrorKind::WouldBlock) => {
+                        continue;
+                    }
+                    Err(e) if e.kind() == ErrorKind::Interrupted => continue,
+                    // A hung-up pseudo-terminal or unplugged adapter ends the stream.
+                    Err(e) if e.kind() == ErrorKind::BrokenPipe || e.raw_os_error() == Some(5) => {
+                        Chunk::End
+                    }
+                    Err(e) => Chunk::Failed(format!("reading {name}: {e}")),
+                };
+                let last = !matches!(msg, Chunk::Bytes(_));
+                if tx.send(msg).is_err() || last {
+                    return;
+                }
             }
-            Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::WouldBlock => {
-                rx.idle(&mut |e| d.absorb(e));
-                if o.quiet_exit.is_some_and(|q| last_byte.elapsed() >= q) {
+        })
+        .map_err(|e| format!("cannot start the reader: {e}"))?;
+    Ok(rx)
+}
+
+/// Read the line until it closes or stays quiet, printing each updated fix to `out`; what was
+/// decoded, for the final report.
+pub fn run(o: &LiveOptions, out: &mut Out) -> Result<Decoded, Stop> {
+    o.locate.check()?;
+    let rx = reader(&o.source)?;
+    let mut dec = Decoder::new(BridgeConfig::default(), o.keep_track);
+    let mut last_byte = Instant::now();
+    let mut reported = 0usize;
+    let mut ended = false;
+    while !ended {
+        // Block for the first chunk (or the idle timeout), then take all that is waiting.
+        let mut next = rx.recv_timeout(IDLE);
+        loop {
+            match next {
+                Ok(Chunk::Bytes(b)) => {
+                    last_byte = Instant::now();
+                    dec.feed(&b);
+                }
+                Ok(Chunk::End) | Err(mpsc::RecvTimeoutError::Disconnected) => {
+                    ended = true;
+                    break;
+                }
+                Ok(Chunk::Failed(e)) => return Err(Stop::Error(e)),
+                Err(mpsc::RecvTimeoutError::Timeout) => {
+                    dec.idle();
+                    ended = o.quiet_exit.is_some_and(|q| last_byte.elapsed() >= q);
                     break;
                 }
             }
-            // A hung-up pseudo-terminal or unplugged adapter ends the stream.
-            Err(e) if e.kind() == ErrorKind::BrokenPipe || e.raw_os_error() == Some(5) => break,
-            Err(e) => return Err(format!("reading {}: {e}", o.path)),
+            next = match rx.try_recv() {
+                Ok(c) => Ok(c),
+                Err(mpsc::TryRecvError::Empty) => break,
+                Err(mpsc::TryRecvError::Disconnected) => Err(mpsc::RecvTimeoutError::Disconnected),
+            };
         }
-        if d.bearings.len() > before {
-            emit(&mut d, &rx, out);
+        if ended {
+            // Bearings still waiting for a later fix are placed with the fixes there are.
+            dec.end();
+        }
+        let n = dec.decoded.bearings.len();
+        if n > reported {
+            reported = n;
+            dec.snapshot();
+            let line = match (locate(&dec.decoded, &o.locate), o.json) {
+                (Ok(l), true) => serde_json::to_string(&l.report).map_err(|e| e.to_string())?,
+                (Ok(l), false) => l.report.update_line(),
+                (Err(e), true) => serde_json::json!({"used": n, "error": e}).to_string(),
+                (Err(e), false) => format!("{n} bearings: no fix yet: {e}"),
+            };
+            out.line(&line)?;
+            out.flush()?;
         }
     }
-    rx.finish(&mut |e| d.absorb(e));
-    snapshot(&rx, &mut d);
-    let (r, s) = locate(&d, o.method, o.sigma_deg, o.seed)?;
-    Ok((r, s, d))
+    Ok(dec.finish())
 }

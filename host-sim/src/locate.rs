@@ -1,52 +1,81 @@
-//! `foxhunt locate`: the emitter's position from a recorded drive.
+//! `foxhunt locate`: the emitter's position from a drive's bytes.
 //!
-//! The capture's bytes go through the serial bridge (the same code as the firmware) into
-//! bearings in local metres; a fix method turns them into a position with its covariance, the
-//! 95 % ellipse and CEP50, and the CRLB of the drive's geometry says how good any unbiased fix
-//! could be. Bearing noise is estimated from the fix's residuals (a robust MAD scale) unless
-//! the user gives it, so the ellipse is honest about the DF unit actually used.
+//! The bytes go through the serial bridge (the same code as the firmware) into bearings in
+//! local metres, streamed in chunks so memory is bounded by the bearings kept (16 bytes each),
+//! never by the capture; a fix method of the core's registry turns them into a position with
+//! its covariance, the 95 % ellipse and CEP50; the CRLB of the drive's geometry says how good
+//! any unbiased fix could be. Bearing noise is estimated from the fix's residuals unless the
+//! user gives it, so the ellipse is honest about the DF unit actually used.
 
+use crate::runs::locate_bearings;
 use foxhunt_bridge::bridge::{BridgeConfig, BridgeCounters, Event, Receiver, VehicleFix};
 use foxhunt_bridge::geo::LocalFrame;
-use foxhunt_bridge::nmea::LatLon;
 use foxhunt_bridge::stream::StreamCounters;
+use foxhunt_bridge::{Frame, nmea::LatLon};
 use foxhunt_core::fix::crlb::crlb;
 use foxhunt_core::fix::ellipse::{Ellipse, cep50};
-use foxhunt_core::fix::init::initial_particles;
-use foxhunt_core::fix::intersection::MIN_CROSSING;
-use foxhunt_core::fix::ml::{MlOptions, ml};
 use foxhunt_core::model::bearing::{predicted, wrap};
-use foxhunt_core::{
-    Afsa, Bearing, BearingEkf, Error, Filter, Gaussian, GaussianUniform, Gpf, Huber, ParticleSet,
-    Sir, SirConfig, StaticEmitter,
-};
+use foxhunt_core::{Bearing, Error, Method};
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 use serde::Serialize;
 use std::collections::BTreeMap;
+use std::fmt::Write;
 
-/// Particles of the sequential methods.
+/// Particles of the sequential methods unless `--particles` says otherwise.
 pub const PARTICLES: usize = 1000;
 
-/// How the position is computed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum LocateMethod {
-    /// Maximum likelihood with a Huber loss (wild bearings down-weighted): the most accurate.
-    Ml,
-    /// Maximum likelihood, Gaussian loss (least squares; wild bearings pull it).
-    MlGauss,
-    /// SIR particle filter, Gaussian + uniform likelihood, 1000 particles.
-    Sir,
-    /// Gaussian particle filter, 1000 particles.
-    Gpf,
-    /// Extended Kalman filter.
-    Ekf,
-    /// Artificial-fish-swarm particle filter (seed 002), 1000 particles.
-    Afsa,
+/// The seeds' random-walk jitter for their filters (`sir-seed`, the swarms), m^2 per step: the
+/// value of their aoa-afsa scenario. A real drive has no jitter of its own to take.
+pub const SEEDS_JITTER_M2: f32 = 1.0;
+
+/// How `locate` computes the fix.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LocateOptions {
+    /// The estimator.
+    pub method: Method,
+    /// Particles of sequential methods (a compiled count).
+    pub particles: usize,
+    /// The DF unit's bearing noise, degrees, or `None` to estimate it.
+    pub sigma_deg: Option<f32>,
+    /// Seed of the particle methods.
+    pub seed: u64,
 }
 
-/// The 95 % ellipse in the report.
+impl Default for LocateOptions {
+    fn default() -> Self {
+        Self {
+            method: Method::MlHuber,
+            particles: PARTICLES,
+            sigma_deg: None,
+            seed: 1,
+        }
+    }
+}
+
+impl LocateOptions {
+    /// Refuse settings no fix can use, naming the value.
+    pub fn check(&self) -> Result<(), String> {
+        if let Some(s) = self.sigma_deg
+            && !(s > 0.0 && s < 90.0)
+        {
+            return Err(format!(
+                "--sigma-deg must lie between 0 and 90 degrees, not {s}"
+            ));
+        }
+        if self.method.uses_particles() && !foxhunt_core::PARTICLE_COUNTS.contains(&self.particles)
+        {
+            return Err(format!(
+                "--particles {} is not a compiled size; use one of {:?}",
+                self.particles,
+                foxhunt_core::PARTICLE_COUNTS
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The 95 % ellipse in the report: semi-axes.
 #[derive(Debug, Clone, Serialize)]
 pub struct EllipseReport {
     /// Semi-major axis, metres.
@@ -57,6 +86,15 @@ pub struct EllipseReport {
     pub orientation_deg: f32,
     /// Probability inside.
     pub confidence: f32,
+}
+
+/// A latitude and longitude in a report.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct LatLonReport {
+    /// Degrees.
+    pub lat: f64,
+    /// Degrees.
+    pub lon: f64,
 }
 
 /// What `locate` found (the `--json` object; field names are stable).
@@ -78,9 +116,9 @@ pub struct LocateReport {
     pub cep50_m: f32,
     /// sqrt(trace) of the CRLB of the drive's geometry at the fix, metres.
     pub crlb_m: f32,
-    /// The method used.
-    pub method: LocateMethod,
-    /// Bearing noise used, degrees, and whether it was estimated from the residuals.
+    /// The method used (the registry's name).
+    pub method: &'static str,
+    /// Bearing noise used, degrees.
     pub sigma_deg: f32,
     /// Whether `sigma_deg` was estimated (not given).
     pub sigma_estimated: bool,
@@ -90,13 +128,38 @@ pub struct LocateReport {
     pub rejected: BTreeMap<&'static str, u32>,
 }
 
-/// A latitude and longitude in a report.
-#[derive(Debug, Clone, Copy, Serialize)]
-pub struct LatLonReport {
-    /// Degrees.
-    pub lat: f64,
-    /// Degrees.
-    pub lon: f64,
+/// A position with covariance, and the particle cloud if the method has one.
+#[derive(Debug, Clone)]
+pub struct Solution {
+    /// Position, local metres.
+    pub position: [f32; 2],
+    /// Covariance, m^2.
+    pub covariance: [[f32; 2]; 2],
+    /// Bearings a robust loss treated as outliers (beyond 3 sigma).
+    pub outliers: u32,
+    /// The method's particles (empty for batch fixes and the EKF).
+    pub cloud: Vec<[f32; 2]>,
+}
+
+/// A fix: the report and what the maps draw.
+#[derive(Debug, Clone)]
+pub struct Located {
+    /// The report.
+    pub report: LocateReport,
+    /// The solution behind it.
+    pub solution: Solution,
+}
+
+/// Sentences and records of one kind seen in a capture, and how many the bridge refused as
+/// malformed.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct KindTally {
+    /// Seen.
+    pub seen: u32,
+    /// Refused with a bad or out-of-range field.
+    pub malformed: u32,
+    /// Saying the receiver has no fix (GPS only).
+    pub no_fix: u32,
 }
 
 /// Everything decoded from a capture.
@@ -104,39 +167,142 @@ pub struct LatLonReport {
 pub struct Decoded {
     /// Bearings in the local frame.
     pub bearings: Vec<Bearing>,
-    /// The vehicle's fixes.
+    /// The vehicle's fixes, kept only when a map asks for them.
     pub track: Vec<VehicleFix>,
+    /// Vehicle fixes seen.
+    pub fixes: u64,
     /// The local frame, if any fix arrived.
     pub frame: Option<LocalFrame>,
     /// Stream counters.
     pub stream: StreamCounters,
     /// Bridge counters.
     pub bridge: BridgeCounters,
+    /// GPS position sentences seen.
+    pub gps: KindTally,
+    /// Bearing records seen.
+    pub bearing_records: KindTally,
 }
 
-impl Decoded {
-    /// Keep what the bridge hands on: bearings and the vehicle track.
-    pub fn absorb(&mut self, e: Event) {
-        match e {
-            Event::Bearing(b) => self.bearings.push(b.bearing),
-            Event::Fix(f) => self.track.push(f),
-            Event::Rssi(_) => {}
-        }
+/// Whether a frame carries a GPS position, a bearing, or something else.
+enum Kind {
+    Gps,
+    Bearing,
+    Other,
+}
+
+fn kind(f: &Frame<'_>) -> Kind {
+    match f {
+        Frame::Nmea(text) => match text.get(2..5) {
+            _ if text.starts_with('P') => {
+                if text.starts_with("PFOXB") {
+                    Kind::Bearing
+                } else {
+                    Kind::Other
+                }
+            }
+            Some("GGA" | "RMC" | "GLL" | "GNS") => Kind::Gps,
+            _ => Kind::Other,
+        },
+        #[allow(unreachable_patterns)]
+        _ => Kind::Other,
     }
 }
 
-/// Decode a capture (bytes as a UART delivered them).
-pub fn decode(bytes: &[u8], config: BridgeConfig) -> Decoded {
-    let mut rx = Receiver::<0>::new(config, []);
-    let mut d = Decoded::default();
-    let mut sink = |e| d.absorb(e);
-    rx.feed(bytes, &mut sink);
-    rx.finish(&mut sink);
-    d.frame = rx.bridge.local_frame().copied();
-    let (s, b) = rx.counters();
-    d.stream = *s;
-    d.bridge = *b;
-    d
+/// The bridge fed byte by byte or chunk by chunk, keeping what a fix needs.
+pub struct Decoder {
+    rx: Receiver<0>,
+    /// What has been decoded so far.
+    pub decoded: Decoded,
+    keep_track: bool,
+}
+
+impl Decoder {
+    /// A decoder; `keep_track` keeps every vehicle fix (for maps).
+    pub fn new(config: BridgeConfig, keep_track: bool) -> Self {
+        Self {
+            rx: Receiver::new(config, []),
+            decoded: Decoded::default(),
+            keep_track,
+        }
+    }
+
+    /// Feed bytes as they arrive.
+    pub fn feed(&mut self, bytes: &[u8]) {
+        let (demux, bridge) = (&mut self.rx.demux, &mut self.rx.bridge);
+        let (d, keep) = (&mut self.decoded, self.keep_track);
+        demux.feed(bytes, &mut |f| push(bridge, &f, d, keep));
+    }
+
+    /// The line went quiet: settle frames waiting on look-ahead.
+    pub fn idle(&mut self) {
+        self.rx.demux.idle();
+        let (d, keep) = (&mut self.decoded, self.keep_track);
+        while let Some(f) = self.rx.demux.next_frame() {
+            push(&mut self.rx.bridge, &f, d, keep);
+        }
+        self.snapshot();
+    }
+
+    /// End of the stream: frames still buffered are delivered and bearings waiting for a
+    /// later fix are placed with the fixes there are. Idempotent.
+    pub fn end(&mut self) {
+        let (demux, bridge) = (&mut self.rx.demux, &mut self.rx.bridge);
+        let (d, keep) = (&mut self.decoded, self.keep_track);
+        demux.finish_into(&mut |f| push(bridge, &f, d, keep));
+        bridge.finish(&mut |e| absorb(d, e, keep));
+        self.snapshot();
+    }
+
+    /// End of the stream: everything decoded.
+    pub fn finish(mut self) -> Decoded {
+        self.end();
+        self.decoded
+    }
+
+    /// Bring the frame and counters up to date (before a fix is computed mid-stream).
+    pub fn snapshot(&mut self) {
+        self.decoded.frame = self.rx.bridge.local_frame().copied();
+        let (s, b) = self.rx.counters();
+        self.decoded.stream = *s;
+        self.decoded.bridge = *b;
+    }
+}
+
+fn absorb(d: &mut Decoded, e: Event, keep_track: bool) {
+    match e {
+        Event::Bearing(b) => d.bearings.push(b.bearing),
+        Event::Fix(f) => {
+            d.fixes += 1;
+            if keep_track {
+                d.track.push(f);
+            }
+        }
+        Event::Rssi(_) => {}
+    }
+}
+
+/// One frame into the bridge, its refusals attributed to its kind.
+fn push(bridge: &mut foxhunt_bridge::Bridge<0>, f: &Frame<'_>, d: &mut Decoded, keep_track: bool) {
+    let before = *bridge.counters();
+    bridge.push(f, &mut |e| absorb(d, e, keep_track));
+    let after = bridge.counters();
+    let malformed =
+        (after.bad_field - before.bad_field) + (after.bad_position - before.bad_position);
+    let tally = match kind(f) {
+        Kind::Gps => &mut d.gps,
+        Kind::Bearing => &mut d.bearing_records,
+        Kind::Other => return,
+    };
+    tally.seen += 1;
+    tally.malformed += malformed;
+    tally.no_fix += after.no_fix_sentences - before.no_fix_sentences;
+}
+
+/// Decode whole captures (bytes as a UART delivered them).
+pub fn decode(bytes: &[u8], config: BridgeConfig, keep_track: bool) -> Decoded {
+    let mut dec = Decoder::new(config, keep_track);
+    dec.feed(bytes);
+    dec.finish()
 }
 
 /// Rejections by reason, every reason listed (zero included) so scripts can rely on the keys.
@@ -159,7 +325,61 @@ pub fn rejections(d: &Decoded, outliers: u32) -> BTreeMap<&'static str, u32> {
     ])
 }
 
-/// Why a capture gives no fix, in words a user can act on.
+/// Why a capture gives no position for the vehicle, in words a user can act on.
+fn no_vehicle_position(d: &Decoded) -> String {
+    let g = d.gps;
+    if g.seen == 0 {
+        let bad = d.stream.bad_checksum + d.stream.malformed;
+        return if bad > 0 {
+            format!(
+                "no GPS fix: no GGA/RMC/GLL/GNS sentence decoded ({bad} sentences failed their \
+                 checksum or framing)"
+            )
+        } else {
+            "no GPS fix: the capture holds no GGA/RMC/GLL/GNS sentence, so bearings cannot be \
+             placed"
+                .into()
+        };
+    }
+    format!(
+        "no GPS fix: {} position sentences, {} saying the receiver has no fix, {} with a \
+         malformed or out-of-range field",
+        g.seen, g.no_fix, g.malformed
+    )
+}
+
+/// Why a capture with a vehicle track gives no usable bearing.
+fn no_bearing(d: &Decoded) -> String {
+    let (r, b) = (d.bearing_records, &d.bridge);
+    if r.seen == 0 {
+        return "no bearing record in the capture (no $PFOXB sentence)".into();
+    }
+    let mut why = Vec::new();
+    let mut reason = |n: u32, text: &str| {
+        if n > 0 {
+            why.push(format!("{n} {text}"));
+        }
+    };
+    reason(r.malformed, "with a malformed or out-of-range field");
+    reason(b.low_quality, "at or below the quality gate");
+    reason(b.no_course, "relative with no course to turn them by");
+    reason(b.no_fix, "before any GPS fix");
+    reason(
+        b.stale_fix,
+        "with no GPS fix within the allowed gap of their time",
+    );
+    format!(
+        "no usable bearing: of {} bearing records, {}",
+        r.seen,
+        if why.is_empty() {
+            "none reached the bridge".into()
+        } else {
+            why.join(", ")
+        }
+    )
+}
+
+/// Why the bearings give no fix, in words a user can act on.
 pub fn explain(e: Error, d: &Decoded) -> String {
     match e {
         Error::TooFewMeasurements if d.bearings.len() == 1 => {
@@ -167,22 +387,41 @@ pub fn explain(e: Error, d: &Decoded) -> String {
                 .into()
         }
         Error::TooFewMeasurements => "too few usable bearings for a fix".into(),
-        Error::ParallelBearings => {
-            "all bearings are parallel: they never cross, so the range is unknown; drive across \
-             the line of bearing"
-                .into()
-        }
+        Error::ParallelBearings => "all bearings are parallel: they never cross, so the range is \
+             unknown; drive across the line of bearing"
+            .into(),
         Error::StationaryVehicle => {
             "the vehicle never moved: bearings from one place give a direction, not a position"
                 .into()
         }
-        Error::ShallowCrossing | Error::DegenerateGeometry => {
+        _ if points_away(&d.bearings) => "the bearings point away from where their lines cross \
+             (they meet behind the vehicle): is the DF unit's angle convention reversed (180 \
+             degrees) or mirrored?"
+            .into(),
+        Error::ShallowCrossing => {
             "the bearings cross too shallowly for a fix; drive further across the line of bearing"
                 .into()
         }
-        Error::BehindVehicle => "the bearings cross behind the vehicle: no emitter there".into(),
+        Error::DegenerateGeometry => "the bearings do not pin down a point (their information is \
+             singular); drive across the line of bearing"
+            .into(),
+        Error::BehindVehicle => "the bearings meet behind the vehicle: no emitter there".into(),
         e => format!("no fix: {e}"),
     }
+}
+
+/// Whether nearly all of at least five bearings point away from where their lines cross (the
+/// pseudo-linear fix, which treats a bearing as an undirected line): the sign of a reversed or
+/// mirrored DF convention. Fewer, or a mixed picture, is a geometry problem instead.
+fn points_away(bearings: &[Bearing]) -> bool {
+    let Ok(f) = foxhunt_core::fix::ple::ple(bearings) else {
+        return false;
+    };
+    let away = bearings
+        .iter()
+        .filter(|b| b.residual(&f.position).cos() < 0.0)
+        .count();
+    bearings.len() >= 5 && 10 * away >= 9 * bearings.len()
 }
 
 fn with_sigma(bearings: &[Bearing], sigma: f32) -> Vec<Bearing> {
@@ -203,138 +442,51 @@ pub fn estimate_sigma(bearings: &[Bearing], p: &[f32; 2]) -> f32 {
     if r.len() < 3 {
         return 1.0f32.to_radians();
     }
-    r.sort_by(f32::total_cmp);
-    let mad = (1.4826 * r[r.len() / 2]).max(floor);
+    let mid = r.len() / 2;
+    let (_, median, _) = r.select_nth_unstable_by(mid, f32::total_cmp);
+    let mad = (1.4826 * *median).max(floor);
     let inliers: Vec<f32> = r.into_iter().filter(|x| *x <= 3.0 * mad).collect();
     if inliers.len() < 3 {
         return mad;
     }
-    let ss: f32 = inliers.iter().map(|x| x * x).sum();
-    (ss / (inliers.len() - 2) as f32 / 0.9733).sqrt().max(floor)
+    let ss: f64 = inliers.iter().map(|x| f64::from(x * x)).sum();
+    ((ss / (inliers.len() - 2) as f64 / 0.9733).sqrt() as f32).max(floor)
 }
 
-/// A position with covariance, and the particle cloud if the method has one.
-#[derive(Debug, Clone)]
-pub struct Solution {
-    /// Position, local metres.
-    pub position: [f32; 2],
-    /// Covariance, m^2.
-    pub covariance: [[f32; 2]; 2],
-    /// Bearings a robust loss treated as outliers (beyond 3 sigma).
-    pub outliers: u32,
-    /// Particles (sequential methods).
-    pub cloud: Vec<[f32; 2]>,
-}
-
-fn filter_solution<F: Filter<2, Measurement = Bearing>>(
-    f: &mut F,
-    bearings: &[Bearing],
-    rng: &mut XorShiftRng,
-) -> Result<Solution, Error> {
-    let mut cloud = Box::new(ParticleSet::<PARTICLES, 2>::new());
-    initial_particles(bearings, MIN_CROSSING, &mut cloud, rng)?;
-    f.initialise(&cloud.states, rng)?;
-    for b in bearings {
-        let _ = f.step(b, rng);
-    }
-    let e = f.estimate();
-    if !e
-        .mean
-        .iter()
-        .chain(e.covariance.iter().flatten())
-        .all(|v| v.is_finite())
-    {
-        return Err(Error::NonFinite);
-    }
-    Ok(Solution {
-        position: e.mean,
-        covariance: e.covariance,
-        outliers: 0,
-        cloud: Vec::new(),
-    })
-}
-
-/// Solve with `method` on bearings whose sigma is already set.
-pub fn solve(method: LocateMethod, bearings: &[Bearing], seed: u64) -> Result<Solution, Error> {
-    let mut rng = XorShiftRng::seed_from_u64(seed);
-    let batch = |f: foxhunt_core::Fix| Solution {
-        position: f.position,
-        covariance: f.covariance,
-        outliers: f.outliers,
-        cloud: Vec::new(),
+/// Locate the emitter of a decoded capture.
+pub fn locate(d: &Decoded, o: &LocateOptions) -> Result<Located, String> {
+    o.check()?;
+    let Some(frame) = d.frame else {
+        return Err(no_vehicle_position(d));
     };
-    let model = StaticEmitter { process_var: 0.0 };
-    match method {
-        LocateMethod::Ml => ml(bearings, None, &Huber::default(), MlOptions::default()).map(batch),
-        LocateMethod::MlGauss => ml(bearings, None, &Gaussian, MlOptions::default()).map(batch),
-        LocateMethod::Sir => {
-            let lik = GaussianUniform { eps: 0.05 };
-            let mut f = Box::new(Sir::<_, _, PARTICLES, 2>::new(
-                model,
-                lik,
-                SirConfig::default(),
-            ));
-            let mut s = filter_solution(&mut *f, bearings, &mut rng)?;
-            s.cloud = f.particles().states.to_vec();
-            Ok(s)
-        }
-        LocateMethod::Gpf => {
-            let mut f = Box::new(Gpf::<_, _, PARTICLES, 2>::new(model, Gaussian));
-            filter_solution(&mut *f, bearings, &mut rng)
-        }
-        LocateMethod::Ekf => filter_solution(&mut BearingEkf::new(0.0), bearings, &mut rng),
-        LocateMethod::Afsa => {
-            let mut f = Box::new(Sir::<_, _, PARTICLES, 2, Afsa>::with_swarm(
-                model,
-                Gaussian,
-                SirConfig::default(),
-                Afsa::default(),
-            ));
-            let mut s = filter_solution(&mut *f, bearings, &mut rng)?;
-            s.cloud = f.particles().states.to_vec();
-            Ok(s)
-        }
-    }
-}
-
-/// Locate the emitter of a decoded capture. `sigma_deg`: the DF unit's bearing noise, or
-/// `None` to estimate it.
-pub fn locate(
-    d: &Decoded,
-    method: LocateMethod,
-    sigma_deg: Option<f32>,
-    seed: u64,
-) -> Result<(LocateReport, Solution), String> {
-    let frame = d.frame.ok_or(
-        "no GPS fix in the capture: bearings cannot be placed without the vehicle's position",
-    )?;
     if d.bearings.is_empty() {
-        return Err(
-            if d.bridge.no_fix + d.bridge.stale_fix + d.bridge.low_quality > 0 {
-                format!(
-                    "no usable bearing: {} without a GPS fix near their time, {} below the quality gate",
-                    d.bridge.no_fix + d.bridge.stale_fix,
-                    d.bridge.low_quality
-                )
-            } else {
-                "no bearing ($PFOXB) sentence in the capture".into()
-            },
-        );
+        return Err(no_bearing(d));
     }
-    let (sigma, estimated) = match sigma_deg {
-        Some(s) if s.is_finite() && s > 0.0 => (s.to_radians(), false),
-        Some(s) => return Err(format!("--sigma-deg must be a positive number, not {s}")),
+    let (sigma, estimated) = match o.sigma_deg {
+        Some(s) => (s.to_radians(), false),
         None => {
             // Two passes of the robust ML: the first with a nominal 1 degree, the second with
             // the noise its residuals show.
             let first = with_sigma(&d.bearings, 1.0f32.to_radians());
-            let f = ml(&first, None, &Huber::default(), MlOptions::default())
+            let f = foxhunt_core::estimator::batch_fix(Method::MlHuber, &first)
                 .map_err(|e| explain(e, d))?;
             (estimate_sigma(&first, &f.position), true)
         }
     };
     let bearings = with_sigma(&d.bearings, sigma);
-    let s = solve(method, &bearings, seed).map_err(|e| explain(e, d))?;
+    let mut rng = XorShiftRng::seed_from_u64(o.seed);
+    let s = crate::montecarlo::pool()
+        .install(|| {
+            locate_bearings(
+                o.method,
+                o.particles,
+                SEEDS_JITTER_M2,
+                &bearings,
+                true,
+                &mut rng,
+            )
+        })
+        .map_err(|e| explain(e, d))?;
     let e = Ellipse::from_covariance(&s.covariance, 0.95).map_err(|e| explain(e, d))?;
     let cep = cep50(&s.covariance).map_err(|e| explain(e, d))?;
     let bound = crlb(&s.position, &bearings).map_err(|e| explain(e, d))?;
@@ -359,68 +511,84 @@ pub fn locate(
         },
         cep50_m: cep,
         crlb_m: bound.rmse,
-        method,
+        method: o.method.name(),
         sigma_deg: sigma.to_degrees(),
         sigma_estimated: estimated,
         used: bearings.len() as u32,
         rejected: rejections(d, s.outliers),
     };
-    Ok((report, s))
+    Ok(Located {
+        report,
+        solution: Solution {
+            position: s.position,
+            covariance: s.covariance,
+            outliers: s.outliers,
+            cloud: s.cloud,
+        },
+    })
 }
 
-/// The emitter point, the ellipse polygon, the track and the bearing lines as GeoJSON
-/// (RFC 7946: longitude first; polygons closed).
-pub fn geojson(r: &LocateReport, s: &Solution, d: &Decoded) -> serde_json::Value {
-    use serde_json::json;
-    let Some(frame) = d.frame else {
-        return json!({"type": "FeatureCollection", "features": []});
-    };
-    let ll = |e: f32, n: f32| -> [f64; 2] {
-        let p = frame
-            .to_geodetic([f64::from(e), f64::from(n)])
-            .unwrap_or(LatLon { lat: 0.0, lon: 0.0 });
-        [p.lon, p.lat]
-    };
-    let e = Ellipse::from_covariance(&s.covariance, 0.95).ok();
-    let mut ring: Vec<[f64; 2]> = Vec::new();
-    if let Some(e) = e {
-        let (c, si) = (e.orientation.cos(), e.orientation.sin());
-        for k in 0..=72 {
-            let t = k as f32 * std::f32::consts::TAU / 72.0;
-            let (a, b) = (e.major * t.cos(), e.minor * t.sin());
-            ring.push(ll(
-                s.position[0] + a * c - b * si,
-                s.position[1] + a * si + b * c,
-            ));
-        }
-        ring[72] = ring[0];
-    }
-    let track: Vec<[f64; 2]> = d
-        .track
-        .iter()
-        .map(|f| [f.position.lon, f.position.lat])
-        .collect();
-    let reach = 1.5 * (s.position[0].hypot(s.position[1]) + 1.0);
-    let mut features = vec![
-        json!({"type": "Feature", "properties": {"kind": "emitter", "method": r.method,
-            "cep50_m": r.cep50_m, "crlb_m": r.crlb_m},
-            "geometry": {"type": "Point", "coordinates": [r.lon, r.lat]}}),
-        json!({"type": "Feature", "properties": {"kind": "track"},
-            "geometry": {"type": "LineString", "coordinates": track}}),
-    ];
-    if !ring.is_empty() {
-        features.push(
-            json!({"type": "Feature", "properties": {"kind": "ellipse", "confidence": 0.95},
-            "geometry": {"type": "Polygon", "coordinates": [ring]}}),
+impl LocateReport {
+    /// The report as the terminal shows it.
+    pub fn text(&self) -> String {
+        let mut out = String::new();
+        let _ = writeln!(
+            out,
+            "emitter      {:.6}, {:.6}  ({:.1} m east, {:.1} m north of {:.6}, {:.6})",
+            self.lat, self.lon, self.east_m, self.north_m, self.origin.lat, self.origin.lon
         );
+        let _ = writeln!(
+            out,
+            "95 % ellipse semi-axes {:.1} m and {:.1} m, major axis {:.0} deg from north; CEP50 {:.1} m",
+            self.ellipse.major_m, self.ellipse.minor_m, self.ellipse.orientation_deg, self.cep50_m
+        );
+        let _ = writeln!(
+            out,
+            "CRLB         {:.1} m for this drive's geometry (best any unbiased fix can do)",
+            self.crlb_m
+        );
+        let _ = writeln!(
+            out,
+            "method       {}, bearing noise {:.2} deg ({})",
+            self.method,
+            self.sigma_deg,
+            if self.sigma_estimated {
+                "estimated from the residuals"
+            } else {
+                "given"
+            }
+        );
+        let rejected: Vec<String> = self
+            .rejected
+            .iter()
+            .filter(|(_, n)| **n > 0)
+            .map(|(k, n)| format!("{k} {n}"))
+            .collect();
+        let _ = writeln!(
+            out,
+            "bearings     {} used; rejected: {}",
+            self.used,
+            if rejected.is_empty() {
+                "none".to_string()
+            } else {
+                rejected.join(", ")
+            }
+        );
+        out
     }
-    for b in &d.bearings {
-        let end = [
-            b.vehicle[0] + reach * b.theta.cos(),
-            b.vehicle[1] + reach * b.theta.sin(),
-        ];
-        features.push(json!({"type": "Feature", "properties": {"kind": "bearing"},
-            "geometry": {"type": "LineString", "coordinates": [ll(b.vehicle[0], b.vehicle[1]), ll(end[0], end[1])]}}));
+
+    /// One line for a live update.
+    pub fn update_line(&self) -> String {
+        format!(
+            "{} bearings: {:.6}, {:.6}  CEP50 {:.1} m, CRLB {:.1} m",
+            self.used, self.lat, self.lon, self.cep50_m, self.crlb_m
+        )
     }
-    json!({"type": "FeatureCollection", "features": features})
+}
+
+/// The geodetic position of local metres `p` in `frame` (the origin when out of range).
+pub fn geodetic(frame: &LocalFrame, p: [f32; 2]) -> LatLon {
+    frame
+        .to_geodetic([f64::from(p[0]), f64::from(p[1])])
+        .unwrap_or(frame.origin)
 }

@@ -1,16 +1,20 @@
-//! Seeded, parallel Monte Carlo runs and the metrics of SCENARIOS.md.
+//! Seeded, parallel Monte Carlo runs of a scenario's table and the metrics of SCENARIOS.md
+//! (../shared/spec): one skeleton for bearing and tracking scenarios alike.
 
-use crate::methods::{Method, PARTICLE_COUNTS};
-use crate::scenario::Scenario;
+use crate::report::Row;
+use crate::runs::{bearing_run_timed, tracking_run};
+use crate::scenario::{Scenario, ScenarioModel};
 use foxhunt_core::fix::crlb::crlb;
-use indicatif::{ParallelProgressIterator, ProgressBar, ProgressStyle};
+use foxhunt_core::{Method, PARTICLE_COUNTS};
+use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
-use serde::Serialize;
-use std::sync::OnceLock;
-use std::time::Instant;
+use std::io::IsTerminal;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Mutex, OnceLock};
+use std::time::{Duration, Instant};
 
 /// The Monte Carlo thread pool: one worker per core, with 64 MiB stacks. Filters are sized at
-/// compile time and a 10 000-particle filter is built on the stack before it is boxed; a rayon
+/// compile time and built on the stack (a 100 000-particle filter is megabytes); a rayon
 /// worker that waits on a join can also run a stolen run on top of its own, so the default
 /// 2 MiB stacks overflow. The reservation is virtual: only touched pages cost memory.
 pub fn pool() -> &'static rayon::ThreadPool {
@@ -20,145 +24,300 @@ pub fn pool() -> &'static rayon::ThreadPool {
             .stack_size(64 << 20)
             .thread_name(|i| format!("foxhunt-mc-{i}"))
             .build()
-            .expect("the Monte Carlo thread pool starts")
+            .unwrap_or_else(|_| {
+                // Without threads the runs still go, one at a time on a big stack.
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(1)
+                    .stack_size(64 << 20)
+                    .build()
+                    .unwrap_or_else(|e| panic!("no thread for the Monte Carlo runs: {e}"))
+            })
     })
 }
 
-/// One row of the bench: a method on a scenario.
-#[derive(Debug, Clone, Serialize)]
-pub struct Row {
-    /// Scenario name.
-    pub scenario: String,
-    /// Method name.
-    pub method: String,
-    /// Particles (null for batch fixes and the EKF).
-    pub particles: Option<usize>,
-    /// Monte Carlo runs.
-    pub runs: usize,
-    /// Root mean square position error, metres (tracking: over every step of every run).
-    pub rmse: f64,
-    /// Mean relative error along x, percent (static emitter only).
-    pub rel_x: Option<f64>,
-    /// Mean relative error along y, percent (static emitter only).
-    pub rel_y: Option<f64>,
-    /// The bound: CRLB rmse of the geometry, or the PCRB for tracking.
-    pub crlb: f64,
-    /// rmse / crlb.
-    pub ratio: f64,
-    /// Mean wall time per run, seconds.
-    pub time_s: f64,
-    /// Mean likelihood evaluations per run (0 for batch fixes).
-    pub evaluations: f64,
-    /// Runs in which the method returned no estimate (counted, excluded from the metrics).
-    pub failures: usize,
-    /// The seed paper's figure for this row, if it printed one.
-    pub paper: Option<String>,
+/// Progress on stderr: a bar on a terminal, a short line every few seconds otherwise (a CI
+/// log or a redirected stderr), nothing when quiet.
+pub struct Progress {
+    bar: Option<ProgressBar>,
+    done: AtomicU64,
+    total: u64,
+    last_line: Mutex<Instant>,
+    label: Mutex<String>,
+    lines: bool,
+    every: Duration,
 }
 
-/// A progress bar on stderr when asked for, hidden otherwise.
-pub fn progress_bar(total: u64, label: &str, show: bool) -> ProgressBar {
-    if !show {
-        return ProgressBar::hidden();
+/// How often a non-terminal progress line is written unless told otherwise.
+pub const LINE_EVERY: Duration = Duration::from_secs(5);
+
+impl Progress {
+    /// Progress over `total` runs; `show` false keeps it silent.
+    pub fn new(total: u64, show: bool) -> Self {
+        Self::every(total, show, LINE_EVERY)
     }
-    let bar = ProgressBar::new(total).with_style(
-        ProgressStyle::with_template("{msg:>14} [{bar:30}] {pos}/{len} runs {elapsed}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    bar.set_message(label.to_string());
-    bar
-}
 
-/// The outcome of one run: the estimate (if any), seconds, likelihood evaluations.
-type Outcome = (Option<[f32; 2]>, f64, u64);
-
-/// Run every method on `scenario`, `scenario.runs` times each, in parallel over runs. Each swarm
-/// method is followed by the tuned SIR at the particle count that spends the same likelihood
-/// evaluations per step (the largest compiled count not above it): the equal-cost comparison.
-pub fn bench(scenario: &Scenario, methods: &[Method], progress: bool) -> Vec<Row> {
-    let bound = crlb(&scenario.emitter, &scenario.geometry())
-        .map(|c| c.rmse as f64)
-        .unwrap_or(f64::INFINITY);
-    let bar = progress_bar(
-        (scenario.runs * methods.len()) as u64,
-        &scenario.name,
-        progress,
-    );
-    let mut rows = Vec::new();
-    for &m in methods {
-        let outcomes = run_all(scenario, m, &bar);
-        let row = summarise(scenario, m, bound, &outcomes);
-        let per_step = row.evaluations / scenario.route.len().max(1) as f64;
-        let swarm = matches!(m, Method::AfsaPf | Method::FaPf | Method::FaPfImproved);
-        rows.push(row);
-        if swarm {
-            let n = PARTICLE_COUNTS
-                .iter()
-                .copied()
-                .filter(|n| *n as f64 <= per_step)
-                .max()
-                .unwrap_or(scenario.particles);
-            let equal = Scenario {
-                particles: n,
-                ..scenario.clone()
-            };
-            let outcomes = run_all(&equal, Method::Sir, &bar);
-            let mut r = summarise(&equal, Method::Sir, bound, &outcomes);
-            r.method = format!("sir={}", m.name());
-            rows.push(r);
+    /// [`Progress::new`] writing its non-terminal lines at most every `every`.
+    pub fn every(total: u64, show: bool, every: Duration) -> Self {
+        let terminal = show && std::io::stderr().is_terminal();
+        let bar = terminal.then(|| {
+            let bar = ProgressBar::new(total);
+            if let Ok(style) =
+                ProgressStyle::with_template("{msg:>16} [{bar:30}] {pos}/{len} runs {elapsed}")
+            {
+                bar.set_style(style);
+            }
+            bar
+        });
+        Self {
+            bar,
+            done: AtomicU64::new(0),
+            total,
+            last_line: Mutex::new(Instant::now()),
+            label: Mutex::new(String::new()),
+            lines: show && !terminal,
+            every,
         }
     }
-    bar.finish_and_clear();
+
+    /// Name what is running now.
+    pub fn set_label(&self, label: &str) {
+        if let Some(b) = &self.bar {
+            b.set_message(label.to_string());
+        }
+        if let Ok(mut l) = self.label.lock() {
+            *l = label.to_string();
+        }
+    }
+
+    /// One run finished.
+    pub fn tick(&self) {
+        let done = self.done.fetch_add(1, Ordering::Relaxed) + 1;
+        if let Some(b) = &self.bar {
+            b.inc(1);
+        }
+        if !self.lines {
+            return;
+        }
+        let Ok(mut last) = self.last_line.lock() else {
+            return;
+        };
+        if last.elapsed() >= self.every {
+            *last = Instant::now();
+            let label = self.label.lock().map(|l| l.clone()).unwrap_or_default();
+            crate::io::note(&format!("bench: {done}/{} runs done ({label})", self.total));
+        }
+    }
+
+    /// Clear the bar.
+    pub fn finish(&self) {
+        if let Some(b) = &self.bar {
+            b.finish_and_clear();
+        }
+    }
+}
+
+/// Runs a whole table will take: every method at every count, and the equal-cost rows (an
+/// upper bound: a swarm row that cannot run has none).
+pub fn total_runs(s: &Scenario) -> u64 {
+    let swarms = s.methods.iter().filter(|m| m.is_swarm()).count();
+    ((s.methods.len() + swarms) * s.particles.len() * s.runs) as u64
+}
+
+/// The scenario's table: every method at every particle count, each swarm method followed by
+/// the baseline filter at the particle count that spends the same likelihood evaluations per
+/// step (the largest compiled count not above it): the equal-cost comparison.
+pub fn bench(s: &Scenario, progress: &Progress) -> Vec<Row> {
+    let bound = bound(s);
+    let mut rows = Vec::new();
+    for &n in &s.particles {
+        for &m in &s.methods {
+            let row = measure(s, m, n, bound, progress);
+            let per_step = row.evaluations / s.steps().max(1) as f64;
+            let ran = row.rmse.is_some();
+            rows.push(row);
+            if m.is_swarm() && ran {
+                let equal = PARTICLE_COUNTS
+                    .iter()
+                    .copied()
+                    .filter(|c| *c as f64 <= per_step)
+                    .max()
+                    .unwrap_or(n);
+                let mut r = measure(s, s.baseline, equal, bound, progress);
+                r.scenario = s.label(n);
+                r.method = format!("{}={}", s.baseline.name(), m.name());
+                r.paper = None;
+                rows.push(r);
+            }
+        }
+    }
     rows
 }
 
-fn run_all(scenario: &Scenario, m: Method, bar: &ProgressBar) -> Vec<Outcome> {
-    pool().install(|| {
-        (0..scenario.runs)
-            .into_par_iter()
-            .progress_with(bar.clone())
-            .map(|run| {
-                let mut rng = scenario.rng(run);
-                let bearings = scenario.simulate(&mut rng);
-                let t = Instant::now();
-                let est = m.run_counted(scenario, &bearings, &mut rng).ok();
-                let secs = t.elapsed().as_secs_f64();
-                (est.map(|e| e.0), secs, est.map(|e| e.1).unwrap_or(0))
-            })
-            .collect()
-    })
+/// The bound rows are measured against: the CRLB of a drive's geometry (infinite when the
+/// geometry cannot locate the emitter), or the average PCRB of a tracking scenario.
+pub fn bound(s: &Scenario) -> Option<f64> {
+    match &s.model {
+        ScenarioModel::Bearing(d) => crlb(&d.emitter, &d.geometry())
+            .ok()
+            .map(|c| c.rmse as f64)
+            .filter(|b| b.is_finite()),
+        _ => crate::tracking::pcrb(s).filter(|b| b.is_finite()),
+    }
 }
 
-fn summarise(s: &Scenario, m: Method, bound: f64, outcomes: &[Outcome]) -> Row {
-    let (ex, ey) = (s.emitter[0] as f64, s.emitter[1] as f64);
-    let mut sq = 0.0;
-    let (mut rx, mut ry) = (0.0, 0.0);
-    let mut ok = 0usize;
-    for (est, _, _) in outcomes {
-        if let Some(p) = est {
-            let dx = p[0] as f64 - ex;
-            let dy = p[1] as f64 - ey;
-            sq += dx * dx + dy * dy;
-            rx += dx.abs() / ex.abs().max(1e-9);
-            ry += dy.abs() / ey.abs().max(1e-9);
-            ok += 1;
+/// Whether `method` at `n` particles runs at all, and if not why: the O(N^2) swarms are not
+/// run above 1 000 particles (minutes to hours per run; `foxhunt perf` times their growth),
+/// and AFSA indexes its fish by u16.
+pub fn not_run(method: Method, n: usize) -> Option<String> {
+    let quadratic = matches!(method, Method::FaPf | Method::GsaGpf);
+    if quadratic && n > 1000 {
+        return Some(format!(
+            "not run: its O(N^2) step at N = {n} takes minutes to hours per run"
+        ));
+    }
+    if method == Method::AfsaPf && n > u16::MAX as usize {
+        return Some(format!(
+            "not run: AFSA indexes its fish by u16 (at most 65 535, not {n})"
+        ));
+    }
+    None
+}
+
+/// One run's outcome: the static fix's error vector or the tracking run's summed error,
+/// seconds and likelihood evaluations.
+struct Outcome {
+    error: Option<Error>,
+    seconds: f64,
+    evaluations: u64,
+}
+
+/// What a run's error is.
+enum Error {
+    /// Static emitter: estimate minus truth.
+    Fix([f64; 2]),
+    /// Tracking: error summed over the steps.
+    Track(f64),
+}
+
+/// One method at one particle count over every run.
+fn measure(s: &Scenario, m: Method, n: usize, bound: Option<f64>, p: &Progress) -> Row {
+    let label = s.label(n);
+    p.set_label(&format!("{label} {}", m.name()));
+    let mut row = Row {
+        scenario: label,
+        method: m.name().to_string(),
+        particles: m.uses_particles().then_some(n),
+        runs: s.runs,
+        rmse: None,
+        rel_x: None,
+        rel_y: None,
+        crlb: bound,
+        ratio: None,
+        time_s: 0.0,
+        evaluations: 0.0,
+        failures: 0,
+        note: None,
+        paper: s.paper(m, n).map(str::to_string),
+    };
+    if let Some(why) = not_run(m, n) {
+        row.note = Some(why);
+        for _ in 0..s.runs {
+            p.tick();
+        }
+        return row;
+    }
+    let outcomes: Vec<Outcome> = pool().install(|| {
+        (0..s.runs)
+            .into_par_iter()
+            .map(|run| {
+                let o = one(s, m, n, run);
+                p.tick();
+                o
+            })
+            .collect()
+    });
+    summarise(s, &mut row, &outcomes);
+    row
+}
+
+fn one(s: &Scenario, m: Method, n: usize, run: usize) -> Outcome {
+    match &s.model {
+        ScenarioModel::Bearing(d) => {
+            let (r, seconds) = bearing_run_timed(d, m, n, &mut s.rng(run));
+            let finite = |f: &crate::runs::BearingFix| f.position.iter().all(|v| v.is_finite());
+            match r {
+                Ok(f) if finite(&f) => Outcome {
+                    error: Some(Error::Fix([
+                        f64::from(f.position[0] - d.emitter[0]),
+                        f64::from(f.position[1] - d.emitter[1]),
+                    ])),
+                    seconds,
+                    evaluations: f.evaluations,
+                },
+                _ => Outcome {
+                    error: None,
+                    seconds,
+                    evaluations: 0,
+                },
+            }
+        }
+        _ => {
+            let (r, seconds) = tracking_run(s, m, n, run);
+            Outcome {
+                error: r.as_ref().ok().map(|(e, _)| Error::Track(*e)),
+                seconds,
+                evaluations: r.map(|(_, ev)| ev).unwrap_or(0),
+            }
         }
     }
-    let n = ok.max(1) as f64;
-    let rmse = if ok > 0 { (sq / n).sqrt() } else { f64::NAN };
+}
+
+fn summarise(s: &Scenario, row: &mut Row, outcomes: &[Outcome]) {
     let runs = outcomes.len().max(1) as f64;
-    Row {
-        scenario: s.name.clone(),
-        method: m.name().to_string(),
-        particles: m.uses_particles().then_some(s.particles),
-        runs: outcomes.len(),
-        rmse,
-        rel_x: Some(100.0 * rx / n),
-        rel_y: Some(100.0 * ry / n),
-        crlb: bound,
-        ratio: rmse / bound,
-        time_s: outcomes.iter().map(|o| o.1).sum::<f64>() / runs,
-        evaluations: outcomes.iter().map(|o| o.2 as f64).sum::<f64>() / runs,
-        failures: outcomes.len() - ok,
-        paper: crate::report::paper_figure(&s.name, m.name()),
+    row.time_s = outcomes.iter().map(|o| o.seconds).sum::<f64>() / runs;
+    row.evaluations = outcomes.iter().map(|o| o.evaluations as f64).sum::<f64>() / runs;
+    let ok: Vec<&Error> = outcomes.iter().filter_map(|o| o.error.as_ref()).collect();
+    row.failures = outcomes.len() - ok.len();
+    if ok.is_empty() {
+        row.note = Some(format!(
+            "failed: none of {} runs gave an estimate",
+            row.runs
+        ));
+        return;
+    }
+    let k = ok.len() as f64;
+    match &s.model {
+        ScenarioModel::Bearing(d) => {
+            let (ex, ey) = (f64::from(d.emitter[0]), f64::from(d.emitter[1]));
+            let (mut sq, mut rx, mut ry) = (0.0, 0.0, 0.0);
+            for e in &ok {
+                if let Error::Fix([dx, dy]) = e {
+                    sq += dx * dx + dy * dy;
+                    rx += dx.abs() / ex.abs().max(1e-9);
+                    ry += dy.abs() / ey.abs().max(1e-9);
+                }
+            }
+            row.rmse = Some((sq / k).sqrt());
+            row.rel_x = Some(100.0 * rx / k);
+            row.rel_y = Some(100.0 * ry / k);
+        }
+        _ => {
+            let sum: f64 = ok
+                .iter()
+                .map(|e| if let Error::Track(t) = e { *t } else { 0.0 })
+                .sum();
+            row.rmse = Some(sum / (k * s.steps().max(1) as f64));
+        }
+    }
+    row.ratio = match (row.rmse, row.crlb) {
+        (Some(e), Some(b)) if b > 0.0 => Some(e / b),
+        _ => None,
+    };
+    if row.crlb.is_none() && s.drive().is_some() {
+        row.note = Some(
+            "unbounded geometry: the CRLB is infinite (the emitter lies on the line of the \
+             route's bearings)"
+                .into(),
+        );
     }
 }

@@ -1,27 +1,29 @@
-//! `foxhunt perf`: speed against the numpy peer, and how each filter's cost grows with N.
+//! `foxhunt perf`: speed against the numpy peer, how each filter's cost grows with N, and how
+//! `locate` scales with the size of a capture (time and peak memory).
 //!
-//! The peer is `benches/numpy_sir.py`: the same bootstrap SIR on the same scenario, written the
-//! way users write it today (numpy, filterpy's `systematic_resample`). This module installs it
-//! (numpy, scipy, filterpy from PyPI into `target/peer-venv`), runs it, runs the identical Rust
-//! filter single-threaded in the same invocation, and prints the ratio. Timing is wall-clock
-//! over whole runs; it is reported, never asserted.
+//! The peer is `benches/numpy_sir.py`: the registry's `sir-seed` on the same scenario, written
+//! the way users write it today (numpy, filterpy's `systematic_resample`). This module installs
+//! it (numpy, scipy, filterpy from PyPI into `target/peer-venv`), runs it, runs the identical
+//! Rust filter single-threaded in the same invocation, and prints the ratio. Timing is
+//! wall-clock over whole runs; it is reported, never asserted.
 
 use crate::montecarlo::pool;
-use foxhunt_core::Bearing;
+use crate::report::human_seconds;
+use crate::runs::Steps;
+use foxhunt_core::canonical::{AOA_EMITTER, AOA_SIGMA};
+use foxhunt_core::estimator::with_bearing_filter;
+use foxhunt_core::fix::{init::initial_particles, intersection::MIN_CROSSING};
 use foxhunt_core::model::bearing::{predicted, wrap};
 use foxhunt_core::{
-    Filter, Gaussian, Gpf, ParticleSet, Resampling, Roughening, Sir, SirConfig, StaticEmitter,
-    random,
+    Bearing, Error, Estimate, Filter, Method, ParticleSet, WithFilter, random, with_particles,
 };
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 use serde::Deserialize;
+use std::fmt::Write;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
-
-const EMITTER: [f32; 2] = [1200.0, 800.0];
-const SIGMA: f32 = 0.019_496; // sqrt(3.801e-4)
 
 /// One speed measurement.
 #[derive(Debug, Clone, Deserialize)]
@@ -36,25 +38,20 @@ pub struct Timing {
     pub rmse: f64,
 }
 
+/// The peer's jitter, m^2 per step.
+const PEER_JITTER: f32 = 1.0;
+
+/// aoa-afsa's route.
 fn route() -> Vec<[f32; 2]> {
-    let start = libm::atan2f(-EMITTER[1], -EMITTER[0]);
     (0..60)
-        .map(|k| {
-            let a = start + 2.0 * std::f32::consts::PI * k as f32 / 60.0;
-            [EMITTER[0] + 300.0 * a.cos(), EMITTER[1] + 300.0 * a.sin()]
-        })
+        .map(|k| foxhunt_core::canonical::loop300(AOA_EMITTER, k))
         .collect()
 }
 
-/// The peer's algorithm in Rust: 1 m^2 jitter, Gaussian likelihood, systematic resampling when
-/// ESS < N/2, initial cloud N(emitter, 50^2 I). Single thread.
-fn rust_sir<const N: usize>(runs: usize) -> Timing {
+/// The peer's algorithm in Rust: `sir-seed` (1 m^2 jitter, Gaussian likelihood, systematic
+/// resampling every step) from the initial cloud N(emitter, 50^2 I). Single thread.
+fn rust_sir<const N: usize>(runs: usize) -> Result<Timing, Error> {
     let vehicles = route();
-    let config = SirConfig {
-        resampling: Resampling::Systematic,
-        ess_threshold: 0.5,
-        roughening: Roughening::None,
-    };
     let mut rng = XorShiftRng::seed_from_u64(1);
     let (mut sq, mut elapsed) = (0.0f64, 0.0f64);
     let mut cloud = Box::new(ParticleSet::<N, 2>::new());
@@ -64,30 +61,34 @@ fn rust_sir<const N: usize>(runs: usize) -> Timing {
             .iter()
             .map(|v| Bearing {
                 vehicle: *v,
-                theta: wrap(predicted(&EMITTER, v) + SIGMA * random::normal(&mut rng)),
-                sigma: SIGMA,
+                theta: wrap(predicted(&AOA_EMITTER, v) + AOA_SIGMA * random::normal(&mut rng)),
+                sigma: AOA_SIGMA,
             })
             .collect();
         let t = Instant::now();
-        let _ = cloud.draw_gaussian(&EMITTER, &[[2500.0, 0.0], [0.0, 2500.0]], &mut rng);
-        let model = StaticEmitter { process_var: 1.0 };
-        let mut f = Box::new(Sir::<_, _, N, 2>::new(model, Gaussian, config));
-        let _ = f.initialise(&cloud.states, &mut rng);
-        for b in &bearings {
-            let _ = f.step(b, &mut rng);
-        }
-        let est = f.estimate().mean;
+        cloud.draw_gaussian(&AOA_EMITTER, &[[2500.0, 0.0], [0.0, 2500.0]], &mut rng)?;
+        let steps = Steps {
+            cloud: &cloud.states,
+            measurements: &bearings,
+            rng: &mut rng,
+            each: |_, _: &Estimate<2>| {},
+            keep_cloud: false,
+        };
+        let est = with_bearing_filter::<N, _>(Method::SirSeed, PEER_JITTER, steps)??
+            .estimate
+            .mean;
         if run > 0 {
             elapsed += t.elapsed().as_secs_f64();
-            sq += ((est[0] - EMITTER[0]) as f64).powi(2) + ((est[1] - EMITTER[1]) as f64).powi(2);
+            sq += f64::from(est[0] - AOA_EMITTER[0]).powi(2)
+                + f64::from(est[1] - AOA_EMITTER[1]).powi(2);
         }
     }
-    Timing {
+    Ok(Timing {
         particles: N,
         runs,
         seconds_per_run: elapsed / runs as f64,
         rmse: (sq / runs as f64).sqrt(),
-    }
+    })
 }
 
 /// Runs to time at `n` particles: at least `runs`, and below N = 1 000 proportionally more, so
@@ -97,16 +98,10 @@ pub fn runs_at(n: usize, runs: usize) -> usize {
     runs.max(runs * 1000 / n.max(1))
 }
 
-/// Time the Rust SIR at `n` particles (a compiled size: 100, 1000, 10 000 or 100 000).
-pub fn rust_timing(n: usize, runs: usize) -> Option<Timing> {
-    // Run on the big-stack pool: a 100 000-particle filter is built on the stack before boxing.
-    pool().install(|| match n {
-        100 => Some(rust_sir::<100>(runs)),
-        1000 => Some(rust_sir::<1000>(runs)),
-        10_000 => Some(rust_sir::<10_000>(runs)),
-        100_000 => Some(rust_sir::<100_000>(runs)),
-        _ => None,
-    })
+/// Time the Rust SIR at `n` particles (a compiled count).
+pub fn rust_timing(n: usize, runs: usize) -> Result<Timing, Error> {
+    // On the big-stack pool: a 100 000-particle filter is built on the stack.
+    pool().install(|| with_particles!(n, N => rust_sir::<N>(runs)))
 }
 
 /// The peer's virtual environment, made on first use.
@@ -125,7 +120,7 @@ fn peer_python(target: &Path) -> Result<PathBuf, String> {
         } else {
             Err(format!(
                 "{cmd:?} failed: {}",
-                String::from_utf8_lossy(&out.stderr)
+                String::from_utf8_lossy(&out.stderr).trim()
             ))
         }
     };
@@ -137,11 +132,14 @@ fn peer_python(target: &Path) -> Result<PathBuf, String> {
     Ok(python)
 }
 
+fn target_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../target")
+}
+
 /// Run the numpy peer at each particle count.
 pub fn peer_timings(counts: &[usize], runs: usize) -> Result<Vec<Timing>, String> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let target = root.join("../target");
-    let python = peer_python(&target)?;
+    let python = peer_python(&target_dir())?;
     let out = Command::new(python)
         .arg(root.join("benches/numpy_sir.py"))
         .arg("--runs")
@@ -152,7 +150,7 @@ pub fn peer_timings(counts: &[usize], runs: usize) -> Result<Vec<Timing>, String
     if !out.status.success() {
         return Err(format!(
             "numpy peer failed: {}",
-            String::from_utf8_lossy(&out.stderr)
+            String::from_utf8_lossy(&out.stderr).trim()
         ));
     }
     String::from_utf8_lossy(&out.stdout)
@@ -161,18 +159,47 @@ pub fn peer_timings(counts: &[usize], runs: usize) -> Result<Vec<Timing>, String
         .collect()
 }
 
+/// The Rust-against-numpy table (Markdown), at N = 100, 1 000 and 10 000.
+pub fn numpy_table(runs: usize) -> Result<String, String> {
+    let mut out = format!(
+        "Bootstrap SIR (sir-seed) on aoa-afsa (60 bearings), one thread, the same runs on both \
+         sides (at least {runs}; more below N = 1 000):\n\n\
+         | N | runs | Rust s/run | numpy s/run | Rust / numpy speed | Rust particle updates/s | Rust rmse m | numpy rmse m |\n\
+         |---:|---:|---:|---:|---:|---:|---:|---:|\n"
+    );
+    for n in [100, 1000, 10_000] {
+        let runs = runs_at(n, runs);
+        let peer = peer_timings(&[n], runs)?;
+        let p = peer.first().ok_or("the numpy peer printed nothing")?;
+        let r = rust_timing(n, runs).map_err(|e| format!("Rust SIR at N = {n}: {e}"))?;
+        let updates = (r.particles * 60) as f64 / r.seconds_per_run;
+        let _ = writeln!(
+            out,
+            "| {} | {runs} | {:.3e} | {:.3e} | {:.1}x | {:.3e} | {:.2} | {:.2} |",
+            p.particles,
+            r.seconds_per_run,
+            p.seconds_per_run,
+            p.seconds_per_run / r.seconds_per_run,
+            updates,
+            r.rmse,
+            p.rmse
+        );
+    }
+    Ok(out)
+}
+
 /// The filters of the growth table, on the bearing model (aoa-afsa's bearings).
-pub const GROWTH_FILTERS: [&str; 7] = [
-    "sir",
-    "gpf",
-    "fa-pf-imp",
-    "pso-gpf",
-    "gsa-gpf",
-    "afsa-pf",
-    "fa-pf",
+pub const GROWTH_FILTERS: [Method; 7] = [
+    Method::Sir,
+    Method::Gpf,
+    Method::FaPfImp,
+    Method::PsoGpf,
+    Method::GsaGpf,
+    Method::AfsaPf,
+    Method::FaPf,
 ];
 
-/// Particle counts of the growth table (compiled sizes).
+/// Particle counts of the growth table (compiled counts).
 pub const GROWTH_SIZES: [usize; 4] = [100, 1000, 10_000, 100_000];
 
 /// Mean seconds per step of one filter at one N.
@@ -197,8 +224,8 @@ pub enum StepTime {
 /// One filter's row: step time at each N and the fitted exponent of time ~ N^k.
 #[derive(Debug, Clone)]
 pub struct GrowthRow {
-    /// Filter name.
-    pub filter: &'static str,
+    /// The filter.
+    pub filter: Method,
     /// (N, time) pairs in ascending N.
     pub times: Vec<(usize, StepTime)>,
     /// Least-squares slope of log time against log N over the measured N >= 1 000 (at N = 100
@@ -206,70 +233,46 @@ pub struct GrowthRow {
     pub exponent: f64,
 }
 
-/// Step `filter` (started from aoa-afsa's bearing-pair cloud) over the scenario's bearings,
-/// cyclically, until `budget` has passed (at least one step).
-fn time_steps<const N: usize, F: Filter<2, Measurement = Bearing>>(
-    make: impl FnOnce() -> F,
+/// The visitor that steps a started filter over the bearings, cyclically, until `budget`
+/// seconds have passed (at least one step).
+struct TimeSteps<'a> {
+    cloud: &'a [[f32; 2]],
+    bearings: &'a [Bearing],
+    rng: &'a mut XorShiftRng,
     budget: f64,
-) -> StepTime {
-    use foxhunt_core::fix::{init::initial_particles, intersection::MIN_CROSSING};
-    let s = crate::scenario::Scenario::named("aoa-afsa").expect("aoa-afsa is built in");
-    let mut rng = s.rng(0);
-    let bearings = s.simulate(&mut rng);
-    let mut cloud = Box::new(ParticleSet::<N, 2>::new());
-    if initial_particles(&bearings, MIN_CROSSING, &mut cloud, &mut rng).is_err() {
-        return StepTime::Skipped { predicted: 0.0 };
-    }
-    let mut f = Box::new(make());
-    let _ = f.initialise(&cloud.states, &mut rng);
-    let start = Instant::now();
-    let mut steps = 0;
-    while steps == 0 || start.elapsed().as_secs_f64() < budget {
-        let _ = std::hint::black_box(f.step(&bearings[steps % bearings.len()], &mut rng));
-        steps += 1;
-    }
-    StepTime::Measured {
-        seconds: start.elapsed().as_secs_f64() / steps as f64,
-        steps,
+}
+
+impl WithFilter<2, Bearing> for TimeSteps<'_> {
+    type Output = Result<StepTime, Error>;
+    fn visit<F: Filter<2, Measurement = Bearing>>(self, f: &mut F) -> Self::Output {
+        f.initialise(self.cloud, self.rng)?;
+        let start = Instant::now();
+        let mut steps = 0;
+        while steps == 0 || start.elapsed().as_secs_f64() < self.budget {
+            let z = &self.bearings[steps % self.bearings.len()];
+            let _ = std::hint::black_box(f.step(z, self.rng));
+            steps += 1;
+        }
+        Ok(StepTime::Measured {
+            seconds: start.elapsed().as_secs_f64() / steps as f64,
+            steps,
+        })
     }
 }
 
-/// Time one filter at one compiled N.
-fn step_time<const N: usize>(filter: &str, budget: f64) -> Option<StepTime> {
-    use foxhunt_core::{Afsa, Firefly, Gsa, ImprovedFirefly, Pso};
-    let model = StaticEmitter { process_var: 0.0 };
-    let config = SirConfig::default();
-    Some(match filter {
-        "sir" => time_steps::<N, _>(|| Sir::<_, _, N, 2>::new(model, Gaussian, config), budget),
-        "gpf" => time_steps::<N, _>(|| Gpf::<_, _, N, 2>::new(model, Gaussian), budget),
-        "afsa-pf" => time_steps::<N, _>(
-            || Sir::<_, _, N, 2, _>::with_swarm(model, Gaussian, config, Afsa::default()),
-            budget,
-        ),
-        "fa-pf" => time_steps::<N, _>(
-            || Sir::<_, _, N, 2, _>::with_swarm(model, Gaussian, config, Firefly::default()),
-            budget,
-        ),
-        "fa-pf-imp" => time_steps::<N, _>(
-            || {
-                Sir::<_, _, N, 2, _>::with_swarm(
-                    model,
-                    Gaussian,
-                    config,
-                    ImprovedFirefly::default(),
-                )
-            },
-            budget,
-        ),
-        "pso-gpf" => time_steps::<N, _>(
-            || Gpf::<_, _, N, 2, _>::with_swarm(model, Gaussian, Pso::default()),
-            budget,
-        ),
-        "gsa-gpf" => time_steps::<N, _>(
-            || Gpf::<_, _, N, 2, _>::with_swarm(model, Gaussian, Gsa::default()),
-            budget,
-        ),
-        _ => return None,
+/// Time one filter at `n` particles, started from aoa-afsa's bearing-pair cloud.
+fn step_time(filter: Method, n: usize, budget: f64) -> Result<StepTime, Error> {
+    let s = crate::scenario::Scenario::named("aoa-afsa").ok_or(Error::Unsupported)?;
+    let d = s.drive().ok_or(Error::Unsupported)?;
+    let mut rng = s.rng(0);
+    let bearings = d.simulate(&mut rng);
+    pool().install(|| {
+        with_particles!(n, N => {
+            let mut cloud = Box::new(ParticleSet::<N, 2>::new());
+            initial_particles(&bearings, MIN_CROSSING, &mut cloud, &mut rng)?;
+            let t = TimeSteps { cloud: &cloud.states, bearings: &bearings, rng: &mut rng, budget };
+            with_bearing_filter::<N, _>(filter, 0.0, t)?
+        })
     })
 }
 
@@ -307,13 +310,13 @@ fn exponent(times: &[(usize, StepTime)]) -> f64 {
 /// Time every filter of [`GROWTH_FILTERS`] at every N of [`GROWTH_SIZES`], each cell for about
 /// `budget` seconds, single thread. A cell whose time, extrapolated from the previous two,
 /// exceeds `limit` seconds per step is skipped (and the larger N after it).
-pub fn growth(budget: f64, limit: f64, mut progress: impl FnMut(&str, usize)) -> Vec<GrowthRow> {
+pub fn growth(budget: f64, limit: f64, mut progress: impl FnMut(Method, usize)) -> Vec<GrowthRow> {
     GROWTH_FILTERS
         .iter()
         .map(|&filter| {
             let mut times: Vec<(usize, StepTime)> = Vec::new();
             for &n in &GROWTH_SIZES {
-                if filter == "afsa-pf" && n > u16::MAX as usize {
+                if crate::montecarlo::not_run(filter, n).is_some() && filter == Method::AfsaPf {
                     times.push((n, StepTime::Unsupported));
                     continue;
                 }
@@ -323,14 +326,7 @@ pub fn growth(budget: f64, limit: f64, mut progress: impl FnMut(&str, usize)) ->
                     continue;
                 }
                 progress(filter, n);
-                // Big filters are built on the stack before boxing: run on the big-stack pool.
-                let t = pool().install(|| match n {
-                    100 => step_time::<100>(filter, budget),
-                    1000 => step_time::<1000>(filter, budget),
-                    10_000 => step_time::<10_000>(filter, budget),
-                    _ => step_time::<100_000>(filter, budget),
-                });
-                if let Some(t) = t {
+                if let Ok(t) = step_time(filter, n, budget) {
                     times.push((n, t));
                 }
             }
@@ -360,4 +356,174 @@ fn predict(times: &[(usize, StepTime)], n: usize) -> f64 {
         }
         _ => 0.0,
     }
+}
+
+/// The growth table (Markdown).
+pub fn growth_table(rows: &[GrowthRow]) -> String {
+    let mut out = String::from(
+        "Step time against N on aoa-afsa's bearings (one thread; time per step, then million \
+         particle updates per second):\n\n",
+    );
+    let header: Vec<String> = GROWTH_SIZES.iter().map(|n| format!("N = {n}")).collect();
+    let _ = writeln!(out, "| filter | {} | exponent |", header.join(" | "));
+    let _ = writeln!(out, "|---|{}---:|", "---:|".repeat(GROWTH_SIZES.len()));
+    for row in rows {
+        let cells: Vec<String> = row
+            .times
+            .iter()
+            .map(|(n, t)| match t {
+                StepTime::Measured { seconds, .. } => format!(
+                    "{} ({:.1})",
+                    human_seconds(*seconds),
+                    *n as f64 / seconds / 1e6
+                ),
+                StepTime::Skipped { predicted } => {
+                    format!("not run (~{})", human_seconds(*predicted))
+                }
+                StepTime::Unsupported => "n/a (u16 fish index)".to_string(),
+            })
+            .collect();
+        let _ = writeln!(
+            out,
+            "| {} | {} | {:.2} |",
+            row.filter,
+            cells.join(" | "),
+            row.exponent
+        );
+    }
+    out
+}
+
+/// One `locate` run on a large capture: its size, bearings, seconds and peak memory.
+#[derive(Debug, Clone)]
+pub struct ScaleRow {
+    /// What the capture is.
+    pub what: String,
+    /// Its size, bytes.
+    pub bytes: u64,
+    /// Bearings located.
+    pub bearings: u64,
+    /// Wall seconds of the whole command.
+    pub seconds: f64,
+    /// Peak resident memory of the command, bytes.
+    pub peak_bytes: u64,
+}
+
+/// Write `path` with `copies` concatenated drives of `seconds` each at `rate` bearings a second
+/// (the bundled drive's geometry, bearings `1 / rate` seconds apart), unless it already has
+/// the right size.
+fn scale_capture(path: &Path, seconds: usize, rate: usize, copies: usize) -> Result<u64, String> {
+    use crate::simulate::{CaptureOptions, drive_capture};
+    let mut s = crate::scenario::Scenario::named("aoa-drive").ok_or("aoa-drive is built in")?;
+    let crate::scenario::ScenarioModel::Bearing(d) = &mut s.model else {
+        return Err("aoa-drive is a drive".into());
+    };
+    // An L-shaped drive at 10 m/s, one route point (and bearing) per 1/rate s.
+    let points = seconds * rate;
+    let step = 10.0 / rate as f32;
+    d.route = (0..points)
+        .map(|k| {
+            let t = k as f32 * step;
+            let leg = 0.5 * points as f32 * step;
+            if t < leg { [t, 0.0] } else { [leg, t - leg] }
+        })
+        .collect();
+    d.emitter = [3000.0, 2000.0];
+    let options = CaptureOptions {
+        interval_ms: (1000 / rate) as u32,
+        ..CaptureOptions::default()
+    };
+    let one = drive_capture(&s, &options)?;
+    let size = (one.len() * copies) as u64;
+    if std::fs::metadata(path).is_ok_and(|m| m.len() == size) {
+        return Ok(size);
+    }
+    let mut f = std::io::BufWriter::new(
+        std::fs::File::create(path).map_err(|e| format!("cannot write {}: {e}", path.display()))?,
+    );
+    for _ in 0..copies {
+        std::io::Write::write_all(&mut f, &one)
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    }
+    std::io::Write::flush(&mut f).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    Ok(size)
+}
+
+/// Time `foxhunt locate --stats` on `path` as a child process (one thread), reading its
+/// own report of bearings and peak memory.
+fn time_locate(path: &Path) -> Result<(u64, f64, u64), String> {
+    let exe = std::env::current_exe().map_err(|e| format!("cannot find the command: {e}"))?;
+    let t = Instant::now();
+    let out = Command::new(exe)
+        .env("RAYON_NUM_THREADS", "1")
+        .arg("locate")
+        .arg(path)
+        .args(["--json", "--stats"])
+        .output()
+        .map_err(|e| format!("cannot run locate: {e}"))?;
+    let seconds = t.elapsed().as_secs_f64();
+    let err = String::from_utf8_lossy(&out.stderr);
+    let stats = err
+        .lines()
+        .find_map(|l| l.strip_prefix("stats: "))
+        .ok_or_else(|| format!("locate printed no stats: {}", err.trim()))?;
+    let field = |key: &str| -> Option<u64> {
+        stats
+            .split(", ")
+            .find_map(|kv| kv.strip_prefix(key))
+            .and_then(|v| v.trim().parse().ok())
+    };
+    Ok((
+        field("bearings ").unwrap_or(0),
+        seconds,
+        field("peak_bytes ").unwrap_or(0),
+    ))
+}
+
+/// `locate` on large captures: a 1-hour drive at 20 bearings a second, and a capture of about
+/// 200 MB (that drive repeated). The captures are written once under `target/`.
+pub fn scale() -> Result<Vec<ScaleRow>, String> {
+    let dir = target_dir().join("scale");
+    std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let mut rows = Vec::new();
+    for (what, file, copies) in [
+        ("1-hour drive, 20 bearings/s", "hour-20hz.nmea", 1),
+        (
+            "the same drive 24 times (about 200 MB)",
+            "hour-20hz-x24.nmea",
+            24,
+        ),
+    ] {
+        let path = dir.join(file);
+        let bytes = scale_capture(&path, 3600, 20, copies)?;
+        let (bearings, seconds, peak_bytes) = time_locate(&path)?;
+        rows.push(ScaleRow {
+            what: what.to_string(),
+            bytes,
+            bearings,
+            seconds,
+            peak_bytes,
+        });
+    }
+    Ok(rows)
+}
+
+/// The scale table (Markdown).
+pub fn scale_table(rows: &[ScaleRow]) -> String {
+    let mut out = String::from(
+        "`foxhunt locate --json` on large captures (one thread, the whole command):\n\n\
+         | capture | size | bearings | time | peak memory |\n|---|---:|---:|---:|---:|\n",
+    );
+    for r in rows {
+        let _ = writeln!(
+            out,
+            "| {} | {:.1} MB | {} | {:.2} s | {:.1} MB |",
+            r.what,
+            r.bytes as f64 / 1e6,
+            r.bearings,
+            r.seconds,
+            r.peak_bytes as f64 / 1e6
+        );
+    }
+    out
 }

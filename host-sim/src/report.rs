@@ -1,38 +1,64 @@
-//! Bench tables for the terminal, Markdown and JSON.
+//! Every table the command prints: bench rows for the terminal, Markdown and JSON, and the
+//! speed tables of `foxhunt perf`.
 
-use crate::montecarlo::Row;
+use serde::Serialize;
 use std::fmt::Write;
 
-/// The seed paper's own figure for a row, printed beside ours (their routes are unpublished;
-/// SCENARIOS.md explains why only loop300 reaches their regime).
-pub fn paper_figure(scenario: &str, method: &str) -> Option<String> {
-    let text = match (scenario, method) {
-        ("aoa-afsa", "sir-seed") => "seed 002 PF: rel_x 0.266 %, rel_y 0.206 %, 0.183 s",
-        ("aoa-afsa", "afsa-pf") => "seed 002 AFSA-PF: rel_x 0.101 %, rel_y 0.091 %, 0.352 s",
-        ("aoa-firefly", "sir-seed") => "seed 001 PF: about 4x the improved FA-PF's error",
-        ("aoa-firefly", "fa-pf-imp") => "seed 001 improved FA-PF: largest error 0.23 %, < 0.3 s",
-        ("aoa-pf-vs-kf", "sir-seed") => "seed 004: PF (N = 500) beats the linearised KF",
-        ("aoa-pf-vs-kf", "ekf") => "seed 004: worse than the PF",
-        ("ungm", "pf") => "seed 001 PF: 3.0190",
-        ("ungm", "fa-pf-imp") => "seed 001 improved FA-PF: 1.4322",
-        _ => return rssi_figure(scenario, method),
-    };
-    Some(text.to_string())
+/// One row of the bench: a method on a scenario at one particle count.
+///
+/// Static-emitter rows give the rmse of the final fix over the runs; tracking rows give the
+/// seeds' "average RMSE" (seed 003 eq. 10), the mean Euclidean error over steps and runs, in
+/// the same field, and the posterior CRB averaged the same way as the bound.
+#[derive(Debug, Clone, Serialize)]
+pub struct Row {
+    /// Scenario name (with `/N=` when its table has several particle counts).
+    pub scenario: String,
+    /// Method name (`baseline=swarm` for the plain filter given a swarm's cost).
+    pub method: String,
+    /// Particles (null for batch fixes and the EKF).
+    pub particles: Option<usize>,
+    /// Monte Carlo runs.
+    pub runs: usize,
+    /// Static emitter: root mean square error of the final fix, metres. Tracking: the mean
+    /// position error over steps and runs. Null when no run gave an estimate.
+    pub rmse: Option<f64>,
+    /// Mean relative error along x, percent (static emitter only).
+    pub rel_x: Option<f64>,
+    /// Mean relative error along y, percent (static emitter only).
+    pub rel_y: Option<f64>,
+    /// The bound: CRLB rmse of the geometry, or the average PCRB for tracking. Null when it is
+    /// infinite (the geometry cannot locate the emitter).
+    pub crlb: Option<f64>,
+    /// rmse / bound; null when either is unknown.
+    pub ratio: Option<f64>,
+    /// Mean wall time per run, seconds.
+    pub time_s: f64,
+    /// Mean likelihood evaluations per run (0 for batch fixes).
+    pub evaluations: f64,
+    /// Runs in which the method returned no estimate (counted, excluded from the metrics).
+    pub failures: usize,
+    /// Why the row's figures are missing or partial, when they are.
+    pub note: Option<String>,
+    /// The seed paper's figure for this row, if it printed one.
+    pub paper: Option<String>,
 }
 
-/// Seed 003 table 1 (rssi-sim, 50 runs): RMSE in metres by N and method.
-fn rssi_figure(scenario: &str, method: &str) -> Option<String> {
-    let n: usize = scenario.strip_prefix("rssi-sim/N=")?.parse().ok()?;
-    let row = match n {
-        50 => [1.2539, 0.6094, 0.5374, 0.4502],
-        100 => [0.7443, 0.5006, 0.4515, 0.3599],
-        200 => [0.6356, 0.3836, 0.3503, 0.3119],
-        _ => return None,
-    };
-    let col = ["pf", "gpf", "pso-gpf", "gsa-gpf"]
-        .iter()
-        .position(|m| *m == method)?;
-    Some(format!("seed 003: {}", row[col]))
+impl Row {
+    /// The row's note, or the failures counted in words.
+    fn remark(&self) -> String {
+        match (&self.note, self.failures) {
+            (Some(n), _) => n.clone(),
+            (None, 0) => String::new(),
+            (None, f) => format!("{f} of {} runs gave no estimate", self.runs),
+        }
+    }
+}
+
+fn num(v: Option<f64>, width: usize, digits: usize) -> String {
+    match v {
+        Some(v) => format!("{v:>width$.digits$}"),
+        None => format!("{:>width$}", "-"),
+    }
 }
 
 /// A fixed-width table for the terminal.
@@ -40,30 +66,28 @@ pub fn table(rows: &[Row]) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "{:<16} {:<16} {:>5} {:>9} {:>7} {:>7} {:>8} {:>6} {:>9} {:>9}  paper",
+        "{:<16} {:<16} {:>6} {:>9} {:>7} {:>7} {:>8} {:>6} {:>9} {:>9}  paper / note",
         "scenario", "method", "N", "rmse", "rel_x%", "rel_y%", "bound", "ratio", "time_s", "evals"
     );
     for r in rows {
-        let fail = if r.failures > 0 {
-            format!(" [{} runs gave no estimate]", r.failures)
-        } else {
-            String::new()
-        };
+        let note = [r.paper.clone().unwrap_or_default(), r.remark()]
+            .into_iter()
+            .filter(|s| !s.is_empty())
+            .collect::<Vec<_>>()
+            .join("; ");
         let _ = writeln!(
             out,
-            "{:<16} {:<16} {:>5} {:>9.3} {:>7} {:>7} {:>8.3} {:>6.3} {:>9.2e} {:>9.2e}  {}{}",
+            "{:<16} {:<16} {:>6} {} {} {} {} {} {:>9.2e} {:>9.2e}  {note}",
             r.scenario,
             r.method,
             count(r.particles),
-            r.rmse,
-            pct(r.rel_x),
-            pct(r.rel_y),
-            r.crlb,
-            r.ratio,
+            num(r.rmse, 9, 3),
+            num(r.rel_x, 7, 3),
+            num(r.rel_y, 7, 3),
+            num(r.crlb, 8, 3),
+            num(r.ratio, 6, 3),
             r.time_s,
             r.evaluations,
-            r.paper.as_deref().unwrap_or(""),
-            fail
         );
     }
     out
@@ -72,22 +96,27 @@ pub fn table(rows: &[Row]) -> String {
 /// The same rows as a Markdown table (for the README).
 pub fn markdown(rows: &[Row]) -> String {
     let mut out = String::from(
-        "| scenario | method | N | rmse | rel_x % | rel_y % | bound | ratio | time/run (s) | paper |\n|---|---|---|---|---|---|---|---|---|---|\n",
+        "| scenario | method | N | rmse | rel_x % | rel_y % | bound | ratio | time/run (s) | paper / note |\n|---|---|---|---|---|---|---|---|---|---|\n",
     );
+    let cell = |v: Option<f64>| v.map(|v| format!("{v:.3}")).unwrap_or_else(|| "-".into());
     for r in rows {
+        let note = [r.paper.clone().unwrap_or_default(), r.remark()]
+            .into_iter()
+            .filter(|s| !s.is_empty())
+            .collect::<Vec<_>>()
+            .join("; ");
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {:.3} | {} | {} | {:.3} | {:.3} | {:.2e} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {:.2e} | {note} |",
             r.scenario,
             r.method,
             count(r.particles),
-            r.rmse,
-            pct(r.rel_x),
-            pct(r.rel_y),
-            r.crlb,
-            r.ratio,
+            cell(r.rmse),
+            cell(r.rel_x),
+            cell(r.rel_y),
+            cell(r.crlb),
+            cell(r.ratio),
             r.time_s,
-            r.paper.as_deref().unwrap_or("")
         );
     }
     out
@@ -97,6 +126,13 @@ fn count(n: Option<usize>) -> String {
     n.map(|n| n.to_string()).unwrap_or_else(|| "-".into())
 }
 
-fn pct(v: Option<f64>) -> String {
-    v.map(|v| format!("{v:.3}")).unwrap_or_else(|| "-".into())
+/// Seconds in the unit that keeps 3 significant digits readable.
+pub fn human_seconds(s: f64) -> String {
+    if s < 1e-3 {
+        format!("{:.1} us", s * 1e6)
+    } else if s < 1.0 {
+        format!("{:.2} ms", s * 1e3)
+    } else {
+        format!("{s:.2} s")
+    }
 }

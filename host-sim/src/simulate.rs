@@ -6,7 +6,7 @@
 //! replay must interpolate the vehicle's position at the bearing's time to place it right. A
 //! last fix one step beyond the route closes the drive.
 
-use crate::scenario::Scenario;
+use crate::scenario::{Drive, Scenario};
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::{
     Date, LatLon, Line, Pfoxb, Reference, UtcTime, gga_body, pfoxb_body, rmc_body, write_sentence,
@@ -24,7 +24,7 @@ pub const DEFAULT_ORIGIN: LatLon = LatLon {
 /// How a capture is written.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CaptureOptions {
-    /// Geodetic position of local (0, 0).
+    /// Where the route's first point sits (the capture's local origin).
     pub origin: LatLon,
     /// UTC time of the first fix.
     pub start: UtcTime,
@@ -32,6 +32,8 @@ pub struct CaptureOptions {
     pub date: Date,
     /// Which Monte Carlo run's noise to use.
     pub run: usize,
+    /// Milliseconds between route points (GPS fixes); each bearing comes half of it later.
+    pub interval_ms: u32,
     /// Carrier frequency in the bearing sentences, MHz.
     pub freq_mhz: f64,
     /// Share of wild bearings (uniform over the circle); `None` keeps the scenario's.
@@ -57,6 +59,7 @@ impl Default for CaptureOptions {
                 day: 1,
             },
             run: 0,
+            interval_ms: 1000,
             freq_mhz: 433.92,
             wild_fraction: None,
             bias_deg: 0.0,
@@ -73,9 +76,76 @@ fn push(out: &mut Vec<u8>, body: &str) {
     out.extend_from_slice(s.as_bytes());
 }
 
+impl CaptureOptions {
+    /// Refuse values no capture can use, naming the option.
+    pub fn check(&self) -> Result<(), String> {
+        let share = |name: &str, v: f32| {
+            if (0.0..=1.0).contains(&v) {
+                Ok(())
+            } else {
+                Err(format!("--{name} is a share between 0 and 1, not {v}"))
+            }
+        };
+        share("corrupt", self.corrupt_fraction)?;
+        share("drop", self.drop_fraction)?;
+        if let Some(w) = self.wild_fraction {
+            share("wild", w)?;
+        }
+        if !(self.bias_deg.is_finite() && self.bias_deg.abs() <= 180.0) {
+            return Err(format!(
+                "--bias-deg must lie between -180 and 180 degrees, not {}",
+                self.bias_deg
+            ));
+        }
+        if !(2..=3_600_000).contains(&self.interval_ms) {
+            return Err(format!(
+                "the interval between fixes must be 2 ms to 1 h, not {} ms",
+                self.interval_ms
+            ));
+        }
+        let o = self.origin;
+        if !(o.lat.abs() <= 90.0 && o.lon.abs() <= 180.0) {
+            return Err(format!(
+                "--origin must be a latitude in [-90, 90] and a longitude in [-180, 180], not {},{}",
+                o.lat, o.lon
+            ));
+        }
+        Ok(())
+    }
+
+    /// UTC time and date `ms` after the first fix: a drive past midnight rolls the date.
+    fn at(&self, ms: u64) -> (UtcTime, Date) {
+        const DAY: u64 = 86_400_000;
+        let total = u64::from(self.start.ms_of_day) + ms;
+        let date = time::Date::from_calendar_date(
+            i32::from(self.date.year),
+            time::Month::try_from(self.date.month).unwrap_or(time::Month::January),
+            self.date.day,
+        )
+        .ok()
+        .and_then(|d| d.checked_add(time::Duration::days((total / DAY) as i64)))
+        .map(|d| Date {
+            year: d.year().clamp(0, 9999) as u16,
+            month: d.month() as u8,
+            day: d.day(),
+        })
+        .unwrap_or(self.date);
+        (
+            UtcTime {
+                ms_of_day: (total % DAY) as u32,
+            },
+            date,
+        )
+    }
+}
+
 /// The capture of one run of a bearing scenario. Local (0, 0) of the capture is the route's
 /// first point, at `o.origin`: the emitter lies at `emitter - route[0]` in a replay's frame.
-pub fn drive_capture(s: &Scenario, o: &CaptureOptions) -> Result<Vec<u8>, String> {
+pub fn drive_capture(scenario: &Scenario, o: &CaptureOptions) -> Result<Vec<u8>, String> {
+    o.check()?;
+    let s: &Drive = scenario
+        .drive()
+        .ok_or_else(|| format!("`{}` is not a drive (a bearing scenario)", scenario.name))?;
     let frame = LocalFrame::new(o.origin, 0.0).map_err(|_| "origin out of range".to_string())?;
     let n = s.route.len();
     if n < 2 {
@@ -86,7 +156,7 @@ pub fn drive_capture(s: &Scenario, o: &CaptureOptions) -> Result<Vec<u8>, String
     let (a, b) = (s.route[n - 2], s.route[n - 1]);
     points.push([2.0 * b[0] - a[0], 2.0 * b[1] - a[1]]);
     let start = s.route[0];
-    let mut rng = s.rng(o.run);
+    let mut rng = scenario.rng(o.run);
     let sigma = s.sigma();
     let wild = o.wild_fraction.unwrap_or(s.wild_fraction);
     let bias = o.bias_deg.to_radians();
@@ -94,9 +164,7 @@ pub fn drive_capture(s: &Scenario, o: &CaptureOptions) -> Result<Vec<u8>, String
     let mut line = Line::new();
     let fmt_err = |_| "sentence longer than 96 characters".to_string();
     for (k, p) in points.iter().enumerate() {
-        let time = UtcTime {
-            ms_of_day: o.start.ms_of_day + 1000 * k as u32,
-        };
+        let (time, date) = o.at(u64::from(o.interval_ms) * k as u64);
         // The route's first point is the origin: a replay's local frame (origin: the first
         // fix) then equals the scenario's, shifted by that point.
         let geo = frame
@@ -108,13 +176,14 @@ pub fn drive_capture(s: &Scenario, o: &CaptureOptions) -> Result<Vec<u8>, String
             [2.0 * p[0] - prev[0], 2.0 * p[1] - prev[1]]
         });
         let (dx, dy) = (next[0] - p[0], next[1] - p[1]);
-        let speed_kn = f64::from(dx.hypot(dy)) * 3600.0 / 1852.0;
+        let speed_kn =
+            f64::from(dx.hypot(dy)) * 1000.0 / f64::from(o.interval_ms) * 3600.0 / 1852.0;
         let course = f64::from(dx.atan2(dy).to_degrees().rem_euclid(360.0));
         line.clear();
         gga_body(&mut line, time, geo, 9, 0.9).map_err(fmt_err)?;
         push(&mut out, &line);
         line.clear();
-        rmc_body(&mut line, time, o.date, geo, speed_kn, course).map_err(fmt_err)?;
+        rmc_body(&mut line, time, date, geo, speed_kn, course).map_err(fmt_err)?;
         push(&mut out, &line);
         if k + 1 == points.len() {
             break;
@@ -128,9 +197,9 @@ pub fn drive_capture(s: &Scenario, o: &CaptureOptions) -> Result<Vec<u8>, String
         };
         let azimuth = f64::from(theta_to_azimuth(theta).to_degrees()) % 360.0;
         let bearing = Pfoxb {
-            time: UtcTime {
-                ms_of_day: time.ms_of_day + 500,
-            },
+            time: o
+                .at(u64::from(o.interval_ms) * k as u64 + u64::from(o.interval_ms / 2))
+                .0,
             azimuth_deg: azimuth,
             reference: Reference::True,
             quality: random::uniform_in(&mut rng, 60.0, 100.0).round(),
@@ -172,8 +241,9 @@ mod tests {
 
     #[test]
     fn capture_replays_to_the_scenario_bearings() {
-        let s = Scenario::named("aoa-drive").expect("scenario");
-        let bytes = drive_capture(&s, &CaptureOptions::default()).expect("capture");
+        let scenario = Scenario::named("aoa-drive").expect("scenario");
+        let s = scenario.drive().expect("a drive");
+        let bytes = drive_capture(&scenario, &CaptureOptions::default()).expect("capture");
         let mut rx = Receiver::<0>::new(BridgeConfig::default(), []);
         let mut bearings = Vec::new();
         let mut sink = |e| {
@@ -197,5 +267,37 @@ mod tests {
             let err = (b.vehicle[0] - mid[0]).hypot(b.vehicle[1] - mid[1]);
             assert!(err < 0.01, "bearing {k}: {err} m off");
         }
+    }
+}
+
+#[cfg(test)]
+mod time_tests {
+    use super::*;
+
+    #[test]
+    fn a_drive_past_midnight_rolls_the_date() {
+        let o = CaptureOptions {
+            start: UtcTime {
+                ms_of_day: 86_399_000,
+            },
+            date: Date {
+                year: 2026,
+                month: 12,
+                day: 31,
+            },
+            ..CaptureOptions::default()
+        };
+        let (t, d) = o.at(1500);
+        assert_eq!(t.ms_of_day, 500);
+        assert_eq!(
+            d,
+            Date {
+                year: 2027,
+                month: 1,
+                day: 1
+            }
+        );
+        let (t, d) = o.at(3 * 86_400_000);
+        assert_eq!((t.ms_of_day, d.day, d.month), (86_399_000, 3, 1));
     }
 }

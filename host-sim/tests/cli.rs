@@ -1,16 +1,22 @@
-//! The `foxhunt` command as a user runs it.
+//! The `foxhunt` command as a user runs it, and as an adversary would: it never panics, never
+//! loses or destroys data, streams, refuses nonsense by name, and says what is wrong.
 
-use std::process::Command;
+use std::io::{BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// A fresh scratch folder for one test.
-fn scratch(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("foxhunt-{name}-{}", std::process::id()));
+fn scratch(name: &str) -> PathBuf {
+    static N: AtomicUsize = AtomicUsize::new(0);
+    let k = N.fetch_add(1, Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("foxhunt-{name}-{}-{k}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("scratch dir");
     dir
 }
 
 /// Write `text` to `name` in `dir`; its path.
-fn scratch_file(dir: &std::path::Path, name: &str, text: impl AsRef<[u8]>) -> String {
+fn scratch_file(dir: &Path, name: &str, text: impl AsRef<[u8]>) -> String {
     let f = dir.join(name);
     std::fs::write(&f, text).expect("write");
     f.to_str().expect("path").to_string()
@@ -25,16 +31,19 @@ fn capture(name: &str) -> String {
 }
 
 /// The command's standard output as one JSON value per line.
-fn json_lines(out: &std::process::Output) -> Vec<serde_json::Value> {
+fn json_lines(out: &Output) -> Vec<serde_json::Value> {
     String::from_utf8_lossy(&out.stdout)
         .lines()
         .map(|l| serde_json::from_str(l).expect("JSON line"))
         .collect()
 }
 
-/// Run the command in a scratch folder: `locate` writes its maps to the working directory,
-/// which must not be the source tree.
-fn foxhunt(args: &[&str]) -> std::process::Output {
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Run the command in a scratch folder (it must not write into the source tree).
+fn foxhunt(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_foxhunt"))
         .current_dir(scratch("cwd"))
         .args(args)
@@ -42,14 +51,34 @@ fn foxhunt(args: &[&str]) -> std::process::Output {
         .expect("run foxhunt")
 }
 
+/// The command failed with one line on stderr that contains every one of `words`, exit 1,
+/// and no panic.
+fn refused(out: &Output, words: &[&str]) {
+    let err = stderr(out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "not one line: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    for w in words {
+        assert!(err.contains(w), "`{w}` not in: {err}");
+    }
+}
+
+fn sentence(body: &str) -> String {
+    let mut s = String::new();
+    foxhunt_bridge::nmea::write_sentence(&mut s, body).expect("string");
+    s
+}
+
+fn gga(t: &str, lon: &str) -> String {
+    sentence(&format!(
+        "GPGGA,{t},4700.0000,N,{lon},E,1,08,1.0,0.0,M,0.0,M,,"
+    ))
+}
+
 #[test]
 fn bench_json_has_the_stable_fields() {
     let out = foxhunt(&["bench", "--runs", "4", "--json"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", stderr(&out));
     let rows: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     let rows = rows.as_array().expect("array");
     assert!(rows.len() >= 9);
@@ -71,6 +100,78 @@ fn bench_json_has_the_stable_fields() {
     assert_eq!(rows[0]["scenario"], "aoa-afsa");
     assert_eq!(rows[0]["runs"], 4);
     assert!(rows[0]["paper"].is_string());
+    for r in rows {
+        assert!(r["rmse"].as_f64().is_some_and(f64::is_finite), "{r}");
+        assert!(r["ratio"].as_f64().is_some_and(|q| q > 0.0), "{r}");
+    }
+}
+
+#[test]
+fn bench_gives_finite_rows_at_a_count_the_old_tables_lacked() {
+    // 80 particles was advertised but missing from the tracking dispatch: null rows.
+    let out = foxhunt(&[
+        "bench",
+        "--scenario",
+        "ungm",
+        "--particles",
+        "80",
+        "--runs",
+        "2",
+        "--json",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let rows: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    for r in rows.as_array().expect("array") {
+        assert!(r["rmse"].as_f64().is_some_and(f64::is_finite), "{r}");
+        assert!(r["ratio"].as_f64().is_some_and(|q| q > 0.0), "{r}");
+    }
+    refused(
+        &foxhunt(&["bench", "--particles", "81"]),
+        &["81", "compiled"],
+    );
+    refused(&foxhunt(&["bench", "--runs", "0"]), &["--runs", "0"]);
+}
+
+#[test]
+fn bench_rows_say_when_the_geometry_is_unbounded() {
+    // The emitter sits on the line of a straight drive: every bearing is the same line.
+    let dir = scratch("unbounded");
+    let f = scratch_file(
+        &dir,
+        "line.toml",
+        "emitter = [900.0, 0.0]\nroute = \"line600\"\nruns = 2\n",
+    );
+    let out = foxhunt(&["bench", "--scenario-file", &f, "--json", "--quiet"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let rows: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    for r in rows.as_array().expect("array") {
+        assert!(r["crlb"].is_null() && r["ratio"].is_null(), "{r}");
+        let note = r["note"].as_str().unwrap_or_default();
+        assert!(
+            note.contains("unbounded") || note.contains("failed"),
+            "no note: {r}"
+        );
+    }
+}
+
+#[test]
+fn bench_shows_progress_when_stderr_is_not_a_terminal() {
+    let out = foxhunt(&[
+        "bench",
+        "--scenario",
+        "aoa-pf-vs-kf",
+        "--runs",
+        "3",
+        "--progress-secs",
+        "0",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(
+        err.lines()
+            .any(|l| l.starts_with("bench: ") && l.contains("runs done")),
+        "{err}"
+    );
 }
 
 #[test]
@@ -82,11 +183,7 @@ fn bench_runs_a_scenario_file() {
         "name = \"mine\"\nemitter = [800.0, 600.0]\npoints = [[0.0, 0.0], [100.0, 0.0], [200.0, 50.0], [250.0, 150.0]]\nruns = 3\n",
     );
     let out = foxhunt(&["bench", "--scenario-file", &f, "--markdown"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", stderr(&out));
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("| mine | ml |"), "{text}");
 
@@ -95,37 +192,38 @@ fn bench_runs_a_scenario_file() {
         "drive.toml",
         "emitter = [1.0, 2.0]\nroute = \"loop300\"\nspeed = 3\n",
     );
-    let out = foxhunt(&["bench", "--scenario-file", &f]);
-    assert_eq!(out.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("speed"));
+    refused(
+        &foxhunt(&["bench", "--scenario-file", &f]),
+        &["speed", "line 3"],
+    );
+    let f = scratch_file(
+        &dir,
+        "three.toml",
+        "emitter = [1.0, 2.0, 3.0]\nroute = \"loop300\"\n",
+    );
+    refused(
+        &foxhunt(&["bench", "--scenario-file", &f]),
+        &["emitter", "two numbers"],
+    );
+    let f = scratch_file(&dir, "broken.toml", "emitter = [1.0, 2.0\nroute = 3\n");
+    refused(
+        &foxhunt(&["bench", "--scenario-file", &f]),
+        &["broken.toml"],
+    );
 }
 
 #[test]
 fn unknown_scenario_is_a_one_line_error() {
-    let out = foxhunt(&["bench", "--scenario", "nowhere"]);
-    assert_eq!(out.status.code(), Some(1));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        err.contains("unknown scenario `nowhere`") && err.contains("aoa-afsa"),
-        "{err}"
+    refused(
+        &foxhunt(&["bench", "--scenario", "nowhere"]),
+        &["unknown scenario `nowhere`", "aoa-afsa"],
     );
-    assert_eq!(err.trim().lines().count(), 1);
-}
-
-fn sentence(body: &str) -> String {
-    let mut s = String::new();
-    foxhunt_bridge::nmea::write_sentence(&mut s, body).expect("string");
-    s
 }
 
 #[test]
 fn locate_the_bundled_drive_as_json() {
     let out = foxhunt(&["locate", "--json"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", stderr(&out));
     let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     for key in [
         "lat", "lon", "east_m", "north_m", "cep50_m", "crlb_m", "method", "used", "rejected",
@@ -141,78 +239,411 @@ fn locate_the_bundled_drive_as_json() {
         r["north_m"].as_f64().expect("n"),
     );
     assert!((e - 1200.0).hypot(n - 800.0) < 250.0, "{r}");
-    assert_eq!(r["method"], "ml");
+    assert_eq!(r["method"], "ml-huber");
+    let text = foxhunt(&["locate"]);
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(text.contains("semi-axes"), "{text}");
 }
 
 #[test]
-fn bad_captures_give_one_line_errors_and_exit_1() {
+fn bad_captures_give_one_line_errors_that_say_what_is_wrong() {
     let dir = scratch("bad");
-    let fix = |t: &str, lon: &str| {
-        sentence(&format!(
-            "GPGGA,{t},4700.0000,N,{lon},E,1,08,1.0,0.0,M,0.0,M,,"
-        ))
-    };
+    let fix = |t: &str| gga(t, "00800.0000");
     let bearing = |t: &str| sentence(&format!("PFOXB,{t},45.0,T,80,433.92"));
     let garbage: Vec<u8> = (0..4000u32)
         .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8 | 0x80)
         .collect();
-    let cases: Vec<(&str, Vec<u8>, &str)> = vec![
-        ("empty", Vec::new(), "empty"),
-        ("nofix", bearing("120000.00").into_bytes(), "no GPS fix"),
-        (
-            "nobearing",
-            fix("120000.000", "00800.0000").into_bytes(),
-            "no bearing",
-        ),
+    // 59 bearings out of range (azimuth 400), and relative ones with no course to turn them.
+    let out_of_range: String = (0..59)
+        .map(|k| {
+            let t = format!("1200{:02}.000", k % 60);
+            fix(&t) + &sentence(&format!("PFOXB,1200{:02}.50,400.0,T,80,433.92", k % 60))
+        })
+        .collect();
+    let relative: String = (0..5)
+        .map(|k| {
+            let t = format!("1200{k:02}.000");
+            fix(&t) + &sentence(&format!("PFOXB,1200{k:02}.50,45.0,R,80,433.92"))
+        })
+        .collect();
+    // GPS sentences that exist but are malformed (an impossible latitude).
+    let bad_gps: String = (0..4)
+        .map(|k| {
+            sentence(&format!(
+                "GPGGA,1200{k:02}.000,9900.0000,N,00800.0000,E,1,08,1.0,0.0,M,0.0,M,,"
+            )) + &bearing(&format!("1200{k:02}.50"))
+        })
+        .collect();
+    let cases: Vec<(&str, Vec<u8>, &[&str])> = vec![
+        ("nofix", bearing("120000.00").into_bytes(), &["no GPS fix"]),
+        ("nobearing", fix("120000.000").into_bytes(), &["no bearing"]),
         (
             "onebearing",
-            [fix("120000.000", "00800.0000"), bearing("120000.00")]
+            [fix("120000.000"), bearing("120000.00")]
                 .concat()
                 .into_bytes(),
-            "only one usable bearing",
+            &["only one usable bearing"],
         ),
-        ("garbage", garbage, "no GPS fix"),
+        ("garbage", garbage, &["no GPS fix"]),
+        (
+            "range",
+            out_of_range.into_bytes(),
+            &[
+                "59 bearing records",
+                "59 with a malformed or out-of-range field",
+            ],
+        ),
+        (
+            "relative",
+            relative.into_bytes(),
+            &["5 relative with no course"],
+        ),
+        (
+            "badgps",
+            bad_gps.into_bytes(),
+            &["no GPS fix", "4 position sentences", "4 with a malformed"],
+        ),
     ];
     for (name, bytes, expect) in cases {
         let path = scratch_file(&dir, name, bytes);
         let out = foxhunt(&["locate", &path]);
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(1), "{name}: {err}");
-        assert!(
-            err.contains(expect) && err.lines().count() == 1,
-            "{name}: {err}"
-        );
+        refused(&out, expect);
         assert!(out.stdout.is_empty(), "{name}: printed a fix");
     }
-    let out = foxhunt(&["locate", dir.join("missing").to_str().expect("path")]);
-    assert_eq!(out.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read"));
-    let parallel = [
-        fix("120000.000", "00800.0000"),
+    refused(
+        &foxhunt(&["locate", dir.join("missing").to_str().expect("path")]),
+        &["cannot read"],
+    );
+    let empty = scratch_file(&dir, "empty", "");
+    refused(&foxhunt(&["locate", &empty]), &["no GPS fix"]);
+    let parked = [
+        fix("120000.000"),
         bearing("120000.00"),
-        fix("120001.000", "00800.0000"),
+        fix("120001.000"),
         bearing("120001.00"),
     ]
     .concat();
-    let path = scratch_file(&dir, "stationary", parallel);
+    let path = scratch_file(&dir, "stationary", parked);
     let out = foxhunt(&["locate", &path]);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{err}");
+    refused(&out, &[]);
+    let err = stderr(&out);
     assert!(
         err.contains("never moved") || err.contains("parallel"),
         "{err}"
     );
-    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn mirrored_bearings_are_not_called_a_shallow_crossing() {
+    // The bundled drive with every bearing turned by 180 degrees (a reversed DF convention).
+    let bytes = std::fs::read(capture("aoa-drive.nmea")).expect("capture");
+    let text = String::from_utf8(bytes).expect("ASCII");
+    let flipped: String = text
+        .lines()
+        .map(|l| {
+            if let Some(body) = l.strip_prefix("$PFOXB,").and_then(|b| b.split('*').next()) {
+                let mut f: Vec<String> = body.split(',').map(str::to_string).collect();
+                let a: f64 = f[1].parse().expect("azimuth");
+                f[1] = format!("{:.2}", (a + 180.0) % 360.0);
+                sentence(&format!("PFOXB,{}", f.join(",")))
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    let dir = scratch("mirror");
+    let path = scratch_file(&dir, "mirrored.nmea", flipped);
+    let out = foxhunt(&["locate", &path]);
+    refused(&out, &[]);
+    let err = stderr(&out);
+    assert!(!err.contains("shallow"), "{err}");
+    assert!(err.contains("behind") || err.contains("reversed"), "{err}");
+}
+
+#[test]
+fn nonsense_options_are_refused_by_name() {
+    refused(
+        &foxhunt(&["locate", "--sigma-deg", "100000"]),
+        &["--sigma-deg", "100000"],
+    );
+    refused(
+        &foxhunt(&["locate", "--sigma-deg", "NaN"]),
+        &["--sigma-deg", "NaN"],
+    );
+    refused(
+        &foxhunt(&["locate", "--particles", "123", "--method", "sir"]),
+        &["--particles", "123"],
+    );
+    let dir = scratch("nonsense");
+    let out = dir.join("d.nmea");
+    let o = out.to_str().expect("path");
+    refused(
+        &foxhunt(&["simulate", "--out", o, "--bias-deg", "NaN"]),
+        &["--bias-deg", "NaN"],
+    );
+    assert!(!out.exists(), "a capture was written");
+    refused(
+        &foxhunt(&["simulate", "--out", o, "--wild", "1.5"]),
+        &["--wild", "1.5"],
+    );
+    for flag in ["--drop", "--corrupt", "--wild", "--bias-deg"] {
+        refused(
+            &foxhunt(&[
+                "simulate",
+                "--scenario",
+                "rssi-sim",
+                "--out",
+                o,
+                flag,
+                "0.1",
+            ]),
+            &[flag, "rssi-sim"],
+        );
+    }
+    refused(
+        &foxhunt(&["simulate", "--out", o, "--origin", "95,8"]),
+        &["--origin"],
+    );
+    refused(
+        &foxhunt(&["locate", "--quiet-exit", "5"]),
+        &["--quiet-exit", "live"],
+    );
+    refused(
+        &foxhunt(&["locate", "-", "--quiet-exit", "-1"]),
+        &["--quiet-exit", "-1"],
+    );
+    // `inf` is "until the line closes": an empty standard input closes at once.
+    let inf = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .args(["locate", "-", "--quiet-exit", "inf"])
+        .stdin(Stdio::null())
+        .output()
+        .expect("run foxhunt");
+    assert!(!stderr(&inf).contains("panicked"), "{}", stderr(&inf));
+}
+
+#[test]
+fn anchors_files_with_nan_or_inf_are_refused() {
+    let dir = scratch("anchors");
+    let base = "[[anchor]]\naddr = 0x0101\nx = 0.0\ny = 5.0\n[[anchor]]\naddr = 0x0102\nx = 5.0\ny = 10.0\n[[anchor]]\naddr = 0x0103\nx = 10.0\ny = 0.0\n";
+    for (name, extra, key) in [
+        ("nan-x", base.replace("x = 5.0", "x = nan"), "0x0102"),
+        ("inf-sigma", format!("sigma_db = inf\n{base}"), "sigma_db"),
+        ("nan-room", format!("room = [nan, 10.0]\n{base}"), "room"),
+        (
+            "nan-q",
+            format!("process_q = [0.5, nan, 0.5, 1.0]\n{base}"),
+            "process_q",
+        ),
+    ] {
+        let f = scratch_file(&dir, &format!("{name}.toml"), extra);
+        let out = foxhunt(&["track", &capture("rssi-sim.znp"), "--anchors", &f]);
+        refused(&out, &[key]);
+        assert!(out.stdout.is_empty(), "{name}: printed a track");
+    }
+}
+
+#[test]
+fn outputs_never_overwrite_inputs_or_unnamed_files() {
+    let dir = scratch("inputs");
+    let original = std::fs::read(capture("aoa-drive.nmea")).expect("capture");
+    let x = scratch_file(&dir, "x.nmea", &original);
+    refused(
+        &foxhunt(&["locate", &x, "--geojson", &x]),
+        &["refusing", "input"],
+    );
+    // The same file under another name (a hard link) is still the input.
+    let link = dir.join("alias.svg");
+    std::fs::hard_link(&x, &link).expect("link");
+    refused(
+        &foxhunt(&["locate", &x, "--svg", link.to_str().expect("path")]),
+        &["refusing"],
+    );
+    assert_eq!(
+        std::fs::read(&x).expect("input"),
+        original,
+        "the input changed"
+    );
+
+    // An RSSI capture's anchors file is written beside it only if it is new, named, or forced.
+    let out = dir.join("lab.cap");
+    let anchors = dir.join("lab.anchors.toml");
+    std::fs::write(&anchors, "mine").expect("write");
+    let o = out.to_str().expect("path");
+    refused(
+        &foxhunt(&["simulate", "--scenario", "rssi-sim", "--out", o]),
+        &["refusing to overwrite", "lab.anchors.toml", "--force"],
+    );
+    assert_eq!(std::fs::read_to_string(&anchors).expect("anchors"), "mine");
+    let named = dir.join("named.toml");
+    let ok = foxhunt(&[
+        "simulate",
+        "--scenario",
+        "rssi-sim",
+        "--out",
+        o,
+        "--anchors-out",
+        named.to_str().expect("path"),
+    ]);
+    assert!(ok.status.success(), "{}", stderr(&ok));
+    assert!(named.exists());
+    let forced = foxhunt(&["simulate", "--scenario", "rssi-sim", "--out", o, "--force"]);
+    assert!(forced.status.success(), "{}", stderr(&forced));
+    assert_ne!(std::fs::read_to_string(&anchors).expect("anchors"), "mine");
+}
+
+#[test]
+fn a_closed_pipe_ends_quietly_and_a_full_disk_is_an_error() {
+    // `foxhunt track ... | head -1`: the reader goes away after one line.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .args([
+            "track",
+            &capture("rssi-sim.znp"),
+            "--anchors",
+            &capture("rssi-sim.anchors.toml"),
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run foxhunt");
+    let mut first = String::new();
+    BufReader::new(child.stdout.take().expect("stdout"))
+        .read_line(&mut first)
+        .expect("a line");
+    assert!(first.starts_with("step,"), "{first}");
+    let out = child.wait_with_output().expect("foxhunt ends");
+    assert!(out.status.success(), "{:?}: {}", out.status, stderr(&out));
+    assert!(out.stderr.is_empty(), "{}", stderr(&out));
+
+    // `> /dev/full`.
+    if Path::new("/dev/full").exists() {
+        let full = std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .expect("/dev/full");
+        let out = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+            .args(["frames", &capture("aoa-drive.nmea")])
+            .stdout(full)
+            .output()
+            .expect("run foxhunt");
+        refused(&out, &["cannot write to standard output"]);
+    }
+}
+
+#[test]
+fn standard_input_streams_fixes_as_bytes_arrive() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .args(["locate", "-", "--json"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run foxhunt");
+    let bytes = std::fs::read(capture("aoa-drive.nmea")).expect("capture");
+    let mut stdin = child.stdin.take().expect("stdin");
+    // Half the drive, then wait for an update before sending the rest: the fix must come
+    // while standard input is still open.
+    stdin.write_all(&bytes[..bytes.len() / 2]).expect("write");
+    stdin.flush().expect("flush");
+    let (tx, rx) = std::sync::mpsc::channel();
+    let stdout = child.stdout.take().expect("stdout");
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines() {
+            if tx.send(line.expect("line")).is_err() {
+                return;
+            }
+        }
+    });
+    // A guard against a hang, not a timing assertion.
+    let first = rx
+        .recv_timeout(std::time::Duration::from_secs(60))
+        .expect("an update before end of input");
+    let first: serde_json::Value = serde_json::from_str(&first).expect("JSON");
+    let used_early = first["used"].as_u64().expect("used");
+    assert!((1..60).contains(&used_early), "{first}");
+    stdin.write_all(&bytes[bytes.len() / 2..]).expect("write");
+    drop(stdin);
+    let status = child.wait().expect("foxhunt ends");
+    assert!(status.success());
+    let lines: Vec<serde_json::Value> = rx
+        .iter()
+        .map(|l| serde_json::from_str(&l).expect("JSON"))
+        .collect();
+    let last = lines.last().expect("a final update");
+    assert_eq!(last["used"], 60, "{last}");
+    assert!(last["lat"].is_number(), "{last}");
+}
+
+#[test]
+fn locate_memory_is_bounded_by_the_bearings_not_the_file() {
+    // A capture of about 20 MB: the 60-bearing drive's GGA/RMC padded with 40 000 GSV-like
+    // sentences per bearing (not kept), so the bytes grow and the bearings do not.
+    let dir = scratch("memory");
+    let drive = std::fs::read_to_string(capture("aoa-drive.nmea")).expect("capture");
+    let filler = sentence("GPGSV,3,1,12,01,40,083,46,02,17,308,41,12,07,344,39,14,22,228,45");
+    let mut big = String::with_capacity(21_000_000);
+    for line in drive.lines() {
+        big.push_str(line);
+        big.push('\n');
+        if line.starts_with("$PFOXB") {
+            for _ in 0..4400 {
+                big.push_str(&filler);
+            }
+        }
+    }
+    let path = scratch_file(&dir, "big.nmea", &big);
+    let out = foxhunt(&["locate", &path, "--json", "--stats"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let err = stderr(&out);
+    let peak: u64 = err
+        .lines()
+        .find_map(|l| l.split("peak_bytes ").nth(1))
+        .and_then(|v| v.trim().parse().ok())
+        .expect("stats line");
+    // The process itself (binary, libraries, thread stacks touched) takes some 10-20 MB; a
+    // capture read whole would add its 20 MB and the decoded copies more.
+    assert!(
+        peak < 40_000_000 || peak == 0,
+        "peak {peak} bytes for a {} byte capture",
+        big.len()
+    );
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(r["used"], 60);
+}
+
+#[test]
+fn simulate_rolls_the_date_past_midnight() {
+    let dir = scratch("midnight");
+    let out = dir.join("late.nmea");
+    let o = out.to_str().expect("path");
+    let r = foxhunt(&[
+        "simulate",
+        "--out",
+        o,
+        "--start",
+        "23:59:30",
+        "--date",
+        "2026-12-31",
+    ]);
+    assert!(r.status.success(), "{}", stderr(&r));
+    let text = std::fs::read_to_string(&out).expect("capture");
+    assert!(
+        text.contains("$GPRMC,235959.000"),
+        "no last second of the year"
+    );
+    assert!(text.contains("$GPRMC,000000.000"), "midnight");
+    assert!(
+        text.contains(",010127,"),
+        "the date did not roll to 1 January 2027"
+    );
+    assert!(!text.contains("$GPGGA,24"), "an hour 24");
+    let frames = foxhunt(&["locate", o, "--json"]);
+    assert!(frames.status.success(), "{}", stderr(&frames));
 }
 
 #[test]
 fn frames_prints_one_object_per_frame_then_the_counters() {
     let out = foxhunt(&["frames", &capture("aoa-drive.nmea")]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", stderr(&out));
     let lines = json_lines(&out);
     assert_eq!(lines.len(), 182 + 1);
     assert_eq!(lines[0]["kind"], "gga");
@@ -234,12 +665,9 @@ fn track_names_unknown_anchors() {
         "other.toml",
         "[[anchor]]\naddr = 0x0001\nx = 0.0\ny = 0.0\n[[anchor]]\naddr = 0x0002\nx = 5.0\ny = 0.0\n[[anchor]]\naddr = 0x0003\nx = 0.0\ny = 5.0\n",
     );
-    let out = foxhunt(&["track", &capture("rssi-sim.znp"), "--anchors", &anchors]);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{err}");
-    assert!(
-        err.contains("no frame from a known anchor") && err.contains("0x0101"),
-        "{err}"
+    refused(
+        &foxhunt(&["track", &capture("rssi-sim.znp"), "--anchors", &anchors]),
+        &["no frame from a known anchor", "0x0101"],
     );
     let out = foxhunt(&[
         "track",
@@ -248,62 +676,95 @@ fn track_names_unknown_anchors() {
         &capture("rssi-sim.anchors.toml"),
         "--json",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", stderr(&out));
     let points: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!(points.as_array().map(Vec::len), Some(60));
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn locate_reads_a_serial_line_and_updates_the_fix() {
     use serialport::SerialPort;
-    use std::io::Write;
     // A pseudo-terminal pair stands in for the USB serial adapter.
     let (mut master, slave) = serialport::TTYPort::pair().expect("pty pair");
     let path = slave.name().expect("slave path");
     // foxhunt opens the device exclusively: let go of the test's own handle first.
     drop(slave);
-    let child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+    let mut child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
         .args([
             "locate",
             &path,
             "--baud",
             "4800",
+            // The child inherits the test's end of the pseudo-terminal, so the line never hangs
+            // up: it ends two seconds after the last byte, once every line has been read.
             "--quiet-exit",
-            "1.5",
+            "2",
             "--json",
         ])
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
         .spawn()
         .expect("run foxhunt");
-    std::thread::sleep(std::time::Duration::from_millis(300));
-    let bytes = std::fs::read(capture("aoa-drive.nmea")).expect("capture");
-    for chunk in bytes.chunks(97) {
-        master.write_all(chunk).expect("write");
-        std::thread::sleep(std::time::Duration::from_millis(2));
+    let (tx, rx) = std::sync::mpsc::channel();
+    let stdout = child.stdout.take().expect("stdout");
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines() {
+            let Ok(line) = line else { return };
+            if tx.send(line).is_err() {
+                return;
+            }
+        }
+    });
+    // Write only once foxhunt holds the line open (its /proc fd table names the device):
+    // before that the pseudo-terminal refuses the bytes. The deadline guards against a hang.
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+    let fd_dir = format!("/proc/{}/fd", child.id());
+    while !std::fs::read_dir(&fd_dir)
+        .map(|d| {
+            d.filter_map(Result::ok)
+                .any(|e| std::fs::read_link(e.path()).is_ok_and(|l| l == Path::new(&path)))
+        })
+        .unwrap_or(false)
+    {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "foxhunt never opened {path}"
+        );
+        if let Ok(Some(status)) = child.try_wait() {
+            panic!("foxhunt ended before opening {path}: {status}");
+        }
+        std::thread::yield_now();
     }
+    let bytes = std::fs::read(capture("aoa-drive.nmea")).expect("capture");
+    // Feed one bearing at a time and wait for its update.
+    let mut used = Vec::new();
+    let sentences: Vec<&[u8]> = bytes.split_inclusive(|b| *b == b'\n').collect();
+    let mut at = 0;
+    while at < sentences.len() {
+        let end = (at + 3).min(sentences.len());
+        for s in &sentences[at..end] {
+            master.write_all(s).expect("write");
+        }
+        master.flush().expect("flush");
+        at = end;
+        // The first group's bearing waits for the next fix; from the second group on, each
+        // places one bearing, and each new bearing gets one line (its fix, or why there is none
+        // yet). The timeout guards against a hang.
+        if at <= 3 {
+            continue;
+        }
+        match rx.recv_timeout(std::time::Duration::from_secs(20)) {
+            Ok(line) => {
+                let v: serde_json::Value = serde_json::from_str(&line).expect("JSON");
+                used.push(v["used"].as_u64().expect("used"));
+            }
+            Err(e) => panic!("no update after {at} sentences: {e}"),
+        }
+    }
+    drop(master);
     let out = child.wait_with_output().expect("foxhunt ends");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let lines = json_lines(&out);
-    // An update per read that brought bearings (once a fix exists), then the final fix.
-    let used: Vec<u64> = lines
-        .iter()
-        .map(|l| l["used"].as_u64().expect("used"))
-        .collect();
-    assert!(used.len() >= 10, "only {} updates", used.len());
-    assert!(used.windows(2).all(|w| w[0] <= w[1]), "{used:?}");
-    let file = foxhunt(&["locate", &capture("aoa-drive.nmea"), "--json"]);
-    let from_file: serde_json::Value = serde_json::from_slice(&file.stdout).expect("JSON");
-    let last = lines.last().expect("final fix");
-    assert_eq!(last["lat"], from_file["lat"]);
-    assert_eq!(last["used"], 60);
+    assert!(out.status.success(), "{}", stderr(&out));
+    // One line per bearing, in order: 1, 2, ..., 60.
+    let expected: Vec<u64> = (1..=60).collect();
+    assert_eq!(used, expected);
 }

@@ -5,12 +5,11 @@
 
 use crate::bridge::{BridgeConfig, BridgeCounters, Event, Receiver};
 use crate::stream::StreamCounters;
+use foxhunt_core::estimator::with_bearing_filter;
 use foxhunt_core::fix::init::initial_particles;
 use foxhunt_core::fix::intersection::MIN_CROSSING;
 use foxhunt_core::fix::ml::{MlOptions, ml};
-use foxhunt_core::{
-    Bearing, Error, Filter, Fix, Gaussian, ParticleSet, Sir, SirConfig, StaticEmitter,
-};
+use foxhunt_core::{Bearing, Error, Filter, Fix, Gaussian, Method, ParticleSet, WithFilter};
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 
@@ -104,6 +103,25 @@ pub fn replay_from<const N: usize, E>(
     })
 }
 
+/// The registry's tuned `sir` stepped over the first `steps` bearings from `cloud`.
+struct FirstSteps<'a> {
+    cloud: &'a [[f32; 2]],
+    bearings: &'a [Bearing],
+    steps: usize,
+    rng: &'a mut XorShiftRng,
+}
+
+impl WithFilter<2, Bearing> for FirstSteps<'_> {
+    type Output = Result<[f32; 2], Error>;
+    fn visit<F: Filter<2, Measurement = Bearing>>(self, f: &mut F) -> Self::Output {
+        f.initialise(self.cloud, self.rng)?;
+        for b in self.bearings.iter().take(self.steps) {
+            let _ = f.step(b, self.rng);
+        }
+        Ok(f.estimate()?.mean)
+    }
+}
+
 fn run_sir<const N: usize>(
     bearings: &[Bearing],
     steps: usize,
@@ -111,13 +129,13 @@ fn run_sir<const N: usize>(
 ) -> Result<[f32; 2], Error> {
     let mut cloud = ParticleSet::<N, 2>::new();
     initial_particles(bearings, MIN_CROSSING, &mut cloud, rng)?;
-    let model = StaticEmitter { process_var: 0.0 };
-    let mut f = Sir::<_, _, N, 2>::new(model, Gaussian, SirConfig::default());
-    f.initialise(&cloud.states, rng)?;
-    for b in bearings.iter().take(steps) {
-        let _ = f.step(b, rng);
-    }
-    Ok(f.estimate().mean)
+    let run = FirstSteps {
+        cloud: &cloud.states,
+        bearings,
+        steps,
+        rng,
+    };
+    with_bearing_filter::<N, _>(Method::Sir, 0.0, run)?
 }
 
 /// The lines both the firmware and the host print for a replay: the bits of every result, so

@@ -69,7 +69,7 @@ fn firmware_fix_equals_the_host_fix_bit_for_bit() {
     );
 
     let config = BridgeConfig {
-        sigma_rad: 0.019_496,
+        sigma_rad: foxhunt_core::canonical::AOA_SIGMA,
         ..BridgeConfig::default()
     };
     // Fed one byte at a time and in 64-byte reads, as the image does: same answer.

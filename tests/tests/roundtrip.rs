@@ -3,15 +3,16 @@
 
 use foxhunt_core::fix::crlb::crlb;
 use foxhunt_core::linalg::inverse2;
-use foxhunt_sim::locate::{LocateMethod, decode, locate};
-use foxhunt_sim::scenario::{NAMES, Scenario};
+use foxhunt_sim::locate::{LocateOptions, decode, locate};
+use foxhunt_sim::scenario::Scenario;
 use foxhunt_sim::simulate::{CaptureOptions, drive_capture};
 
 fn mahalanobis(name: &str, options: CaptureOptions) -> (f32, u32) {
-    let s = Scenario::named(name).expect("scenario");
-    let bytes = drive_capture(&s, &options).expect("capture");
-    let d = decode(&bytes, Default::default());
-    let (report, _) = locate(&d, LocateMethod::Ml, None, 1).expect("a fix");
+    let scenario = Scenario::named(name).expect("scenario");
+    let s = scenario.drive().expect("a drive");
+    let bytes = drive_capture(&scenario, &options).expect("capture");
+    let d = decode(&bytes, Default::default(), false);
+    let report = locate(&d, &LocateOptions::default()).expect("a fix").report;
     let truth = [s.emitter[0] - s.route[0][0], s.emitter[1] - s.route[0][1]];
     // The bound of the bearings that came through, at the true emitter and the true noise.
     let used: Vec<_> = d
@@ -33,7 +34,9 @@ fn mahalanobis(name: &str, options: CaptureOptions) -> (f32, u32) {
 
 #[test]
 fn every_canonical_drive_is_located_within_three_sigma_of_its_crlb() {
-    for name in NAMES {
+    let drives = Scenario::all().into_iter().filter(|s| s.drive().is_some());
+    for name in drives.map(|s| s.name) {
+        let name = name.as_str();
         let (clean, _) = mahalanobis(name, CaptureOptions::default());
         let damaged = CaptureOptions {
             wild_fraction: Some(0.1),
@@ -57,21 +60,24 @@ fn every_canonical_drive_is_located_within_three_sigma_of_its_crlb() {
 fn the_reported_ellipse_is_honest_over_many_drives() {
     // 100 captures of aoa-drive (the weak, long-range geometry), each located with the
     // default method and the noise estimated from its own residuals.
-    let s = Scenario::named("aoa-drive").expect("scenario");
+    let scenario = Scenario::named("aoa-drive").expect("scenario");
+    let s = scenario.drive().expect("a drive");
     let truth = [s.emitter[0] - s.route[0][0], s.emitter[1] - s.route[0][1]];
     let runs = 100;
     let (mut inside, mut d2_sum) = (0, 0.0f32);
     for run in 0..runs {
         let bytes = drive_capture(
-            &s,
+            &scenario,
             &CaptureOptions {
                 run,
                 ..CaptureOptions::default()
             },
         )
         .expect("capture");
-        let d = decode(&bytes, Default::default());
-        let (_, fix) = locate(&d, LocateMethod::Ml, None, 1).expect("a fix");
+        let d = decode(&bytes, Default::default(), false);
+        let fix = locate(&d, &LocateOptions::default())
+            .expect("a fix")
+            .solution;
         let inv = inverse2(&fix.covariance).expect("invertible");
         let e = [fix.position[0] - truth[0], fix.position[1] - truth[1]];
         let d2 = e[0] * (inv[0][0] * e[0] + inv[0][1] * e[1])
@@ -111,4 +117,26 @@ fn indoor_capture_is_tracked_through_the_bytes() {
     // here the start is unknown (anywhere in the room) and the link quality quantises RSSI
     // to 0.42 dB: 1 m leaves room for both, and is still 10x better than the room's size.
     assert!(mean < 1.0, "mean error {mean} m");
+}
+
+#[test]
+fn the_bundled_captures_are_what_simulate_writes_today() {
+    // serial-bridge/captures holds `foxhunt simulate --scenario aoa-drive --out
+    // serial-bridge/captures/aoa-drive.nmea` and `foxhunt simulate --scenario rssi-sim --out
+    // serial-bridge/captures/rssi-sim.znp --force` (the README's commands): regenerate them
+    // with those when the simulation changes.
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../serial-bridge/captures");
+    let read = |f: &str| std::fs::read(dir.join(f)).expect("bundled capture");
+    let drive = Scenario::named("aoa-drive").expect("scenario");
+    let written = drive_capture(&drive, &CaptureOptions::default()).expect("capture");
+    assert!(written == read("aoa-drive.nmea"), "aoa-drive.nmea is stale");
+    let (bytes, anchors, _) =
+        foxhunt_sim::indoor::simulate_capture("rssi-sim", 0).expect("capture");
+    assert!(bytes == read("rssi-sim.znp"), "rssi-sim.znp is stale");
+    let text = anchors.to_toml("rssi-sim").expect("toml");
+    assert_eq!(
+        text.as_bytes(),
+        read("rssi-sim.anchors.toml").as_slice(),
+        "rssi-sim.anchors.toml is stale"
+    );
 }

@@ -86,16 +86,16 @@ impl Filter<2> for BearingEkf {
         }
         p = next;
         self.state = Some((x, p));
-        Ok(self.estimate())
+        self.estimate()
     }
 
-    fn estimate(&self) -> Estimate<2> {
-        let (mean, covariance) = self.state.unwrap_or(([0.0; 2], [[0.0; 2]; 2]));
-        Estimate {
+    fn estimate(&self) -> Result<Estimate<2>, Error> {
+        let (mean, covariance) = self.state.ok_or(Error::NotInitialised)?;
+        Ok(Estimate {
             mean,
             covariance,
             ess: 0.0,
             status: StepStatus::Updated,
-        }
+        })
     }
 }

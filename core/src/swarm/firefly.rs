@@ -10,10 +10,10 @@ use crate::particles::ParticleSet;
 use crate::{fastmath, random};
 use rand_core::Rng;
 
-/// Standard firefly: every firefly moves toward every brighter one,
-/// x_i += beta0 exp(-gamma r_ij^2) (x_j - x_i) + alpha (U(0,1) - 1/2). O(N^2) per iteration.
+/// The constants both firefly variants share (seed 001 gives beta0 = 1, gamma = 1; alpha, its
+/// decay and the iteration count are chosen).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Firefly {
+pub struct FireflyParams {
     /// Attraction at zero distance.
     pub beta0: f32,
     /// Light absorption, >= 0 (a negative or NaN one disables the move: the swarm returns 0).
@@ -26,7 +26,7 @@ pub struct Firefly {
     pub iterations: u32,
 }
 
-impl Default for Firefly {
+impl Default for FireflyParams {
     fn default() -> Self {
         Self {
             beta0: 1.0,
@@ -38,38 +38,46 @@ impl Default for Firefly {
     }
 }
 
+impl FireflyParams {
+    /// The shared prologue: the cloud's length scale and every firefly's brightness, or `None`
+    /// when the absorption is unusable (a negative one would pull harder the farther apart).
+    fn start<const N: usize, const D: usize>(
+        &self,
+        set: &ParticleSet<N, D>,
+        fitness: &mut impl FnMut(&[f32; D]) -> f32,
+    ) -> Option<([f32; D], [f32; N])> {
+        (self.gamma >= 0.0).then(|| (axis_scale(set, 1e-6), evaluate(set, fitness)))
+    }
+}
+
+/// Standard firefly: every firefly moves toward every brighter one,
+/// x_i += beta0 exp(-gamma r_ij^2) (x_j - x_i) + alpha (U(0,1) - 1/2). O(N^2) per iteration.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Firefly {
+    /// The shared constants.
+    pub params: FireflyParams,
+}
+
 /// Improved firefly of seed 001 (its formulas (4)-(5) are lost; reconstruction of
 /// ALGORITHMS.md, chosen): every firefly moves toward the current best G only,
 /// beta_i = beta0 (I_best / (I_best + I_i)) exp(-gamma r_i^2) eps(t),
 /// eps(t) = eps_min + (1 - eps_min) exp(-t / t_c). O(N) per iteration.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ImprovedFirefly {
-    /// Attraction at zero distance.
-    pub beta0: f32,
-    /// Light absorption, >= 0 (a negative or NaN one disables the move: the swarm returns 0).
-    pub gamma: f32,
-    /// Random step (in cloud standard deviations).
-    pub alpha: f32,
-    /// Factor on alpha per iteration.
-    pub alpha_decay: f32,
+    /// The shared constants.
+    pub params: FireflyParams,
     /// Floor of the attraction schedule eps(t) (chosen: 0.1).
     pub eps_min: f32,
     /// Time constant of eps(t), iterations (chosen: 5).
     pub t_c: f32,
-    /// Iterations (chosen: 10).
-    pub iterations: u32,
 }
 
 impl Default for ImprovedFirefly {
     fn default() -> Self {
         Self {
-            beta0: 1.0,
-            gamma: 1.0,
-            alpha: 0.2,
-            alpha_decay: 0.97,
+            params: FireflyParams::default(),
             eps_min: 0.1,
             t_c: 5.0,
-            iterations: 10,
         }
     }
 }
@@ -91,22 +99,21 @@ impl<const D: usize> Swarm<D> for Firefly {
         mut fitness: F,
         rng: &mut R,
     ) -> u32 {
-        if !(self.gamma >= 0.0) {
+        let p = self.params;
+        let Some((scale, mut light)) = p.start(set, &mut fitness) else {
             return 0;
-        }
-        let scale = axis_scale(set, 1e-6);
-        let mut light = evaluate(set, &mut fitness);
+        };
         let mut evals = N as u32;
-        let mut alpha = self.alpha;
-        for _ in 0..self.iterations {
+        let mut alpha = p.alpha;
+        for _ in 0..p.iterations {
             for i in 0..N {
                 let mut moved = false;
                 for j in 0..N {
                     if light[j] > light[i] {
                         let xj = set.states[j];
                         let xi = &mut set.states[i];
-                        let beta = self.beta0
-                            * fastmath::exp_nonpositive(-self.gamma * scaled_r2(xi, &xj, &scale));
+                        let beta = p.beta0
+                            * fastmath::exp_nonpositive(-p.gamma * scaled_r2(xi, &xj, &scale));
                         for k in 0..D {
                             xi[k] += beta * (xj[k] - xi[k])
                                 + alpha * scale[k] * (random::uniform(rng) - 0.5);
@@ -119,7 +126,7 @@ impl<const D: usize> Swarm<D> for Firefly {
                     evals += 1;
                 }
             }
-            alpha *= self.alpha_decay;
+            alpha *= p.alpha_decay;
         }
         evals
     }
@@ -132,14 +139,13 @@ impl<const D: usize> Swarm<D> for ImprovedFirefly {
         mut fitness: F,
         rng: &mut R,
     ) -> u32 {
-        if !(self.gamma >= 0.0) {
+        let p = self.params;
+        let Some((scale, mut light)) = p.start(set, &mut fitness) else {
             return 0;
-        }
-        let scale = axis_scale(set, 1e-6);
-        let mut light = evaluate(set, &mut fitness);
+        };
         let mut evals = N as u32;
-        let mut alpha = self.alpha;
-        for t in 1..=self.iterations {
+        let mut alpha = p.alpha;
+        for t in 1..=p.iterations {
             let (b, l_best) = argmax(&light);
             if !l_best.is_finite() {
                 break;
@@ -153,8 +159,8 @@ impl<const D: usize> Swarm<D> for ImprovedFirefly {
                 // Relative brightness I_i / I_best in [0, 1]: dimmer fireflies are pulled harder.
                 let rel = fastmath::exp_nonpositive(light[i] - l_best);
                 let xi = &mut set.states[i];
-                let beta = self.beta0 / (1.0 + rel)
-                    * fastmath::exp_nonpositive(-self.gamma * scaled_r2(xi, &g, &scale))
+                let beta = p.beta0 / (1.0 + rel)
+                    * fastmath::exp_nonpositive(-p.gamma * scaled_r2(xi, &g, &scale))
                     * eps;
                 for k in 0..D {
                     xi[k] +=
@@ -163,7 +169,7 @@ impl<const D: usize> Swarm<D> for ImprovedFirefly {
                 light[i] = sane(fitness(xi));
                 evals += 1;
             }
-            alpha *= self.alpha_decay;
+            alpha *= p.alpha_decay;
         }
         evals
     }
@@ -183,13 +189,14 @@ mod tests {
         set.states = core::array::from_fn(|i| [i as f32, 0.0]);
         let before = set.states;
         let fitness = |x: &[f32; 2]| -x[0] * x[0];
-        let mut standard = Firefly {
-            gamma: -1.0,
-            ..Firefly::default()
+        let bad = |gamma| FireflyParams {
+            gamma,
+            ..FireflyParams::default()
         };
+        let mut standard = Firefly { params: bad(-1.0) };
         assert_eq!(standard.optimise(&mut set, fitness, &mut rng), 0);
         let mut improved = ImprovedFirefly {
-            gamma: f32::NAN,
+            params: bad(f32::NAN),
             ..ImprovedFirefly::default()
         };
         assert_eq!(improved.optimise(&mut set, fitness, &mut rng), 0);

@@ -58,8 +58,8 @@ mod image {
     #[entry]
     fn main() -> ! {
         let config = BridgeConfig {
-            // aoa-drive's bearing noise: variance 3.801e-4 rad^2.
-            sigma_rad: 0.019_496,
+            // The drive's bearing noise (aoa-drive's).
+            sigma_rad: foxhunt_core::canonical::AOA_SIGMA,
             ..BridgeConfig::default()
         };
         // The baseline image skips the filter steps: the difference of two instruction counts

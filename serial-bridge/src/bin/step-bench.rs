@@ -1,20 +1,23 @@
-//! The per-filter MCU benchmark image: one filter, N = 100, stepped over the aoa-afsa bearings
-//! (or, for `gsa-gpf-rssi`, the rssi-sim readings), chosen by semihosting arguments
-//! `<filter> <steps>`. `serial-bridge/qemu/steps.sh` runs it twice per filter, with 0 steps and
-//! with 60, under the counting plugin: the difference is the instruction cost of the steps.
+//! The per-filter MCU benchmark image: one filter of the core's registry, N = 100, stepped over
+//! the aoa-afsa bearings (or, with the suffix `-rssi`, the rssi-sim readings), chosen by
+//! semihosting arguments `<filter> <steps>`. `serial-bridge/qemu/steps.sh` runs it twice per
+//! filter, with 0 steps and with 60, under the counting plugin: the difference is the
+//! instruction cost of the steps.
 //!
-//! Filters: sir, gpf, ekf, afsa-pf, fa-pf, fa-pf-imp, pso-gpf, gsa-gpf (bearings),
-//! gsa-gpf-rssi (RSSI, seed 003's model). On the host this binary is an empty stub.
+//! Filters: any sequential method's registry name (sir, gpf, ekf, afsa-pf, fa-pf, fa-pf-imp,
+//! pso-gpf, gsa-gpf, ...) on bearings, or a particle method with `-rssi` (gsa-gpf-rssi: seed
+//! 003's model). On the host this binary is an empty stub.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(target_os = "none")]
 mod image {
     use cortex_m as _;
     use cortex_m_rt::entry;
+    use foxhunt_core::canonical::{AOA_EMITTER, AOA_SIGMA, RSSI_SIM, RSSI_SIM_START, loop300};
+    use foxhunt_core::estimator::{with_bearing_filter, with_particle_filter};
     use foxhunt_core::model::bearing::predicted;
     use foxhunt_core::{
-        Afsa, Bearing, BearingEkf, Filter, Firefly, Gaussian, Gpf, Gsa, ImprovedFirefly,
-        ParticleSet, PathLoss, Pso, RssiMeasurement, RssiTracker, Sir, SirConfig, StaticEmitter,
+        Bearing, Error, Filter, Method, ParticleSet, RssiMeasurement, RssiTracker, WithFilter,
         random,
     };
     use rand_core::SeedableRng;
@@ -22,67 +25,70 @@ mod image {
     use semihosting::{println, process};
 
     const N: usize = 100;
-    const EMITTER: [f32; 2] = [1200.0, 800.0];
-    const SIGMA: f32 = 0.019_496;
 
-    /// aoa-afsa: 60 noisy bearings from a 300 m circle around the emitter.
-    fn bearings(rng: &mut XorShiftRng) -> [Bearing; 60] {
-        let start = libm::atan2f(-EMITTER[1], -EMITTER[0]);
-        core::array::from_fn(|k| {
-            let a = start + 2.0 * core::f32::consts::PI * k as f32 / 60.0;
-            let v = [
-                EMITTER[0] + 300.0 * libm::cosf(a),
-                EMITTER[1] + 300.0 * libm::sinf(a),
-            ];
+    /// Step a started filter `steps` times cycling through `z`; the estimate's first
+    /// coordinate.
+    struct Run<'a, Z, const D: usize> {
+        cloud: &'a [[f32; D]],
+        z: &'a [Z],
+        steps: usize,
+        rng: &'a mut XorShiftRng,
+    }
+
+    impl<Z, const D: usize> WithFilter<D, Z> for Run<'_, Z, D> {
+        type Output = Result<f32, Error>;
+        fn visit<F: Filter<D, Measurement = Z>>(self, f: &mut F) -> Self::Output {
+            f.initialise(self.cloud, self.rng)?;
+            for z in self.z.iter().cycle().take(self.steps) {
+                let _ = f.step(z, self.rng);
+            }
+            Ok(f.estimate()?.mean[0])
+        }
+    }
+
+    /// aoa-afsa's 60 noisy bearings, from a N(emitter, 50^2 I) cloud.
+    fn run_bearings(method: Method, steps: usize) -> Result<f32, Error> {
+        let mut rng = XorShiftRng::seed_from_u64(1);
+        let z: [Bearing; 60] = core::array::from_fn(|k| {
+            let v = loop300(AOA_EMITTER, k);
             Bearing {
                 vehicle: v,
-                theta: predicted(&EMITTER, &v) + SIGMA * random::normal(rng),
-                sigma: SIGMA,
+                theta: predicted(&AOA_EMITTER, &v) + AOA_SIGMA * random::normal(&mut rng),
+                sigma: AOA_SIGMA,
             }
-        })
-    }
-
-    /// Run `steps` of `f` over the bearings from a N(emitter, 50^2 I) cloud.
-    fn run_bearings<F: Filter<2, Measurement = Bearing>>(mut f: F, steps: usize) -> f32 {
-        let mut rng = XorShiftRng::seed_from_u64(1);
-        let z = bearings(&mut rng);
+        });
         let mut cloud = ParticleSet::<N, 2>::new();
-        let _ = cloud.draw_gaussian(&EMITTER, &[[2500.0, 0.0], [0.0, 2500.0]], &mut rng);
-        let _ = f.initialise(&cloud.states, &mut rng);
-        for b in z.iter().cycle().take(steps) {
-            let _ = f.step(b, &mut rng);
-        }
-        f.estimate().mean[0]
+        cloud.draw_gaussian(&AOA_EMITTER, &[[2500.0, 0.0], [0.0, 2500.0]], &mut rng)?;
+        let run = Run {
+            cloud: &cloud.states,
+            z: &z,
+            steps,
+            rng: &mut rng,
+        };
+        with_bearing_filter::<N, _>(method, 0.0, run)?
     }
 
-    /// rssi-sim: a node walking at 0.5 m/s diagonally, three anchors, 0.5 dB noise.
-    fn run_rssi(steps: usize) -> f32 {
-        let model = RssiTracker {
-            anchors: [[0.0, 5.0], [5.0, 10.0], [10.0, 0.0]],
-            sigma: [0.5; 3],
-            path_loss: PathLoss {
-                p0: -37.8,
-                d0: 1.0,
-                eta: 2.3,
-            },
-            dt: 0.5,
-            q: [0.5, 1.0, 0.5, 1.0],
-            room: Some([10.0, 10.0]),
-        };
+    /// rssi-sim's node walking from its start, 0.5 dB noise, started at the true state.
+    fn run_rssi(method: Method, steps: usize) -> Result<f32, Error> {
+        let model: RssiTracker<3> = RSSI_SIM;
         let mut rng = XorShiftRng::seed_from_u64(1);
-        let mut f = Gpf::<_, _, N, 4, _>::with_swarm(model, Gaussian, Gsa::default());
-        let start = [[0.0, 0.5, 0.0, 0.5]; 1];
-        let _ = f.initialise(&start, &mut rng);
-        let mut x = [0.0f32, 0.5, 0.0, 0.5];
-        for _ in 0..steps {
+        let mut x = RSSI_SIM_START;
+        let z: [RssiMeasurement<3>; 60] = core::array::from_fn(|_| {
             x = model.confine(model.advance(&x));
             let mut dbm = model.expected(&x);
             for d in dbm.iter_mut() {
                 *d += 0.5 * random::normal(&mut rng);
             }
-            let _ = f.step(&RssiMeasurement::all(dbm), &mut rng);
-        }
-        f.estimate().mean[0]
+            RssiMeasurement::all(dbm)
+        });
+        let start = [RSSI_SIM_START; 1];
+        let run = Run {
+            cloud: &start,
+            z: &z,
+            steps,
+            rng: &mut rng,
+        };
+        with_particle_filter::<N, 4, _, _>(method, model, run)?
     }
 
     #[entry]
@@ -92,45 +98,29 @@ mod image {
         let _program = it.next();
         let filter = it.next().unwrap_or("sir");
         let steps = it.next().and_then(|s| s.parse().ok()).unwrap_or(60usize);
-        let model = StaticEmitter { process_var: 0.0 };
-        let config = SirConfig::default();
-        let out = match filter {
-            "sir" => run_bearings(Sir::<_, _, N, 2>::new(model, Gaussian, config), steps),
-            "gpf" => run_bearings(Gpf::<_, _, N, 2>::new(model, Gaussian), steps),
-            "ekf" => run_bearings(BearingEkf::new(0.0), steps),
-            "afsa-pf" => run_bearings(
-                Sir::<_, _, N, 2, _>::with_swarm(model, Gaussian, config, Afsa::default()),
-                steps,
-            ),
-            "fa-pf" => run_bearings(
-                Sir::<_, _, N, 2, _>::with_swarm(model, Gaussian, config, Firefly::default()),
-                steps,
-            ),
-            "fa-pf-imp" => run_bearings(
-                Sir::<_, _, N, 2, _>::with_swarm(
-                    model,
-                    Gaussian,
-                    config,
-                    ImprovedFirefly::default(),
-                ),
-                steps,
-            ),
-            "pso-gpf" => run_bearings(
-                Gpf::<_, _, N, 2, _>::with_swarm(model, Gaussian, Pso::default()),
-                steps,
-            ),
-            "gsa-gpf" => run_bearings(
-                Gpf::<_, _, N, 2, _>::with_swarm(model, Gaussian, Gsa::default()),
-                steps,
-            ),
-            "gsa-gpf-rssi" => run_rssi(steps),
-            other => {
-                println!("unknown filter {other}");
-                process::exit(2)
-            }
+        let (name, rssi) = match filter.strip_suffix("-rssi") {
+            Some(base) => (base, true),
+            None => (filter, false),
         };
-        println!("{filter} {steps} steps: estimate x {out}");
-        process::exit(if out.is_finite() { 0 } else { 1 })
+        let Some(method) = Method::from_name(name) else {
+            println!("unknown filter {filter}");
+            process::exit(2)
+        };
+        let out = if rssi {
+            run_rssi(method, steps)
+        } else {
+            run_bearings(method, steps)
+        };
+        match out {
+            Ok(x) => {
+                println!("{filter} {steps} steps: estimate x {x}");
+                process::exit(if x.is_finite() { 0 } else { 1 })
+            }
+            Err(e) => {
+                println!("{filter}: {e}");
+                process::exit(1)
+            }
+        }
     }
 }
 

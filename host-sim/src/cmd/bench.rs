@@ -1,0 +1,123 @@
+//! `foxhunt bench`: Monte Carlo of every method of a scenario's table against its bound.
+
+use crate::io::{Out, Outcome};
+use crate::montecarlo::{Progress, bench, total_runs};
+use crate::report;
+use crate::scenario::{NAMES, Scenario, ScenarioModel};
+use foxhunt_core::PARTICLE_COUNTS;
+use std::path::PathBuf;
+
+/// Options of `foxhunt bench`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Canonical scenario name, or `all`.
+    #[arg(long, default_value = "aoa-afsa", conflicts_with = "scenario_file")]
+    pub scenario: String,
+    /// A scenario file (TOML; see the README).
+    #[arg(long)]
+    pub scenario_file: Option<PathBuf>,
+    /// Monte Carlo runs (at least 1; default: the scenario's).
+    #[arg(long)]
+    pub runs: Option<usize>,
+    /// Particles, one of the compiled counts 50, 80, 100, 200, 500, 1000, 2000, 5000, 10000,
+    /// 100000 (default: the scenario's table).
+    #[arg(long)]
+    pub particles: Option<usize>,
+    /// Print JSON (an array of rows with stable field names).
+    #[arg(long, conflicts_with = "markdown")]
+    pub json: bool,
+    /// Print a Markdown table.
+    #[arg(long)]
+    pub markdown: bool,
+    /// No progress on stderr.
+    #[arg(long)]
+    pub quiet: bool,
+    /// When stderr is not a terminal, a progress line at most every this many seconds.
+    #[arg(long, default_value_t = 5.0)]
+    pub progress_secs: f64,
+}
+
+/// The scenarios `a` asks for, with its overrides applied and checked.
+pub fn scenarios(a: &Args) -> Result<Vec<Scenario>, String> {
+    let mut list = match &a.scenario_file {
+        Some(path) => vec![Scenario::load(path)?],
+        None if a.scenario == "all" => Scenario::all(),
+        None => vec![Scenario::named(&a.scenario).ok_or_else(|| {
+            format!(
+                "unknown scenario `{}`; known: all, {}",
+                a.scenario,
+                NAMES.join(", ")
+            )
+        })?],
+    };
+    if a.runs == Some(0) {
+        return Err("--runs must be at least 1, not 0".into());
+    }
+    if let Some(n) = a.particles
+        && !PARTICLE_COUNTS.contains(&n)
+    {
+        return Err(format!(
+            "--particles {n} is not a compiled size; use one of {PARTICLE_COUNTS:?}"
+        ));
+    }
+    for s in list.iter_mut() {
+        if let Some(r) = a.runs {
+            s.runs = r;
+        }
+        if let Some(n) = a.particles {
+            s.particles = vec![n];
+        }
+        s.validate()?;
+    }
+    Ok(list)
+}
+
+/// One line per scenario saying what is run.
+fn header(s: &Scenario) -> String {
+    let counts: Vec<String> = s.particles.iter().map(|n| n.to_string()).collect();
+    let what = match &s.model {
+        ScenarioModel::Bearing(d) => format!(
+            "emitter ({}, {}) m, {} bearings, sigma {:.3} deg, wild {:.0} %; bound = CRLB",
+            d.emitter[0],
+            d.emitter[1],
+            d.route.len(),
+            d.sigma().to_degrees(),
+            100.0 * d.wild_fraction
+        ),
+        _ => format!("{} steps; bound = posterior CRB", s.steps()),
+    };
+    format!(
+        "{}: {what}; N = {}, {} runs, seed {}",
+        s.name,
+        counts.join(", "),
+        s.runs,
+        s.seed
+    )
+}
+
+/// Run `foxhunt bench`.
+pub fn run(a: &Args, out: &mut Out) -> Outcome {
+    let list = scenarios(a)?;
+    if !(a.progress_secs >= 0.0 && a.progress_secs.is_finite()) {
+        return Err(format!(
+            "--progress-secs must be a number of seconds >= 0, not {}",
+            a.progress_secs
+        )
+        .into());
+    }
+    let every = std::time::Duration::from_secs_f64(a.progress_secs);
+    let progress = Progress::every(list.iter().map(total_runs).sum(), !a.quiet, every);
+    let rows: Vec<_> = list.iter().flat_map(|s| bench(s, &progress)).collect();
+    progress.finish();
+    if a.json {
+        let text = serde_json::to_string_pretty(&rows).map_err(|e| e.to_string())?;
+        out.line(&text)
+    } else if a.markdown {
+        out.text(&report::markdown(&rows))
+    } else {
+        for s in &list {
+            out.line(&header(s))?;
+        }
+        out.text(&report::table(&rows))
+    }
+}

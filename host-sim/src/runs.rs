@@ -1,0 +1,212 @@
+//! One seeded run of one method: what the bench averages, `locate` reports and the criterion
+//! benches time. Every filter comes from the core's registry ([`foxhunt_core::estimator`]);
+//! this module only drives it.
+
+use crate::scenario::{Drive, Scenario, ScenarioModel};
+use crate::tracking::{Truth, prior_cloud, prior_var};
+use foxhunt_core::estimator::{batch_fix, with_bearing_filter, with_particle_filter};
+use foxhunt_core::fix::init::initial_particles;
+use foxhunt_core::fix::intersection::MIN_CROSSING;
+use foxhunt_core::{
+    Bearing, Error, Estimate, Filter, Method, Model, ParticleSet, Ungm, WithFilter, with_particles,
+};
+use rand_xorshift::XorShiftRng;
+
+/// A filter run over a sequence of measurements.
+#[derive(Debug, Clone)]
+pub struct FilterRun<const D: usize> {
+    /// The estimate after the last measurement.
+    pub estimate: Estimate<D>,
+    /// Likelihood evaluations spent.
+    pub evaluations: u64,
+    /// The particles at the end, when asked for (empty for the EKF).
+    pub cloud: Vec<[f32; D]>,
+}
+
+/// The visitor that starts a filter from `cloud`, steps it through `measurements` (a rejected
+/// measurement is skipped: the filter keeps its estimate) and calls `each` with every step's
+/// estimate.
+pub struct Steps<'a, const D: usize, Z, C> {
+    /// The initial hypotheses.
+    pub cloud: &'a [[f32; D]],
+    /// The measurements in order.
+    pub measurements: &'a [Z],
+    /// The run's generator.
+    pub rng: &'a mut XorShiftRng,
+    /// Called after every step with its index and estimate.
+    pub each: C,
+    /// Whether to return the final particles.
+    pub keep_cloud: bool,
+}
+
+impl<const D: usize, Z, C: FnMut(usize, &Estimate<D>)> WithFilter<D, Z> for Steps<'_, D, Z, C> {
+    type Output = Result<FilterRun<D>, Error>;
+
+    fn visit<F: Filter<D, Measurement = Z>>(mut self, f: &mut F) -> Self::Output {
+        f.initialise(self.cloud, self.rng)?;
+        for (k, z) in self.measurements.iter().enumerate() {
+            let e = match f.step(z, self.rng) {
+                Ok(e) => e,
+                Err(_) => f.estimate()?,
+            };
+            (self.each)(k, &e);
+        }
+        let estimate = f.estimate()?;
+        let finite = estimate
+            .mean
+            .iter()
+            .chain(estimate.covariance.iter().flatten())
+            .all(|v| v.is_finite());
+        if !finite {
+            return Err(Error::NonFinite);
+        }
+        Ok(FilterRun {
+            estimate,
+            evaluations: f.evaluations(),
+            cloud: if self.keep_cloud {
+                f.cloud().to_vec()
+            } else {
+                Vec::new()
+            },
+        })
+    }
+}
+
+/// A static-emitter fix: position, covariance, and what it cost.
+#[derive(Debug, Clone)]
+pub struct BearingFix {
+    /// Position, local metres.
+    pub position: [f32; 2],
+    /// Covariance, m^2.
+    pub covariance: [[f32; 2]; 2],
+    /// Likelihood evaluations (0 for batch fixes).
+    pub evaluations: u64,
+    /// Bearings a robust loss treated as outliers (batch fixes).
+    pub outliers: u32,
+    /// The particles (particle filters, when asked for).
+    pub cloud: Vec<[f32; 2]>,
+}
+
+/// `method` on `bearings` with `particles` particles (a compiled count), the sequential ones
+/// started from the bearing-pair cloud and the seeds' ones jittered by `jitter_var`.
+pub fn locate_bearings(
+    method: Method,
+    particles: usize,
+    jitter_var: f32,
+    bearings: &[Bearing],
+    keep_cloud: bool,
+    rng: &mut XorShiftRng,
+) -> Result<BearingFix, Error> {
+    if !method.is_sequential() {
+        let f = batch_fix(method, bearings)?;
+        return Ok(BearingFix {
+            position: f.position,
+            covariance: f.covariance,
+            evaluations: 0,
+            outliers: f.outliers,
+            cloud: Vec::new(),
+        });
+    }
+    let run = with_particles!(particles, N => {
+        let mut cloud = Box::new(ParticleSet::<N, 2>::new());
+        initial_particles(bearings, MIN_CROSSING, &mut cloud, rng)?;
+        let steps = Steps {
+            cloud: &cloud.states,
+            measurements: bearings,
+            rng,
+            each: |_, _: &Estimate<2>| {},
+            keep_cloud,
+        };
+        with_bearing_filter::<N, _>(method, jitter_var, steps)?
+    })?;
+    Ok(BearingFix {
+        position: run.estimate.mean,
+        covariance: run.estimate.covariance,
+        evaluations: run.evaluations,
+        outliers: 0,
+        cloud: run.cloud,
+    })
+}
+
+/// One bearing-scenario run: the drive's noisy bearings are drawn from `rng` first, then the
+/// method runs on them (only that part is timed by callers, see [`bearing_run_timed`]).
+pub fn bearing_run(
+    d: &Drive,
+    method: Method,
+    particles: usize,
+    rng: &mut XorShiftRng,
+) -> Result<BearingFix, Error> {
+    bearing_run_timed(d, method, particles, rng).0
+}
+
+/// [`bearing_run`] and the seconds its estimation took.
+pub fn bearing_run_timed(
+    d: &Drive,
+    method: Method,
+    particles: usize,
+    rng: &mut XorShiftRng,
+) -> (Result<BearingFix, Error>, f64) {
+    let bearings = d.simulate(rng);
+    let t = std::time::Instant::now();
+    let r = locate_bearings(method, particles, d.process_var, &bearings, false, rng);
+    (r, t.elapsed().as_secs_f64())
+}
+
+/// One tracking run: the sum over steps of the position error (Euclidean for the RSSI node,
+/// absolute for the UNGM), the likelihood evaluations, and the seconds the filter took.
+pub fn tracking_run(
+    s: &Scenario,
+    method: Method,
+    particles: usize,
+    run: usize,
+) -> (Result<(f64, u64), Error>, f64) {
+    let mut rng = s.rng(run);
+    let Some(truth) = crate::tracking::simulate(s, &mut rng) else {
+        return (Err(Error::Unsupported), 0.0);
+    };
+    let var = prior_var(s);
+    let t = std::time::Instant::now();
+    let r = (|| {
+        with_particles!(particles, N => match (&s.model, &truth) {
+            (ScenarioModel::Rssi { tracker, start, .. }, Truth::Rssi(x, z)) => {
+                let cloud = prior_cloud::<N, 4>(*start, var, &mut rng)?;
+                let err = |k: usize, e: &Estimate<4>| {
+                    ((e.mean[0] - x[k][0]) as f64).hypot((e.mean[2] - x[k][2]) as f64)
+                };
+                track::<N, 4, _>(method, *tracker, &cloud.states, z, err, &mut rng)
+            }
+            (ScenarioModel::Ungm { .. }, Truth::Ungm(x, z)) => {
+                let cloud = prior_cloud::<N, 1>([0.1, 0.0, 0.0, 0.0], var, &mut rng)?;
+                let err = |k: usize, e: &Estimate<1>| ((e.mean[0] - x[k]) as f64).abs();
+                track::<N, 1, _>(method, Ungm::default(), &cloud.states, z, err, &mut rng)
+            }
+            _ => Err(Error::Unsupported),
+        })
+    })();
+    (r, t.elapsed().as_secs_f64())
+}
+
+/// Step particle method `method` on `model` through `z`, summing `error` over the steps.
+fn track<const N: usize, const D: usize, M: Model<D> + Copy>(
+    method: Method,
+    model: M,
+    cloud: &[[f32; D]],
+    z: &[M::Measurement],
+    mut error: impl FnMut(usize, &Estimate<D>) -> f64,
+    rng: &mut XorShiftRng,
+) -> Result<(f64, u64), Error> {
+    let mut sum = 0.0f64;
+    let steps = Steps {
+        cloud,
+        measurements: z,
+        rng,
+        each: |k, e: &Estimate<D>| sum += error(k, e),
+        keep_cloud: false,
+    };
+    let run = with_particle_filter::<N, D, M, _>(method, model, steps)??;
+    if sum.is_finite() {
+        Ok((sum, run.evaluations))
+    } else {
+        Err(Error::NonFinite)
+    }
+}
