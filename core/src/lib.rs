@@ -4,7 +4,9 @@
 //! Everything here runs without an allocator: particle arrays are sized by const generics, so a
 //! filter can live in a `static` on a microcontroller. Randomness comes only from a
 //! caller-supplied [`rand_core::Rng`], so one seed gives the same answer on the host and the MCU.
-//! No entry point panics or returns NaN on bad input: it returns an [`Error`] instead.
+//! No entry point panics on any input. The entry points that return a `Result` never return NaN
+//! either: bad input gives an [`Error`] instead. Plain numeric helpers (a likelihood's `ln`, a
+//! `wrap` of an angle) pass non-finite input through; their callers check first.
 #![no_std]
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
@@ -22,7 +24,9 @@ pub use resample::Resampling;
 pub mod likelihood;
 pub mod model;
 
-pub use likelihood::{Cauchy, Gaussian, GaussianUniform, Huber, Likelihood, StudentT, Widened};
+pub use likelihood::{
+    Cauchy, Gaussian, GaussianUniform, Huber, Likelihood, StudentT, Tukey, Widened,
+};
 pub use model::Model;
 pub use model::bearing::{Bearing, StaticEmitter};
 pub use model::rssi::{PathLoss, RssiMeasurement, RssiTracker};
