@@ -17,6 +17,7 @@ pub mod linalg;
 pub mod particles;
 pub mod random;
 pub mod resample;
+pub mod stats;
 
 pub use error::Error;
 pub use particles::ParticleSet;
