@@ -6,6 +6,7 @@ pub mod ellipse;
 pub mod init;
 pub mod intersection;
 pub mod ml;
+pub mod order;
 pub mod pcrb;
 pub mod ple;
 
