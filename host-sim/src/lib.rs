@@ -2,6 +2,7 @@
 //! parallel Monte Carlo benchmarks of every method against the CRLB, and reports.
 #![deny(missing_docs)]
 
+pub mod field;
 pub mod frames;
 pub mod indoor;
 pub mod live;

@@ -2,15 +2,19 @@
 //! are measured against; the CRLB says what no unbiased estimator can beat.
 
 pub mod bias;
+pub mod channel;
 pub mod consistency;
 pub mod crlb;
 pub mod ellipse;
+pub mod evidence;
 pub mod init;
 pub mod intersection;
+pub mod locate;
 pub mod ml;
 pub mod order;
 pub mod pcrb;
 pub mod ple;
+pub mod robust;
 
 use crate::error::Error;
 use crate::model::bearing::Bearing;
