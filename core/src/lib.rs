@@ -30,6 +30,7 @@ pub use likelihood::{
 };
 pub use model::Model;
 pub use model::bearing::{Bearing, StaticEmitter};
+pub use model::biased::BiasedEmitter;
 pub use model::rssi::{PathLoss, RssiMeasurement, RssiTracker};
 pub use model::ungm::{Ungm, UngmObservation};
 pub mod fix;
@@ -38,7 +39,7 @@ pub use fix::Fix;
 pub mod filter;
 pub mod roughen;
 
-pub use filter::ekf::BearingEkf;
+pub use filter::ekf::{BearingEkf, BiasedBearingEkf};
 pub use filter::gpf::Gpf;
 pub use filter::sir::{Sir, SirConfig};
 pub use filter::{Estimate, Filter, StepStatus};

@@ -115,6 +115,43 @@ pub fn initial_particles_with<R: Rng + ?Sized, const N: usize>(
     Ok(InitialCloud::AlongBearings)
 }
 
+/// Fill `set` with hypotheses [x, y, b] of the augmented state ([`crate::model::biased`]):
+/// each particle's offset b drawn from `prior` (its mean alone for a calibrated unit), its
+/// position along a randomly chosen bearing corrected by that offset, log-uniform in range.
+/// Crossings are not used: where two bearings cross depends on the offset.
+pub fn initial_biased_particles<R: Rng + ?Sized, const N: usize>(
+    bearings: &[Bearing],
+    prior: super::bias::BiasPrior,
+    options: &InitOptions,
+    set: &mut ParticleSet<N, 3>,
+    rng: &mut R,
+) -> Result<(), Error> {
+    options.check()?;
+    prior.check()?;
+    let sd = if prior.sd.is_finite() {
+        prior.sd
+    } else {
+        core::f32::consts::PI
+    };
+    let mut offsets = [0.0f32; N];
+    for b in offsets.iter_mut() {
+        *b = prior.mean + sd * random::normal(rng);
+    }
+    let mut positions = [[0.0f32; 2]; N];
+    along_bearings(
+        bearings,
+        options,
+        &mut positions,
+        |i, _| offsets.get(i).copied().unwrap_or(prior.mean),
+        rng,
+    )?;
+    for ((x, p), b) in set.states.iter_mut().zip(positions).zip(offsets) {
+        *x = [p[0], p[1], b];
+    }
+    set.set_uniform_weights();
+    Ok(())
+}
+
 /// Offsets 1 .. m - 1, each once, coarse to fine: the bit-reversed order of 1 .. 2^k.
 pub(crate) struct Offsets {
     m: usize,
@@ -370,6 +407,57 @@ mod tests {
         let (found, tried) = crossings(&crossing, &options, &mut out);
         assert_eq!(found, 100);
         assert!(tried < 500, "{tried}");
+    }
+
+    #[test]
+    fn the_augmented_cloud_spans_the_offset_prior() {
+        let e = [1200.0, 800.0];
+        let bs = drive(e, 60);
+        let mut set = ParticleSet::<500, 3>::new();
+        let mut rng = XorShiftRng::seed_from_u64(4);
+        let prior = super::super::bias::BiasPrior {
+            mean: 0.02,
+            sd: 0.05,
+        };
+        initial_biased_particles(
+            &bs[..60],
+            prior,
+            &InitOptions::default(),
+            &mut set,
+            &mut rng,
+        )
+        .unwrap();
+        let mean_b = set.states.iter().map(|x| x[2]).sum::<f32>() / 500.0;
+        let var_b = set
+            .states
+            .iter()
+            .map(|x| (x[2] - mean_b) * (x[2] - mean_b))
+            .sum::<f32>()
+            / 500.0;
+        assert!((mean_b - 0.02).abs() < 0.01 && (libm::sqrtf(var_b) - 0.05).abs() < 0.01);
+        // Each particle sits on its bearing turned back by its own offset.
+        let on_line = set
+            .states
+            .iter()
+            .filter(|x| {
+                bs[..60].iter().any(|b| {
+                    libm::fabsf(crate::model::bearing::wrap(
+                        b.theta - x[2] - predicted(&[x[0], x[1]], &b.vehicle),
+                    )) < 4.0 * b.sigma
+                })
+            })
+            .count();
+        assert!(on_line > 490, "{on_line}");
+        // A calibrated unit: every offset is the calibration.
+        initial_biased_particles(
+            &bs[..60],
+            super::super::bias::BiasPrior::calibrated(0.01),
+            &InitOptions::default(),
+            &mut set,
+            &mut rng,
+        )
+        .unwrap();
+        assert!(set.states.iter().all(|x| x[2] == 0.01));
     }
 
     #[test]
