@@ -52,7 +52,7 @@ pub fn ln_gamma(x: f32) -> Result<f32, Error> {
     if product != 1.0 {
         shift = libm::logf(product);
     }
-    Ok((y - 0.5) * libm::logf(y) - y + HALF_LN_TAU + stirling_delta(y) - shift)
+    finite((y - 0.5) * libm::logf(y) - y + HALF_LN_TAU + stirling_delta(y) - shift)
 }
 
 /// ln Gamma(b + a) - ln Gamma(b) for b >= 8, a > 0, without forming either.
@@ -79,9 +79,9 @@ pub fn ln_beta(a: f32, b: f32) -> Result<f32, Error> {
                 - stirling_delta(s),
         )
     } else if b >= STIRLING_FROM {
-        Ok(ln_gamma(a)? - ln_gamma_ratio(a, b))
+        finite(ln_gamma(a)? - ln_gamma_ratio(a, b))
     } else {
-        Ok(ln_gamma(a)? + ln_gamma(b)? - ln_gamma(a + b)?)
+        finite(ln_gamma(a)? + ln_gamma(b)? - ln_gamma(a + b)?)
     }
 }
 
@@ -143,7 +143,7 @@ fn beta_lower_tail(a: f32, b: f32, x: f32, y: f32) -> Result<f32, Error> {
         libm::log1pf(-x)
     };
     let front = a * ln_x + b * ln_y - ln_beta(a, b)?;
-    Ok((libm::expf(front) * beta_fraction(a, b, x) / a).clamp(0.0, 1.0))
+    finite((libm::expf(front) * beta_fraction(a, b, x) / a).clamp(0.0, 1.0))
 }
 
 fn check_beta(a: f32, b: f32, x: f32) -> Result<(), Error> {
@@ -220,7 +220,7 @@ fn gamma_series(a: f32, x: f32) -> Result<f32, Error> {
             break;
         }
     }
-    Ok((sum * libm::expf(gamma_front(a, x)?)).clamp(0.0, 1.0))
+    finite((sum * libm::expf(gamma_front(a, x)?)).clamp(0.0, 1.0))
 }
 
 /// Continued fraction for the upper regularised incomplete gamma Q(a, x), good for x >= a + 1.
@@ -228,7 +228,7 @@ fn gamma_fraction(a: f32, x: f32) -> Result<f32, Error> {
     let tiny = 1e-30f32;
     let mut b = x + 1.0 - a;
     let mut c = 1.0 / tiny;
-    let mut d = 1.0 / b;
+    let mut d = 1.0 / if libm::fabsf(b) < tiny { tiny } else { b };
     let mut h = d;
     for i in 1..=MAX_FRACTION_ROUNDS {
         let i = i as f32;
@@ -249,7 +249,14 @@ fn gamma_fraction(a: f32, x: f32) -> Result<f32, Error> {
             break;
         }
     }
-    Ok((libm::expf(gamma_front(a, x)?) * h).clamp(0.0, 1.0))
+    finite((libm::expf(gamma_front(a, x)?) * h).clamp(0.0, 1.0))
+}
+
+/// `Ok(v)` when `v` is finite: the last guard of every result (f32 runs out of range at
+/// absurd degrees of freedom, 1e30 say, before the algorithms do).
+fn finite(v: f32) -> Result<f32, Error> {
+    crate::error::check_finite(&[v])?;
+    Ok(v)
 }
 
 fn check_gamma(a: f32, x: f32) -> Result<(), Error> {
