@@ -83,6 +83,30 @@ pub fn correlation_time<I: Iterator<Item = f32> + Clone>(values: I, n: u32) -> f
     if tau.is_finite() { tau.max(1.0) } else { 1.0 }
 }
 
+/// Thin high-rate bearings in place: keep an item only if at least `interval` (seconds) has
+/// passed since the last kept item of the same source (`key(item)` gives its time and source);
+/// returns how many are kept, compacted to the front in order. The simple alternative to
+/// widening by N / N_eff: with `interval` about one correlation time (tau reports), the kept
+/// bearings are nearly independent. Sources index a table of 256; items with a non-finite time
+/// are dropped. O(n).
+pub fn thin<T: Copy>(items: &mut [T], interval: f32, key: impl Fn(&T) -> (f32, u8)) -> usize {
+    let mut last = [f32::NEG_INFINITY; 256];
+    let mut kept = 0;
+    for i in 0..items.len() {
+        let it = items[i];
+        let (t, source) = key(&it);
+        let Some(l) = last.get_mut(source as usize) else {
+            continue;
+        };
+        if t.is_finite() && (*l == f32::NEG_INFINITY || t - *l >= interval) {
+            *l = t;
+            items[kept] = it;
+            kept += 1;
+        }
+    }
+    kept
+}
+
 /// P(chi-square(dof) > chi2): small when the residuals are too large for the noise model.
 pub fn chi2_p_value(chi2: f32, dof: f32) -> Result<f32, Error> {
     check_finite(&[chi2, dof])?;
@@ -207,6 +231,26 @@ mod tests {
         assert!((7.5..12.5).contains(&tau), "running mean of 10: tau {tau}");
         // Few values: nothing to estimate from.
         assert_eq!(correlation_time(white.iter().copied(), 5), 1.0);
+    }
+
+    #[test]
+    fn thinning_to_the_correlation_time_decorrelates() {
+        let mut rng = XorShiftRng::seed_from_u64(4);
+        let raw: [f32; 4010] = core::array::from_fn(|_| random::normal(&mut rng));
+        // 5 reports a second, each the mean of the last 10 raw values: (time, value).
+        let mut reports: [(f32, f32); 4000] =
+            core::array::from_fn(|k| (0.2 * k as f32, raw[k..k + 10].iter().sum::<f32>() / 10.0));
+        let tau = correlation_time(reports.iter().map(|r| r.1), 4000);
+        // One report per 10 (2 s) keeps 400 nearly independent ones.
+        let kept = thin(&mut reports, 0.2 * tau.round(), |r| (r.0, 0));
+        let after = correlation_time(reports[..kept].iter().map(|r| r.1), kept as u32);
+        assert!((350..=450).contains(&kept), "{kept} kept at tau {tau}");
+        assert!(after < 1.5, "tau after thinning {after}");
+        assert!(
+            reports[..kept]
+                .windows(2)
+                .all(|w| w[1].0 - w[0].0 >= 0.2 * tau.round() - 1e-3)
+        );
     }
 
     #[test]

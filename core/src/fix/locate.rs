@@ -29,6 +29,29 @@
 //! fixed capacity `B`), the report holds at most `C` channels and `O` other sources, and every
 //! iterative step has a hard cap (RANSAC's hypotheses and attempts, the solver's iterations,
 //! the trimming rounds, the autocorrelation's lags, the sources per channel).
+//!
+//! ```
+//! use foxhunt_core::fix::locate::{LocateConfig, Observation, Workspace, locate};
+//! use foxhunt_core::model::bearing::{Bearing, predicted};
+//! use rand_core::SeedableRng;
+//!
+//! // Forty bearings from a drive past an emitter at (300, 400), a 2 degree offset and some
+//! // noise on them.
+//! let emitter = [300.0f32, 400.0];
+//! let obs: [Observation; 40] = core::array::from_fn(|k| {
+//!     let v = [25.0 * k as f32, 0.04 * (k * k) as f32];
+//!     let error = 0.035 + 0.01 * (1.7 * k as f32).sin();
+//!     let bearing = Bearing { vehicle: v, theta: predicted(&emitter, &v) + error, sigma: 0.01 };
+//!     Observation::new(bearing, k as f32)
+//! });
+//! let mut work = Workspace::<64>::new();
+//! let mut rng = rand_xorshift::XorShiftRng::seed_from_u64(1);
+//! let report = locate::<2, 2, _>(&obs, &LocateConfig::default(), work.buffers(), &mut rng)?;
+//! let e = &report.emitters()[0];
+//! assert!(e.consistent && e.ellipse.contains(&e.position, &emitter));
+//! assert!((e.bias - 0.035).abs() < 3.0 * e.bias_sd);
+//! # Ok::<(), foxhunt_core::Error>(())
+//! ```
 
 use super::bias::{BiasPrior, BiasedOptions, MAX_SOURCES, Sighting, Start, same_priors};
 use super::channel::{self, NO_CHANNEL};
