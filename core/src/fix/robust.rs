@@ -14,9 +14,11 @@
 //!    `hypotheses` scored, `max_attempts` pairs drawn, a sample of at most [`SCORE_SAMPLE`].
 //!    Deterministic given the generator.
 //! 2. [`refine`]: Tukey's biweight from the best hypothesis, then trimmed ML: keep the bearings
-//!    within 3 scale sigmas, fit position and offsets by Gaussian ML on them alone, re-estimate
-//!    the scale from their residuals (truncation-corrected), repeat until the set settles (at
-//!    most [`MAX_TRIM_ROUNDS`]). On clean data nothing is trimmed and the answer is the ML fix.
+//!    Tukey gave weight to, fit position and offsets by Gaussian ML on them alone, re-estimate
+//!    the scale from their residuals (truncation-corrected), cut at [`trim_cut`] scale sigmas
+//!    (3, or the Student-t quantile at 1 - 0.01 / n when that is wider: few bearings are not
+//!    trimmed on a noisy scale estimate), repeat until the set settles (at most
+//!    [`MAX_TRIM_ROUNDS`]). On clean data nothing is trimmed and the answer is the ML fix.
 //!
 //! [`chance`] says how likely so many bearings would line up on some point by luck (uniform
 //! bearings, a search over the hypotheses and offsets tried): pure noise is not an emitter.
