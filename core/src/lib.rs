@@ -4,7 +4,9 @@
 //! Everything here runs without an allocator: particle arrays are sized by const generics, so a
 //! filter can live in a `static` on a microcontroller. Randomness comes only from a
 //! caller-supplied [`rand_core::Rng`], so one seed gives the same answer on the host and the MCU.
-//! No entry point panics or returns NaN on bad input: it returns an [`Error`] instead.
+//! No entry point panics on any input. The entry points that return a `Result` never return NaN
+//! either: bad input gives an [`Error`] instead. Plain numeric helpers (a likelihood's `ln`, a
+//! `wrap` of an angle) pass non-finite input through; their callers check first.
 #![no_std]
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
@@ -15,6 +17,7 @@ pub mod linalg;
 pub mod particles;
 pub mod random;
 pub mod resample;
+pub mod stats;
 
 pub use error::Error;
 pub use particles::ParticleSet;
@@ -22,9 +25,12 @@ pub use resample::{ResamplePolicy, Resampling};
 pub mod likelihood;
 pub mod model;
 
-pub use likelihood::{Cauchy, Gaussian, GaussianUniform, Huber, Likelihood, StudentT, Widened};
+pub use likelihood::{
+    Cauchy, Gaussian, GaussianUniform, Huber, Likelihood, StudentT, Tukey, Widened,
+};
 pub use model::Model;
 pub use model::bearing::{Bearing, StaticEmitter};
+pub use model::biased::BiasedEmitter;
 pub use model::rssi::{PathLoss, RssiMeasurement, RssiTracker};
 pub use model::ungm::{Ungm, UngmObservation};
 pub mod fix;
@@ -34,7 +40,7 @@ pub mod filter;
 pub mod roughen;
 
 pub use estimator::{Method, PARTICLE_COUNTS, WithFilter};
-pub use filter::ekf::BearingEkf;
+pub use filter::ekf::{BearingEkf, BiasedBearingEkf};
 pub use filter::gpf::Gpf;
 pub use filter::sir::{Sir, SirConfig};
 pub use filter::{Estimate, Filter, StepStatus};

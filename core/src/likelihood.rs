@@ -2,7 +2,9 @@
 //!
 //! Each works on the normalised residual u = r / sigma and gives the log-likelihood up to a
 //! constant, plus the iteratively-reweighted-least-squares weight psi(u)/u that the robust ML
-//! fix uses. Heavy tails are how a filter survives wild bearings (reflections, a wrong lobe).
+//! fix uses. Heavy tails are how a filter survives wild bearings (reflections, a wrong lobe);
+//! a redescending loss ([`Cauchy`], [`Tukey`]) gives a wild bearing (almost) no say at all,
+//! which is what a consistent ghost needs, provided the start is already near the emitter.
 
 use core::f32::consts::PI;
 
@@ -17,9 +19,12 @@ pub trait Likelihood: Copy {
         let lik = *self;
         move |r| lik.ln(r, sigma)
     }
-    /// IRLS weight -d ln L / du / u in [0, 1] for the normalised residual u = r / sigma
-    /// (1 for a Gaussian).
-    fn irls_weight(&self, u: f32) -> f32;
+    /// IRLS weight -(d ln L / du) / u of residual `r` with scale `sigma`, u = r / sigma: 1 for
+    /// a Gaussian, in [0, 1] for Huber, Cauchy, Tukey and the Gaussian + uniform mixture, and up
+    /// to (nu + 1) / nu at u = 0 for Student-t (1.25 at the default nu = 4). Always >= 0 and
+    /// finite for finite input. The scale is an argument because a mixture's weight depends on
+    /// it, not only on u.
+    fn irls_weight(&self, r: f32, sigma: f32) -> f32;
 }
 
 /// Gaussian: exp(-u^2 / 2). Optimal for clean data, ruined by one wild bearing.
@@ -38,7 +43,7 @@ impl Likelihood for Gaussian {
         move |r| k * r * r
     }
     #[inline]
-    fn irls_weight(&self, _u: f32) -> f32 {
+    fn irls_weight(&self, _r: f32, _sigma: f32) -> f32 {
         1.0
     }
 }
@@ -67,8 +72,8 @@ impl Likelihood for Huber {
         }
     }
     #[inline]
-    fn irls_weight(&self, u: f32) -> f32 {
-        let a = libm::fabsf(u);
+    fn irls_weight(&self, r: f32, sigma: f32) -> f32 {
+        let a = libm::fabsf(r / sigma);
         if a <= self.c { 1.0 } else { self.c / a }
     }
 }
@@ -84,8 +89,41 @@ impl Likelihood for Cauchy {
         -libm::log1pf(u * u)
     }
     #[inline]
-    fn irls_weight(&self, u: f32) -> f32 {
+    fn irls_weight(&self, r: f32, sigma: f32) -> f32 {
+        let u = r / sigma;
         1.0 / (1.0 + u * u)
+    }
+}
+
+/// Tukey's biweight: rho(u) = c^2/6 (1 - (1 - (u/c)^2)^3) within `c` sigmas, constant beyond
+/// (c = 4.685 gives 95 % Gaussian efficiency). Hard-redescending: a bearing beyond c sigmas has
+/// no influence at all, so a consistent ghost cannot drag a fix that starts near the emitter
+/// (the loss is not convex: start it from a robust search, never from the PLE).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tukey {
+    /// Rejection point in sigmas (> 0).
+    pub c: f32,
+}
+
+impl Default for Tukey {
+    fn default() -> Self {
+        Self { c: 4.685 }
+    }
+}
+
+impl Likelihood for Tukey {
+    #[inline]
+    fn ln(&self, r: f32, sigma: f32) -> f32 {
+        let u = r / sigma;
+        let c2 = self.c * self.c;
+        let t = 1.0 - (u * u / c2).min(1.0);
+        -(c2 / 6.0) * (1.0 - t * t * t)
+    }
+    #[inline]
+    fn irls_weight(&self, r: f32, sigma: f32) -> f32 {
+        let u = r / sigma;
+        let t = 1.0 - (u * u / (self.c * self.c)).min(1.0);
+        t * t
     }
 }
 
@@ -109,7 +147,8 @@ impl Likelihood for StudentT {
         -0.5 * (self.nu + 1.0) * libm::log1pf(u * u / self.nu)
     }
     #[inline]
-    fn irls_weight(&self, u: f32) -> f32 {
+    fn irls_weight(&self, r: f32, sigma: f32) -> f32 {
+        let u = r / sigma;
         (self.nu + 1.0) / (self.nu + u * u)
     }
 }
@@ -145,11 +184,12 @@ impl Likelihood for GaussianUniform {
         libm::logf(libm::expf(-0.5 * u * u) + self.outlier_ratio(sigma))
     }
     #[inline]
-    fn irls_weight(&self, u: f32) -> f32 {
-        // Posterior probability of being an inlier; sigma enters only through the ratio, and
-        // a typical DF sigma of 1 degree is used for it.
+    fn irls_weight(&self, r: f32, sigma: f32) -> f32 {
+        // Posterior probability of being an inlier (the EM weight of the mixture): the ratio
+        // of the uniform floor to the Gaussian peak depends on this bearing's own sigma.
+        let u = r / sigma;
         let g = libm::expf(-0.5 * u * u);
-        let k = self.outlier_ratio(0.02);
+        let k = self.outlier_ratio(sigma);
         g / (g + k)
     }
 }
@@ -174,8 +214,8 @@ impl<L: Likelihood> Likelihood for Widened<L> {
         self.inner.ln(r, sigma * self.factor)
     }
     #[inline]
-    fn irls_weight(&self, u: f32) -> f32 {
-        self.inner.irls_weight(u / self.factor)
+    fn irls_weight(&self, r: f32, sigma: f32) -> f32 {
+        self.inner.irls_weight(r, sigma * self.factor)
     }
 }
 
@@ -189,8 +229,10 @@ mod tests {
         assert!((l.ln(0.05, 0.1) - l.ln(-0.05, 0.1)).abs() < 1e-6);
         assert!(l.ln(0.3, 0.1) < l.ln(0.1, 0.1));
         assert!(l.ln(3.0, 0.01).is_finite());
-        let w = l.irls_weight(10.0);
+        let w = l.irls_weight(1.0, 0.1);
         assert!((0.0..=1.0).contains(&w));
+        let w0 = l.irls_weight(0.0, 0.1);
+        assert!(w0.is_finite() && w0 >= 0.0);
         // The hoisted form agrees with the plain one to a few ulp.
         for sigma in [0.001f32, 0.0195, 1.0, 30.0] {
             let ln = l.ln_at(sigma);
@@ -211,6 +253,7 @@ mod tests {
         check(Huber::default());
         check(Cauchy);
         check(StudentT::default());
+        check(Tukey::default());
         check(GaussianUniform::default());
         check(Widened {
             inner: Cauchy,
@@ -222,7 +265,7 @@ mod tests {
     fn huber_matches_gaussian_in_core() {
         let h = Huber::default();
         assert_eq!(h.ln(0.1, 0.1), Gaussian.ln(0.1, 0.1));
-        assert!((h.irls_weight(2.69) - 0.5).abs() < 1e-3);
+        assert!((h.irls_weight(2.69, 1.0) - 0.5).abs() < 1e-3);
     }
 
     #[test]
@@ -230,5 +273,35 @@ mod tests {
         let g = GaussianUniform { eps: 0.1 };
         // Far out the mixture is flat: a wild bearing costs a constant, not u^2.
         assert!((g.ln(2.0, 0.02) - g.ln(3.0, 0.02)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn documented_weight_ranges() {
+        // Student-t weighs a zero residual above 1: (nu + 1) / nu.
+        assert!((StudentT::default().irls_weight(0.0, 0.1) - 1.25).abs() < 1e-6);
+        // Tukey: 1 at zero, 0 from c sigmas on, and its loss is flat there.
+        let t = Tukey::default();
+        assert_eq!(t.irls_weight(0.0, 0.1), 1.0);
+        assert_eq!(t.irls_weight(0.47, 0.1), 0.0);
+        assert_eq!(t.ln(0.5, 0.1), t.ln(5.0, 0.1));
+    }
+
+    #[test]
+    fn mixture_weight_uses_the_bearings_own_sigma() {
+        // The same normalised residual is likelier an inlier when sigma is small (the Gaussian
+        // density stands higher above the same uniform floor): the weight must change with
+        // sigma, which a fixed hidden sigma could not do.
+        let g = GaussianUniform { eps: 0.1 };
+        let narrow = g.irls_weight(3.0 * 0.005, 0.005);
+        let wide = g.irls_weight(3.0 * 0.2, 0.2);
+        assert!(narrow > wide, "{narrow} {wide}");
+        // And the weight is the posterior inlier probability from the likelihood itself.
+        for sigma in [0.005f32, 0.02, 0.2] {
+            let r = 2.5 * sigma;
+            let ratio = g.outlier_ratio(sigma);
+            let inlier = libm::expf(-0.5 * 2.5 * 2.5);
+            let expected = inlier / (inlier + ratio);
+            assert!((g.irls_weight(r, sigma) - expected).abs() < 1e-6);
+        }
     }
 }

@@ -6,7 +6,7 @@ use foxhunt_core::model::bearing::{azimuth_to_theta, predicted, theta_to_azimuth
 use foxhunt_core::preprocess::{ObservationPoint, error_weight};
 use foxhunt_core::{
     Bearing, BearingEkf, Cauchy, Filter, Gaussian, GaussianUniform, Gpf, Huber, Likelihood,
-    ParticleSet, Resampling, Roughening, Sir, SirConfig, StaticEmitter, StudentT, linalg,
+    ParticleSet, Resampling, Roughening, Sir, SirConfig, StaticEmitter, StudentT, Tukey, linalg,
 };
 use proptest::prelude::*;
 use rand_core::SeedableRng;
@@ -77,12 +77,16 @@ proptest! {
 
     #[test]
     fn likelihoods(r in wild(), s in wild(), p in wild()) {
-        let _ = (Gaussian.ln(r, s), Gaussian.irls_weight(r));
-        let _ = (Huber { c: p }.ln(r, s), Huber { c: p }.irls_weight(r));
-        let _ = (Cauchy.ln(r, s), Cauchy.irls_weight(r));
-        let _ = (StudentT { nu: p }.ln(r, s), StudentT { nu: p }.irls_weight(r));
-        let _ = (GaussianUniform { eps: p }.ln(r, s), GaussianUniform { eps: p }.irls_weight(r));
-        prop_assert!(Huber::default().irls_weight(r).is_nan() || Huber::default().irls_weight(r) <= 1.0);
+        let _ = (Gaussian.ln(r, s), Gaussian.irls_weight(r, s));
+        let _ = (Huber { c: p }.ln(r, s), Huber { c: p }.irls_weight(r, s));
+        let _ = (Cauchy.ln(r, s), Cauchy.irls_weight(r, s));
+        let _ = (StudentT { nu: p }.ln(r, s), StudentT { nu: p }.irls_weight(r, s));
+        let _ = (GaussianUniform { eps: p }.ln(r, s), GaussianUniform { eps: p }.irls_weight(r, s));
+        let _ = (Tukey { c: p }.ln(r, s), Tukey { c: p }.irls_weight(r, s));
+        let h = Huber::default().irls_weight(r, s);
+        prop_assert!(h.is_nan() || h <= 1.0);
+        let t = Tukey::default().irls_weight(r, s);
+        prop_assert!(t.is_nan() || (0.0..=1.0).contains(&t));
     }
 
     #[test]

@@ -4,6 +4,7 @@
 #![deny(missing_docs)]
 
 pub mod cmd;
+pub mod field;
 pub mod frames;
 pub mod indoor;
 pub mod io;

@@ -39,6 +39,54 @@ impl Ellipse {
         crate::error::check_finite(&[e.major, e.minor, e.orientation])?;
         Ok(e)
     }
+
+    /// The ellipse x^T C^-1 x <= `scale` of covariance `cov`, labelled with the `confidence`
+    /// the caller's distribution gives that scale (2 F(2, dof) when the noise was estimated,
+    /// see [`crate::fix::consistency::ellipse_scale`]).
+    pub fn with_scale(cov: &[[f32; 2]; 2], scale: f32, confidence: f32) -> Result<Self, Error> {
+        crate::error::check_finite(&[scale])?;
+        if !(scale > 0.0) {
+            return Err(Error::OutOfRange);
+        }
+        // The 1 - e^{-1/2} ellipse has k = 1: rescale its axes.
+        let unit = Self::from_covariance(cov, 1.0 - libm::expf(-0.5))?;
+        let k = libm::sqrtf(scale);
+        let e = Self {
+            major: k * unit.major,
+            minor: k * unit.minor,
+            orientation: unit.orientation,
+            confidence,
+        };
+        crate::error::check_finite(&[e.major, e.minor])?;
+        if !(confidence > 0.0 && confidence < 1.0) {
+            return Err(Error::OutOfRange);
+        }
+        Ok(e)
+    }
+
+    /// Whether `point` lies inside the ellipse centred on `centre`.
+    pub fn contains(&self, centre: &[f32; 2], point: &[f32; 2]) -> bool {
+        let (dx, dy) = (point[0] - centre[0], point[1] - centre[1]);
+        let (s, c) = (libm::sinf(self.orientation), libm::cosf(self.orientation));
+        let along = c * dx + s * dy;
+        let across = -s * dx + c * dy;
+        if !(self.major > 0.0 && self.minor > 0.0) {
+            return false;
+        }
+        let a = along / self.major;
+        let b = across / self.minor;
+        a * a + b * b <= 1.0
+    }
+}
+
+/// Mahalanobis distance sqrt(d^T C^-1 d) of `point` from `centre` under covariance `cov`;
+/// `None` when `cov` is singular.
+pub fn mahalanobis(cov: &[[f32; 2]; 2], centre: &[f32; 2], point: &[f32; 2]) -> Option<f32> {
+    let inv = linalg::inverse2(cov)?;
+    let d = [point[0] - centre[0], point[1] - centre[1]];
+    let q =
+        d[0] * (inv[0][0] * d[0] + inv[0][1] * d[1]) + d[1] * (inv[1][0] * d[0] + inv[1][1] * d[1]);
+    (q >= 0.0 && q.is_finite()).then(|| libm::sqrtf(q))
 }
 
 /// Circular error probable (50 %): 0.59 (s1 + s2) of the standard deviations along the axes
@@ -61,6 +109,17 @@ mod tests {
         // CEP50 of a circular Gaussian is 1.1774 sigma; the 0.59 (s1 + s2) rule gives 1.18 sigma.
         let c = cep50(&[[4.0, 0.0], [0.0, 4.0]]).unwrap();
         assert!((c - 2.0 * 1.1774).abs() < 0.01, "{c}");
+    }
+
+    #[test]
+    fn scaled_ellipses_and_membership() {
+        let cov = [[9.0, 0.0], [0.0, 1.0]];
+        let e = Ellipse::with_scale(&cov, 5.991, 0.95).unwrap();
+        let g = Ellipse::from_covariance(&cov, 0.95).unwrap();
+        assert!((e.major - g.major).abs() < 1e-3 && (e.minor - g.minor).abs() < 1e-3);
+        assert!(e.contains(&[0.0, 0.0], &[7.0, 0.0]) && !e.contains(&[0.0, 0.0], &[0.0, 2.6]));
+        let m = mahalanobis(&cov, &[0.0, 0.0], &[3.0, 1.0]).unwrap();
+        assert!((m - libm::sqrtf(2.0)).abs() < 1e-5);
     }
 
     #[test]

@@ -51,7 +51,7 @@ fn normal_equations<L: Likelihood>(
         let d2 = (dx * dx + dy * dy).max(1e-6);
         let r = wrap(b.theta - predicted(&p, &s));
         let inv_var = 1.0 / (b.sigma * b.sigma);
-        let w = inv_var * loss.irls_weight(r / b.sigma);
+        let w = inv_var * loss.irls_weight(r, b.sigma);
         // d h / d p for h = atan2(dy, dx).
         let jac = [-dy / d2, dx / d2];
         for i in 0..2 {

@@ -1,13 +1,20 @@
 //! Batch fixes: every bearing at once. The ML fix is the physical limit the sequential filters
 //! are measured against; the CRLB says what no unbiased estimator can beat.
 
+pub mod bias;
+pub mod channel;
+pub mod consistency;
 pub mod crlb;
 pub mod ellipse;
+pub mod evidence;
 pub mod init;
 pub mod intersection;
+pub mod locate;
 pub mod ml;
+pub mod order;
 pub mod pcrb;
 pub mod ple;
+pub mod robust;
 
 use crate::error::Error;
 use crate::model::bearing::Bearing;
@@ -48,12 +55,21 @@ const STATIONARY_M: f32 = 0.01;
 const PARALLEL_SIN: f32 = 1e-4;
 
 pub(crate) fn geometry(bearings: &[Bearing]) -> Result<Geometry, Error> {
+    let mut g = geometry_of(usable(bearings))?;
+    g.skipped = bearings.len() as u32 - g.used;
+    Ok(g)
+}
+
+/// [`geometry`] of bearings already filtered for use (`skipped` is left 0 for the caller).
+pub(crate) fn geometry_of<'a>(
+    bearings: impl Iterator<Item = &'a Bearing>,
+) -> Result<Geometry, Error> {
     let mut used = 0u32;
     let mut sum = [0.0f64; 2];
     let mut first: Option<Bearing> = None;
     let mut moved = false;
     let mut turned = false;
-    for b in bearings.iter().filter(|b| b.check().is_ok()) {
+    for b in bearings {
         used += 1;
         sum[0] += b.vehicle[0] as f64;
         sum[1] += b.vehicle[1] as f64;
@@ -67,7 +83,6 @@ pub(crate) fn geometry(bearings: &[Bearing]) -> Result<Geometry, Error> {
             }
         }
     }
-    let skipped = bearings.len() as u32 - used;
     if used < 2 {
         return Err(Error::TooFewMeasurements);
     }
@@ -80,7 +95,7 @@ pub(crate) fn geometry(bearings: &[Bearing]) -> Result<Geometry, Error> {
     let origin = [(sum[0] / used as f64) as f32, (sum[1] / used as f64) as f32];
     Ok(Geometry {
         used,
-        skipped,
+        skipped: 0,
         origin,
     })
 }

@@ -1,6 +1,7 @@
 //! State-space models: how a state moves and what a measurement says about it.
 
 pub mod bearing;
+pub mod biased;
 pub mod rssi;
 pub mod ungm;
 

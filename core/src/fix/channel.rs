@@ -1,0 +1,188 @@
+//! Bearings grouped into channels by frequency: one emitter per channel.
+//!
+//! A KrakenSDR reports up to 16 channels (VFOs), each with its frequency; pairing bearings of
+//! different frequencies makes phantom fixes between two transmitters (FIELD.md). Frequencies
+//! are sorted and swept: a channel holds every frequency within `width` of its lowest, the next
+//! frequency beyond starts a new channel. Bearings without a frequency form one channel of
+//! their own, listed first.
+
+use super::order::heapsort_by;
+use crate::error::{Error, check_finite};
+
+/// Marks an item that belongs to no channel (excluded, or beyond the capacity).
+pub const NO_CHANNEL: u8 = u8::MAX;
+
+/// The channels of a set of bearings, at most `C` of them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Channels<const C: usize> {
+    len: usize,
+    /// Mean frequency of each channel, MHz (`None` for the channel without frequency).
+    freq: [Option<f32>; C],
+    /// Items in each channel.
+    count: [u32; C],
+    /// Items whose channel did not fit in `C`.
+    pub overflow: u32,
+}
+
+impl<const C: usize> Channels<C> {
+    /// Number of channels.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether there is no channel.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Mean frequency of channel `c` (MHz; `Some(None)` for the channel without frequency).
+    pub fn freq(&self, c: usize) -> Option<Option<f32>> {
+        self.freq.get(..self.len)?.get(c).copied()
+    }
+
+    /// Items in channel `c`.
+    pub fn count(&self, c: usize) -> u32 {
+        self.count
+            .get(..self.len)
+            .and_then(|v| v.get(c))
+            .copied()
+            .unwrap_or(0)
+    }
+}
+
+/// Group items into channels. `freq(i)` is item i's frequency: `Some(Some(f))` in MHz,
+/// `Some(None)` without one, `None` for an item to leave out. `channel_of[i]` gets the channel
+/// index (or [`NO_CHANNEL`]); `order` (at least `n` long) is sorting space. Non-finite or
+/// negative frequencies are refused before anything is written. O(n log n).
+pub fn group<const C: usize>(
+    n: usize,
+    freq: impl Fn(usize) -> Option<Option<f32>>,
+    width: f32,
+    order: &mut [u32],
+    channel_of: &mut [u8],
+) -> Result<Channels<C>, Error> {
+    check_finite(&[width])?;
+    if !(width >= 0.0) || order.len() < n || channel_of.len() < n || C > NO_CHANNEL as usize {
+        return Err(Error::OutOfRange);
+    }
+    for i in 0..n {
+        if let Some(Some(f)) = freq(i) {
+            check_finite(&[f])?;
+            if f < 0.0 {
+                return Err(Error::OutOfRange);
+            }
+        }
+    }
+    let mut out = Channels {
+        len: 0,
+        freq: [None; C],
+        count: [0; C],
+        overflow: 0,
+    };
+    let mut sums = [0.0f32; C];
+    let mut k = 0usize;
+    let mut untuned = false;
+    for i in 0..n {
+        channel_of[i] = NO_CHANNEL;
+        match freq(i) {
+            Some(Some(_)) => {
+                order[k] = i as u32;
+                k += 1;
+            }
+            Some(None) => untuned = true,
+            None => {}
+        }
+    }
+    // The channel without frequency first.
+    if untuned {
+        if C == 0 {
+            for i in 0..n {
+                out.overflow += matches!(freq(i), Some(None)) as u32;
+            }
+        } else {
+            out.len = 1;
+            for i in 0..n {
+                if matches!(freq(i), Some(None)) {
+                    channel_of[i] = 0;
+                    out.count[0] += 1;
+                }
+            }
+        }
+    }
+    let f_of = |i: u32| freq(i as usize).flatten().unwrap_or(0.0);
+    heapsort_by(&mut order[..k], |a, b| {
+        (f_of(*a), *a).partial_cmp(&(f_of(*b), *b)) == Some(core::cmp::Ordering::Less)
+    });
+    let mut lowest = f32::NEG_INFINITY;
+    let mut current: Option<usize> = None;
+    for &i in &order[..k] {
+        let f = f_of(i);
+        if current.is_none() || f - lowest > width {
+            lowest = f;
+            current = (out.len < C).then_some(out.len);
+            if current.is_some() {
+                out.len += 1;
+            }
+        }
+        match current {
+            Some(c) => {
+                channel_of[i as usize] = c as u8;
+                out.count[c] += 1;
+                sums[c] += f;
+            }
+            None => out.overflow += 1,
+        }
+    }
+    for c in 0..out.len {
+        if out.freq[c].is_none() && !(untuned && c == 0) && out.count[c] > 0 {
+            out.freq[c] = Some(sums[c] / out.count[c] as f32);
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frequencies_within_the_width_share_a_channel() {
+        let f = [
+            Some(Some(146.52)),
+            Some(None),
+            Some(Some(145.000)),
+            Some(Some(146.5205)),
+            None,
+            Some(Some(145.010)),
+            Some(None),
+        ];
+        let mut order = [0u32; 7];
+        let mut of = [0u8; 7];
+        let ch = group::<4>(7, |i| f[i], 0.025, &mut order, &mut of).unwrap();
+        assert_eq!(ch.len(), 3);
+        assert_eq!(of, [2, 0, 1, 2, NO_CHANNEL, 1, 0]);
+        assert_eq!(ch.freq(0), Some(None));
+        assert!((ch.freq(1).flatten().unwrap() - 145.005).abs() < 1e-3);
+        assert_eq!((ch.count(0), ch.count(1), ch.count(2)), (2, 2, 2));
+    }
+
+    #[test]
+    fn channels_beyond_the_capacity_are_counted() {
+        let f = [
+            Some(Some(1.0)),
+            Some(Some(2.0)),
+            Some(Some(3.0)),
+            Some(Some(3.0)),
+        ];
+        let mut order = [0u32; 4];
+        let mut of = [0u8; 4];
+        let ch = group::<2>(4, |i| f[i], 0.1, &mut order, &mut of).unwrap();
+        assert_eq!((ch.len(), ch.overflow), (2, 2));
+        assert_eq!(of, [0, 1, NO_CHANNEL, NO_CHANNEL]);
+        let bad = [Some(Some(f32::NAN))];
+        assert_eq!(
+            group::<2>(1, |i| bad[i], 0.1, &mut order, &mut of),
+            Err(Error::NonFinite)
+        );
+    }
+}

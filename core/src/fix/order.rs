@@ -1,0 +1,93 @@
+//! Sorting without the standard library's sort: a heapsort, a few hundred bytes of code and
+//! O(n log n) on every input.
+//!
+//! The standard library's sort is 4 KB of code, the largest single item of the 64 KiB MCU
+//! image, which sorts little else; the fixes sort residuals (medians, windows), bearing keys
+//! (repeated evidence) and frequencies (channels) with this one.
+
+/// Sort `v` ascending by `less` (a strict weak order), in place. Not stable: callers that need
+/// ties in input order put the index into the key.
+pub fn heapsort_by<T: Copy>(v: &mut [T], mut less: impl FnMut(&T, &T) -> bool) {
+    let n = v.len();
+    for root in (0..n / 2).rev() {
+        sift_down(v, root, n, &mut less);
+    }
+    for end in (1..n).rev() {
+        v.swap(0, end);
+        sift_down(v, 0, end, &mut less);
+    }
+}
+
+/// Restore the max-heap below `root` within `v[..end]`.
+fn sift_down<T: Copy>(
+    v: &mut [T],
+    mut root: usize,
+    end: usize,
+    less: &mut impl FnMut(&T, &T) -> bool,
+) {
+    loop {
+        let mut child = 2 * root + 1;
+        if child >= end {
+            return;
+        }
+        if child + 1 < end && less(&v[child], &v[child + 1]) {
+            child += 1;
+        }
+        if !less(&v[root], &v[child]) {
+            return;
+        }
+        v.swap(root, child);
+        root = child;
+    }
+}
+
+/// Sort ascending in [`f32::total_cmp`] order.
+pub fn heapsort(v: &mut [f32]) {
+    heapsort_by(v, |a, b| a.total_cmp(b).is_lt());
+}
+
+/// Median of `v` (sorted in place); 0 for an empty slice.
+pub fn median(v: &mut [f32]) -> f32 {
+    heapsort(v);
+    match v.len() {
+        0 => 0.0,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::random;
+    use rand_core::SeedableRng;
+    use rand_xorshift::XorShiftRng;
+
+    #[test]
+    fn heapsort_sorts_like_the_standard_library() {
+        let mut rng = XorShiftRng::seed_from_u64(9);
+        for n in 0..40 {
+            let mut v = [0.0f32; 40];
+            for x in v.iter_mut().take(n) {
+                // Few distinct values: ties are the hard case.
+                *x = (random::uniform(&mut rng) * 7.0) as i32 as f32 - 3.0;
+            }
+            v[n / 2] = -0.0;
+            let mut expected = v;
+            expected[..n].sort_unstable_by(f32::total_cmp);
+            heapsort(&mut v[..n]);
+            assert_eq!(v.map(f32::to_bits), expected.map(f32::to_bits), "n = {n}");
+        }
+        let mut odd = [5.0f32, 1.0, 4.0];
+        assert_eq!(median(&mut odd), 4.0);
+        let mut even = [5.0f32, 1.0, 4.0, 2.0];
+        assert_eq!(median(&mut even), 3.0);
+    }
+
+    #[test]
+    fn keys_with_indices_sort_stably() {
+        let mut v = [(3u32, 0u32), (1, 1), (3, 2), (1, 3), (2, 4)];
+        heapsort_by(&mut v, |a, b| a < b);
+        assert_eq!(v, [(1, 1), (1, 3), (2, 4), (3, 0), (3, 2)]);
+    }
+}
