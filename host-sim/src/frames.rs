@@ -1,5 +1,8 @@
 //! `foxhunt frames`: every decoded frame of a capture as one JSON object per line, then the
-//! counters, for debugging a serial link. Field names are stable.
+//! counters, for debugging a serial link. Field names are stable: every object has `kind`;
+//! positions are `lat`/`lon`, times `time` (`hh:mm:ss.sss` UTC); bearings have `bearing_deg`
+//! as the unit reported it and `reference` (`true` or `relative`) after the format's own
+//! convention, with `quality` and `freq_mhz` where the format has them.
 
 use foxhunt_bridge::mt::{AfIncomingMsg, LinkQualityMap};
 use foxhunt_bridge::nmea::{LatLon, NmeaError, Reference, Sentence, UtcTime};
@@ -23,49 +26,99 @@ fn position(v: &mut Value, p: LatLon) {
     v["lon"] = json!(p.lon);
 }
 
+fn talker(t: &[u8; 2]) -> String {
+    String::from_utf8_lossy(t).into_owned()
+}
+
+fn reference(r: Reference) -> &'static str {
+    match r {
+        Reference::True => "true",
+        Reference::Relative => "relative",
+    }
+}
+
+/// The JSON object of one NMEA sentence.
+fn sentence_json(text: &str) -> Value {
+    match Sentence::parse(text) {
+        Ok(Sentence::Gga(g)) => {
+            let mut v = json!({"kind": "gga", "talker": talker(&g.talker),
+                "time": time(g.time), "quality": g.quality, "satellites": g.satellites,
+                "hdop": g.hdop, "altitude_m": g.altitude_m});
+            position(&mut v, g.position);
+            v
+        }
+        Ok(Sentence::Rmc(r)) => {
+            let mut v = json!({"kind": "rmc", "talker": talker(&r.talker),
+                "time": time(r.time), "speed_kn": r.speed_kn, "course_deg": r.course_deg,
+                "date": r.date.map(|d| format!("{:04}-{:02}-{:02}", d.year, d.month, d.day))});
+            position(&mut v, r.position);
+            v
+        }
+        Ok(Sentence::Gll(g)) => {
+            let mut v = json!({"kind": "gll", "talker": talker(&g.talker),
+                "time": g.time.map(time)});
+            position(&mut v, g.position);
+            v
+        }
+        Ok(Sentence::Gns(g)) => {
+            let mut v = json!({"kind": "gns", "talker": talker(&g.talker),
+                "time": time(g.time), "mode": (g.mode as char).to_string(),
+                "satellites": g.satellites, "hdop": g.hdop, "altitude_m": g.altitude_m});
+            position(&mut v, g.position);
+            v
+        }
+        Ok(Sentence::Vtg(t)) => json!({"kind": "vtg", "talker": talker(&t.talker),
+            "course_deg": t.course_deg, "course_magnetic_deg": t.course_magnetic_deg,
+            "speed_kn": t.speed_kn, "speed_kmh": t.speed_kmh, "old_form": t.old_form}),
+        Ok(Sentence::Hdt(h)) => json!({"kind": "hdt", "talker": talker(&h.talker),
+            "heading_deg": h.heading_deg, "reference": "true"}),
+        Ok(Sentence::Ths(h)) => json!({"kind": "ths", "talker": talker(&h.talker),
+            "heading_deg": h.heading_deg, "reference": "true",
+            "mode": (h.mode as char).to_string()}),
+        Ok(Sentence::Hdg(h)) => json!({"kind": "hdg", "talker": talker(&h.talker),
+            "sensor_deg": h.sensor_deg, "deviation_deg": h.deviation_deg,
+            "variation_deg": h.variation_deg, "heading_deg": h.magnetic_deg(),
+            "reference": "magnetic", "true_heading_deg": h.true_deg()}),
+        Ok(Sentence::Hdm(h)) => json!({"kind": "hdm", "talker": talker(&h.talker),
+            "heading_deg": h.heading_deg, "reference": "magnetic"}),
+        Ok(Sentence::Pfoxb(b)) => {
+            let mut v = json!({"kind": "pfoxb", "time": time(b.time),
+                "bearing_deg": b.azimuth_deg, "azimuth_deg": b.azimuth_deg,
+                "reference": reference(b.reference),
+                "quality": b.quality, "freq_mhz": b.freq_mhz});
+            if let Some(p) = b.position {
+                position(&mut v, p);
+            }
+            v
+        }
+        Err(e) => {
+            let kind = match text.get(2..5) {
+                _ if text.starts_with("PFOXB") => "pfoxb",
+                Some("GGA") => "gga",
+                Some("RMC") => "rmc",
+                Some("GLL") => "gll",
+                Some("GNS") => "gns",
+                Some("VTG") => "vtg",
+                Some("HDT") => "hdt",
+                Some("THS") => "ths",
+                Some("HDG") => "hdg",
+                Some("HDM") => "hdm",
+                _ => "nmea",
+            };
+            let error = match e {
+                NmeaError::Unsupported => None,
+                NmeaError::NoFix => Some("no_fix".to_string()),
+                NmeaError::BadField(n) => Some(format!("bad_field_{n}")),
+            };
+            json!({"kind": kind, "sentence": text, "error": error})
+        }
+    }
+}
+
 /// The JSON object of one frame.
 pub fn frame_json(f: &Frame<'_>, map: &LinkQualityMap) -> Value {
     match f {
-        Frame::Nmea(text) => match Sentence::parse(text) {
-            Ok(Sentence::Gga(g)) => {
-                let mut v = json!({"kind": "gga", "talker": String::from_utf8_lossy(&g.talker),
-                    "time": time(g.time), "quality": g.quality, "satellites": g.satellites,
-                    "hdop": g.hdop, "altitude_m": g.altitude_m});
-                position(&mut v, g.position);
-                v
-            }
-            Ok(Sentence::Rmc(r)) => {
-                let mut v = json!({"kind": "rmc", "talker": String::from_utf8_lossy(&r.talker),
-                    "time": time(r.time), "speed_kn": r.speed_kn, "course_deg": r.course_deg,
-                    "date": r.date.map(|d| format!("{:04}-{:02}-{:02}", d.year, d.month, d.day))});
-                position(&mut v, r.position);
-                v
-            }
-            Ok(Sentence::Pfoxb(b)) => {
-                let mut v = json!({"kind": "pfoxb", "time": time(b.time),
-                    "azimuth_deg": b.azimuth_deg,
-                    "reference": match b.reference { Reference::True => "true", Reference::Relative => "relative" },
-                    "quality": b.quality, "freq_mhz": b.freq_mhz});
-                if let Some(p) = b.position {
-                    position(&mut v, p);
-                }
-                v
-            }
-            Err(e) => {
-                let kind = match text.get(2..5) {
-                    Some("GGA") => "gga",
-                    Some("RMC") => "rmc",
-                    _ if text.starts_with("PFOXB") => "pfoxb",
-                    _ => "nmea",
-                };
-                let error = match e {
-                    NmeaError::Unsupported => None,
-                    NmeaError::NoFix => Some("no_fix".to_string()),
-                    NmeaError::BadField(n) => Some(format!("bad_field_{n}")),
-                };
-                json!({"kind": kind, "sentence": text, "error": error})
-            }
-        },
+        Frame::Nmea(text) => sentence_json(text),
         Frame::Mt(m) => match AfIncomingMsg::parse(m) {
             Ok(a) => json!({"kind": "af_incoming_msg", "src_addr": a.src_addr,
                 "link_quality": a.link_quality, "rssi_dbm": map.rssi_dbm(a.link_quality),

@@ -245,7 +245,9 @@ impl<const A: usize> Bridge<A> {
                     let course = r.course_deg.map(|c| c as f32);
                     self.fix(r.time.ms_of_day, r.position, speed, course, sink)
                 }
+                Ok(Sentence::Gns(g)) => self.fix(g.time.ms_of_day, g.position, None, None, sink),
                 Ok(Sentence::Pfoxb(b)) => self.bearing(&b, sink),
+                Ok(_) => self.counters.unsupported_sentences += 1,
                 Err(NmeaError::Unsupported) => self.counters.unsupported_sentences += 1,
                 Err(NmeaError::NoFix) => self.counters.no_fix_sentences += 1,
                 Err(NmeaError::BadField(_)) => self.counters.bad_field += 1,

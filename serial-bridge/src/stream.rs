@@ -15,8 +15,9 @@
 //! wait at once. A sentence cannot be forged across frames: its body must be printable ASCII
 //! without `$`, which the bytes of any other frame break.
 
-/// Longest NMEA sentence, `$` to LF inclusive (NMEA 0183: 82 characters).
-pub const MAX_SENTENCE: usize = 82;
+/// Longest NMEA sentence, `$` to LF inclusive: GPSD's limit (`NMEA_MAX` in its `gpsd.h`), since
+/// RTK receivers print more decimals than NMEA 0183's 82 characters allow.
+pub const MAX_SENTENCE: usize = 130;
 /// Longest MT frame: SOF, LEN, CMD0, CMD1, 255 data bytes, FCS.
 pub const MAX_MT_FRAME: usize = 255 + 5;
 /// Default buffer: room for an MT frame and a second one starting inside it, so every wait
@@ -123,8 +124,10 @@ fn scan_sentence_from(bytes: &[u8], from: usize) -> Scan {
     for i in from.max(1)..limit {
         match bytes[i] {
             b'\n' => return check_sentence(&bytes[..=i]),
+            // CR LF, CR CR LF (Telit) or a bare LF end a line; a CR before anything else
+            // is no line end.
             b'\r' => {
-                if i + 1 < bytes.len() && bytes[i + 1] != b'\n' {
+                if bytes.get(i + 1).is_some_and(|&b| b != b'\n' && b != b'\r') {
                     return Scan::Invalid(Reject::Malformed);
                 }
             }
@@ -140,10 +143,10 @@ fn scan_sentence_from(bytes: &[u8], from: usize) -> Scan {
     }
 }
 
-/// `line` runs from `$` to LF; CRLF or a bare LF both end a line.
+/// `line` runs from `$` to LF; any CRs before the LF belong to the line end.
 fn check_sentence(line: &[u8]) -> Scan {
     let mut end = line.len() - 1;
-    if end > 0 && line[end - 1] == b'\r' {
+    while end > 1 && line[end - 1] == b'\r' {
         end -= 1;
     }
     let text = &line[1..end];
@@ -630,6 +633,37 @@ mod tests {
         d.feed(&s, &mut |_| n += 1);
         d.finish_into(&mut |_| n += 1);
         assert_eq!(d.counters().bytes, s.len() as u64);
+    }
+
+    #[test]
+    fn gpsd_grade_line_ends_lengths_and_binary_neighbours() {
+        let rtk = "GPGGA,132820.60,4134.49821229,N,09345.03351845,W,2,09,1.0,278.020,M,-31.442,M,7.6,0133";
+        let mut s = std::vec::Vec::new();
+        // u-blox UBX (0xB5 0x62) and SiRF (0xA0 0xA2 ... 0xB0 0xB3) frames, one with an MT
+        // start byte and a '$' in its payload, between sentences with every line end.
+        s.extend_from_slice(&[
+            0xB5, 0x62, 0x01, 0x07, 0x04, 0x00, 0xFE, 0x10, b'$', 0x00, 0x3A, 0x9C,
+        ]);
+        s.extend_from_slice(std::format!("${rtk}*7E\r\r\n").as_bytes());
+        s.extend_from_slice(&[0xA0, 0xA2, 0x00, 0x02, 0xFE, 0x05, 0x01, 0x03, 0xB0, 0xB3]);
+        s.extend_from_slice(sentence("GPXXX,1").trim_end().as_bytes());
+        s.extend_from_slice(b"\n");
+        s.extend_from_slice(sentence("GPXXX,2").as_bytes());
+        let (out, c) = frames(&s);
+        let want = [
+            std::format!("Nmea({rtk:?})"),
+            "Nmea(\"GPXXX,1\")".into(),
+            "Nmea(\"GPXXX,2\")".into(),
+        ];
+        assert_eq!(out, want, "{c:?}");
+        // 130 bytes from '$' to LF is GPSD's limit; 131 is too long.
+        for (len, ok) in [(130, true), (131, false)] {
+            let body = std::format!("GPXXX,{}", "9".repeat(len - 12));
+            let line = sentence(&body);
+            assert_eq!(line.len(), len);
+            let (out, c) = frames(line.as_bytes());
+            assert_eq!((out.len() == 1, c.too_long == 1), (ok, !ok), "{len}");
+        }
     }
 
     #[test]
