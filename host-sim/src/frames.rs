@@ -4,6 +4,7 @@
 //! as the unit reported it and `reference` (`true` or `relative`) after the format's own
 //! convention, with `quality` and `freq_mhz` where the format has them.
 
+use foxhunt_bridge::agrelo::Agrelo;
 use foxhunt_bridge::mt::{AfIncomingMsg, LinkQualityMap};
 use foxhunt_bridge::nmea::{LatLon, NmeaError, Reference, Sentence, UtcTime};
 use foxhunt_bridge::{Demux, Frame};
@@ -126,6 +127,40 @@ pub fn frame_json(f: &Frame<'_>, map: &LinkQualityMap) -> Value {
                 "src_endpoint": a.src_endpoint, "trans_seq": a.trans_seq, "len": a.data.len()}),
             Err(_) => json!({"kind": "mt", "cmd0": m.cmd0, "cmd1": m.cmd1, "len": m.data.len()}),
         },
+        Frame::Agrelo(text) => match Agrelo::parse(text) {
+            // Relative to the vehicle, clockwise; 0 means no bearing (`bearing_deg` null).
+            Ok(a) => json!({"kind": "agrelo", "bearing_deg": a.bearing(),
+                "reference": "relative", "quality": a.quality,
+                "magnetic_deg": a.magnetic_deg, "record": text}),
+            Err(e) => json!({"kind": "agrelo", "record": text, "error": e.to_string()}),
+        },
+        Frame::KrakenCsv(k) => {
+            let r = &k.record;
+            let mut v = json!({"kind": "kraken_csv", "bearing_deg": r.bearing_deg,
+                "reference": "relative", "quality": r.confidence, "power_db": r.power_db,
+                "freq_mhz": r.freq_hz as f64 / 1e6, "time": time(UtcTime {
+                    ms_of_day: (r.epoch_ms % 86_400_000) as u32 }),
+                "epoch_ms": r.epoch_ms, "heading_deg": r.heading_deg,
+                "station": r.station.as_str(), "latency_ms": r.latency_ms,
+                "spectrum": k.spectrum.map(|s| s.to_vec())});
+            if let Some(p) = r.position {
+                position(&mut v, p);
+            }
+            v
+        }
+        Frame::KrakenXml(r) => {
+            // DOA counts anticlockwise from the array's front; true = heading + 360 - DOA.
+            let mut v = json!({"kind": "kraken_xml", "bearing_deg": r.doa_deg,
+                "reference": "relative", "anticlockwise": true, "quality": r.conf,
+                "pwr": r.pwr, "freq_mhz": r.freq_mhz,
+                "time": r.time_ms.map(|t| time(UtcTime { ms_of_day: (t % 86_400_000) as u32 })),
+                "epoch_ms": r.time_ms, "heading_deg": r.heading_deg,
+                "true_bearing_deg": r.true_deg(), "station": r.station.as_str()});
+            if let Some(p) = r.position {
+                position(&mut v, p);
+            }
+            v
+        }
     }
 }
 
@@ -149,6 +184,10 @@ pub fn write_frames(bytes: &[u8], out: &mut impl std::io::Write) -> std::io::Res
         json!({"kind": "counters", "bytes": c.bytes, "sentences": c.sentences,
             "mt_frames": c.mt_frames, "garbage_bytes": c.garbage_bytes,
             "bad_checksum": c.bad_checksum, "malformed": c.malformed, "too_long": c.too_long,
-            "bad_fcs": c.bad_fcs, "overlapping": c.overlapping, "truncated": c.truncated})
+            "bad_fcs": c.bad_fcs, "overlapping": c.overlapping, "truncated": c.truncated,
+            "agrelo": c.agrelo, "agrelo_malformed": c.agrelo_malformed,
+            "kraken_csv": c.kraken_csv, "kraken_xml": c.kraken_xml,
+            "kraken_bad_field": c.kraken_bad_field, "kraken_too_long": c.kraken_too_long,
+            "kraken_structure": c.kraken_structure})
     )
 }

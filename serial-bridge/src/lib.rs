@@ -8,12 +8,14 @@
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod agrelo;
 pub mod bridge;
 pub mod geo;
+pub mod kraken;
 pub mod mt;
 pub mod nmea;
 pub mod replay;
 pub mod stream;
 
 pub use bridge::{Bridge, BridgeConfig, BridgeCounters, Event, Receiver};
-pub use stream::{Demux, Frame, MtFrame, StreamCounters};
+pub use stream::{Demux, Frame, KrakenCsvFrame, MtFrame, StreamCounters};

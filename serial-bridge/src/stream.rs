@@ -1,11 +1,21 @@
-//! The byte-stream demultiplexer: bytes in any chunking in, whole checked frames out.
+//! The byte-stream demultiplexer: bytes in any chunking in, whole checked records out.
 //!
-//! One UART may interleave NMEA sentences (`$` ... `*hh` CRLF) and TI Monitor-and-Test frames
-//! (`0xFE`, LEN, CMD0, CMD1, DATA, FCS). The demultiplexer keeps the unparsed bytes in a fixed
-//! buffer and looks only at the first one: `$` starts a sentence, `0xFE` an MT frame, anything
-//! else is garbage, skipped and counted. A candidate that fails its check costs only its first
-//! byte: scanning resumes at the next byte, so a corrupt byte never swallows the valid frames
-//! after it.
+//! One UART (or one file) may interleave NMEA sentences (`$` ... `*hh` CRLF), TI
+//! Monitor-and-Test frames (`0xFE`, LEN, CMD0, CMD1, DATA, FCS), Agrelo bearings (`%`), KrakenSDR
+//! XML records (`<`) and KrakenSDR CSV lines (a digit). The demultiplexer keeps the unparsed
+//! bytes in a fixed buffer and looks only at the first one; anything else is garbage, skipped
+//! and counted (whitespace between records is skipped silently). A candidate that fails its
+//! check costs only its first byte: scanning resumes at the next byte, so a corrupt byte never
+//! swallows the valid records after it. Binary protocols of GPS receivers (u-blox UBX, SiRF,
+//! RTCM) are garbage here: skipped, with the sentences around them kept.
+//!
+//! The Kraken records are decoded as they arrive, a field or a tag at a time
+//! ([`crate::kraken`]), so a 2.5 KB CSV line needs no 2.5 KB buffer. A record that fails
+//! after its first field is dropped (counted by reason) and scanning resumes at the field that
+//! failed, which may be the start of the next record (a corrupted line end); one that fails
+//! in its first field was never a record: its first byte is garbage. CSV has no checksum: a
+//! corrupt digit that keeps a field well formed gives a wrong value, as it would for any
+//! reader of the format.
 //!
 //! An 8-bit XOR check passes one forgery in 256. A forged MT frame (a corrupt LEN, or a `0xFE`
 //! inside a damaged sentence) would span and swallow the genuine frames after it, so an MT
@@ -14,6 +24,11 @@
 //! [`Demux::idle`] (the line went quiet) and [`Demux::finish`] (end of a capture) settle such a
 //! wait at once. A sentence cannot be forged across frames: its body must be printable ASCII
 //! without `$`, which the bytes of any other frame break.
+
+use crate::agrelo;
+use crate::kraken::{
+    CsvDecoder, KrakenCsv, KrakenError, KrakenXml, SPECTRUM_LEN, Step, XmlDecoder,
+};
 
 /// Longest NMEA sentence, `$` to LF inclusive: GPSD's limit (`NMEA_MAX` in its `gpsd.h`), since
 /// RTK receivers print more decimals than NMEA 0183's 82 characters allow.
@@ -27,12 +42,29 @@ pub const DEFAULT_CAPACITY: usize = 2 * MAX_MT_FRAME + 8;
 pub const MT_SOF: u8 = 0xFE;
 
 /// One checked frame, borrowed from the demultiplexer's buffer until the next call.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Frame<'a> {
     /// An NMEA sentence whose checksum matched: the text between `$` and `*`.
     Nmea(&'a str),
     /// A Monitor-and-Test frame whose FCS matched.
     Mt(MtFrame<'a>),
+    /// An Agrelo record that parses: its text from `%` up to the line end
+    /// ([`crate::agrelo::Agrelo::parse`] decodes it).
+    Agrelo(&'a str),
+    /// A KrakenSDR CSV line, decoded.
+    KrakenCsv(KrakenCsvFrame<'a>),
+    /// A KrakenSDR / KerberosSDR XML record, decoded.
+    KrakenXml(KrakenXml),
+}
+
+/// A decoded CSV line and, when the demultiplexer keeps one, its DoA spectrum (dB above its
+/// minimum, indexed anticlockwise from the array's front as the unit writes it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct KrakenCsvFrame<'a> {
+    /// The line's fields.
+    pub record: KrakenCsv,
+    /// The 360 spectrum values, if kept.
+    pub spectrum: Option<&'a [f32]>,
 }
 
 /// A Monitor-and-Test frame: command bytes and data (SOF, LEN and FCS stripped).
@@ -70,6 +102,42 @@ pub struct StreamCounters {
     pub overlapping: u32,
     /// Unfinished frames dropped at the end of the stream.
     pub truncated: u32,
+    /// Agrelo records delivered.
+    pub agrelo: u32,
+    /// `%` and a digit that did not make an Agrelo record.
+    pub agrelo_malformed: u32,
+    /// KrakenSDR CSV lines delivered.
+    pub kraken_csv: u32,
+    /// KrakenSDR XML records delivered.
+    pub kraken_xml: u32,
+    /// Kraken records with a field that did not parse.
+    pub kraken_bad_field: u32,
+    /// Kraken records with a field, text or tag longer than the framing holds.
+    pub kraken_too_long: u32,
+    /// Kraken records of the wrong shape (field count, tag order, no DOA).
+    pub kraken_structure: u32,
+}
+
+impl StreamCounters {
+    const ZERO: Self = Self {
+        bytes: 0,
+        sentences: 0,
+        mt_frames: 0,
+        garbage_bytes: 0,
+        bad_checksum: 0,
+        malformed: 0,
+        too_long: 0,
+        bad_fcs: 0,
+        overlapping: 0,
+        truncated: 0,
+        agrelo: 0,
+        agrelo_malformed: 0,
+        kraken_csv: 0,
+        kraken_xml: 0,
+        kraken_bad_field: 0,
+        kraken_too_long: 0,
+        kraken_structure: 0,
+    };
 }
 
 impl StreamCounters {
@@ -81,6 +149,10 @@ impl StreamCounters {
             .saturating_add(self.bad_fcs)
             .saturating_add(self.overlapping)
             .saturating_add(self.truncated)
+            .saturating_add(self.agrelo_malformed)
+            .saturating_add(self.kraken_bad_field)
+            .saturating_add(self.kraken_too_long)
+            .saturating_add(self.kraken_structure)
     }
 }
 
@@ -291,9 +363,19 @@ fn resolve_overlap(bytes: &[u8], len: usize, ended: bool, in_sync: bool) -> Over
     }
 }
 
-/// The demultiplexer, with a buffer of `CAP` bytes (at least [`DEFAULT_CAPACITY`]).
+/// A record being decoded as it arrives.
+#[derive(Debug, Clone, Copy)]
+enum Streaming {
+    None,
+    Csv(CsvDecoder),
+    Xml(XmlDecoder),
+}
+
+/// The demultiplexer, with a buffer of `CAP` bytes (at least [`DEFAULT_CAPACITY`]) and room
+/// for `SPECTRUM` values of a Kraken CSV line's DoA spectrum ([`SPECTRUM_LEN`] to keep it,
+/// 0, the default, to drop it).
 #[derive(Debug, Clone)]
-pub struct Demux<const CAP: usize = DEFAULT_CAPACITY> {
+pub struct Demux<const CAP: usize = DEFAULT_CAPACITY, const SPECTRUM: usize = 0> {
     buf: [u8; CAP],
     start: usize,
     end: usize,
@@ -307,16 +389,26 @@ pub struct Demux<const CAP: usize = DEFAULT_CAPACITY> {
     in_sync: bool,
     /// Bytes of the sentence candidate at the start already found plain.
     plain: usize,
+    streaming: Streaming,
+    ready: Option<Ready>,
+    spectrum: [f32; SPECTRUM],
     counters: StreamCounters,
 }
 
-impl<const CAP: usize> Default for Demux<CAP> {
+/// A streamed record, ready to hand out.
+#[derive(Debug, Clone, Copy)]
+enum Ready {
+    Csv(KrakenCsv),
+    Xml(KrakenXml),
+}
+
+impl<const CAP: usize, const SPECTRUM: usize> Default for Demux<CAP, SPECTRUM> {
     fn default() -> Self {
         Self::new()
     }
 }
 
-impl<const CAP: usize> Demux<CAP> {
+impl<const CAP: usize, const SPECTRUM: usize> Demux<CAP, SPECTRUM> {
     const ROOM: () = assert!(
         CAP >= DEFAULT_CAPACITY,
         "Demux buffer under DEFAULT_CAPACITY"
@@ -334,18 +426,10 @@ impl<const CAP: usize> Demux<CAP> {
             ended: false,
             in_sync: true,
             plain: 0,
-            counters: StreamCounters {
-                bytes: 0,
-                sentences: 0,
-                mt_frames: 0,
-                garbage_bytes: 0,
-                bad_checksum: 0,
-                malformed: 0,
-                too_long: 0,
-                bad_fcs: 0,
-                overlapping: 0,
-                truncated: 0,
-            },
+            streaming: Streaming::None,
+            ready: None,
+            spectrum: [0.0; SPECTRUM],
+            counters: StreamCounters::ZERO,
         }
     }
 
@@ -408,13 +492,128 @@ impl<const CAP: usize> Demux<CAP> {
         self.plain = 0;
     }
 
+    /// A record decoded as it arrives: one step. `Some(true)`: a record is ready in
+    /// `self.ready`; `Some(false)`: go on; `None`: more bytes needed.
+    fn stream_step(&mut self) -> Option<bool> {
+        let data = &self.buf[self.start..self.end];
+        let (first, step) = match &mut self.streaming {
+            Streaming::None => return Some(false),
+            Streaming::Csv(d) => {
+                let first = d.at_start();
+                let spectrum: &mut [f32] = if SPECTRUM >= SPECTRUM_LEN {
+                    &mut self.spectrum
+                } else {
+                    &mut []
+                };
+                (first, d.step(data, self.ended, spectrum).map(Ready::Csv))
+            }
+            Streaming::Xml(d) => (d.at_start(), d.step(data).map(Ready::Xml)),
+        };
+        match step {
+            Step::NeedMore if !self.ended => None,
+            Step::NeedMore => {
+                self.streaming = Streaming::None;
+                if first {
+                    self.counters.garbage_bytes += 1;
+                    self.drop_first();
+                } else {
+                    self.counters.truncated += 1;
+                    self.in_sync = false;
+                }
+                Some(false)
+            }
+            Step::Took(n) => {
+                self.start += n;
+                Some(false)
+            }
+            Step::Done(n, r) => {
+                self.start += n;
+                self.streaming = Streaming::None;
+                self.in_sync = true;
+                match r {
+                    Ready::Csv(_) => self.counters.kraken_csv += 1,
+                    Ready::Xml(_) => self.counters.kraken_xml += 1,
+                }
+                self.ready = Some(r);
+                Some(true)
+            }
+            Step::Reject(e, skip) => {
+                self.streaming = Streaming::None;
+                if first {
+                    self.counters.garbage_bytes += 1;
+                    self.drop_first();
+                } else {
+                    let c = &mut self.counters;
+                    match e {
+                        KrakenError::BadField(_) => c.kraken_bad_field += 1,
+                        KrakenError::TooLong => c.kraken_too_long += 1,
+                        KrakenError::Structure | KrakenError::NoBearing => c.kraken_structure += 1,
+                    }
+                    self.start += skip;
+                    self.in_sync = false;
+                    self.plain = 0;
+                }
+                Some(false)
+            }
+        }
+    }
+
     /// The next checked frame, or `None` when more bytes are needed.
     pub fn next_frame(&mut self) -> Option<Frame<'_>> {
         self.release();
         loop {
+            if !matches!(self.streaming, Streaming::None) {
+                if !self.stream_step()? {
+                    continue;
+                }
+                return match self.ready.take()? {
+                    Ready::Csv(record) => Some(Frame::KrakenCsv(KrakenCsvFrame {
+                        record,
+                        spectrum: (SPECTRUM >= SPECTRUM_LEN).then_some(&self.spectrum[..]),
+                    })),
+                    Ready::Xml(r) => Some(Frame::KrakenXml(r)),
+                };
+            }
             let data = &self.buf[self.start..self.end];
             let first = *data.first()?;
             let verdict = match first {
+                b'%' => {
+                    match agrelo::scan(data, self.ended) {
+                        agrelo::Scan::Valid { text, end } => {
+                            self.counters.agrelo += 1;
+                            self.delivered = text + end;
+                            self.in_sync = true;
+                            let t = &self.buf[self.start..self.start + text];
+                            // Checked ASCII, so this never fails.
+                            return Some(Frame::Agrelo(core::str::from_utf8(t).unwrap_or("%")));
+                        }
+                        agrelo::Scan::Invalid { started: true } => {
+                            self.counters.agrelo_malformed += 1;
+                        }
+                        agrelo::Scan::Invalid { started: false } => {
+                            self.counters.garbage_bytes += 1;
+                        }
+                        agrelo::Scan::Incomplete if self.ended => {
+                            self.counters.garbage_bytes += 1;
+                        }
+                        agrelo::Scan::Incomplete => return None,
+                    }
+                    self.drop_first();
+                    continue;
+                }
+                b'<' => {
+                    self.streaming = Streaming::Xml(XmlDecoder::new());
+                    continue;
+                }
+                b'0'..=b'9' => {
+                    self.streaming = Streaming::Csv(CsvDecoder::new());
+                    continue;
+                }
+                b' ' | b'\t' | b'\r' | b'\n' => {
+                    self.start += 1;
+                    self.plain = 0;
+                    continue;
+                }
                 b'$' => {
                     let v = scan_sentence_from(data, self.plain);
                     if v == Scan::Incomplete {
@@ -427,10 +626,18 @@ impl<const CAP: usize> Demux<CAP> {
                 }
                 MT_SOF => scan_mt(data),
                 _ => {
-                    let skip = data
+                    // The first byte starts nothing: skip it and what follows up to a byte
+                    // that may start a record (or whitespace, skipped silently).
+                    let skip = 1 + data[1..]
                         .iter()
-                        .position(|&b| b == b'$' || b == MT_SOF)
-                        .unwrap_or(data.len());
+                        .position(|&b| {
+                            matches!(
+                                b,
+                                b'$' | MT_SOF | b'%' | b'<' | b'0'
+                                    ..=b'9' | b' ' | b'\t' | b'\r' | b'\n'
+                            )
+                        })
+                        .unwrap_or(data.len() - 1);
                     self.counters.garbage_bytes =
                         self.counters.garbage_bytes.saturating_add(skip as u32);
                     self.start += skip;

@@ -55,16 +55,24 @@ fn bearing_between_fixes_is_interpolated_and_waits_for_the_later_fix() {
 #[test]
 fn relative_bearing_turns_by_the_course_and_needs_one() {
     let mut rx = Receiver::<0>::new(BridgeConfig::default(), []);
+    // 12.6 m/s from 11:59:57: the speed gate (2 m/s held 3 s) opens at 12:00:00.
+    let earlier: Vec<String> = (57..60)
+        .map(|s| format!("GPRMC,1159{s}.000,A,4700.0000,N,00759.9{s}0,E,24.5,90.0,010626,,,A"))
+        .collect();
     let events = run(
         &mut rx,
         &[
+            "PFOXB,115956.00,10.0,R,80,433.92",
+            &earlier[0],
+            &earlier[1],
+            &earlier[2],
             "PFOXB,115959.00,10.0,R,80,433.92",
             FIX0,
             "PFOXB,120000.00,10.0,R,80,433.92",
         ],
     );
     let b = bearings(&events);
-    assert_eq!(rx.bridge.counters().no_course, 1);
+    assert_eq!(rx.bridge.counters().no_heading, 2);
     assert_eq!(b.len(), 1);
     // Course 90 + relative 10 = azimuth 100 degrees.
     let expected = FRAC_PI_2 - 100f32.to_radians();
