@@ -4,7 +4,8 @@
 //! Layout: `0xFE | LEN | CMD0 | CMD1 | DATA[LEN] | FCS`, CMD0 = type << 5 | subsystem, FCS =
 //! XOR of LEN, CMD0, CMD1 and DATA. Multi-byte fields are little-endian.
 
-use crate::stream::{MT_SOF, MtFrame};
+use crate::nmea::xor;
+use crate::stream::MT_SOF;
 
 /// CMD0 of `AF_INCOMING_MSG`: type AREQ (2), subsystem AF (4).
 pub const AF_INCOMING_MSG_CMD0: u8 = 0x44;
@@ -41,6 +42,17 @@ pub enum CommandType {
     Reserved(u8),
 }
 
+/// A Monitor-and-Test frame: command bytes and data (SOF, LEN and FCS stripped).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MtFrame<'a> {
+    /// Type (bits 7-5) and subsystem (bits 4-0).
+    pub cmd0: u8,
+    /// Command id within the subsystem.
+    pub cmd1: u8,
+    /// Payload, LEN bytes.
+    pub data: &'a [u8],
+}
+
 impl MtFrame<'_> {
     /// The command type.
     pub fn command_type(&self) -> CommandType {
@@ -70,7 +82,7 @@ impl MtFrame<'_> {
         out[2] = self.cmd0;
         out[3] = self.cmd1;
         out[4..4 + self.data.len()].copy_from_slice(self.data);
-        out[total - 1] = out[1..total - 1].iter().fold(0, |x, b| x ^ b);
+        out[total - 1] = xor(&out[1..total - 1]);
         Ok(total)
     }
 }

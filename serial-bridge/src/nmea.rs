@@ -1009,7 +1009,8 @@ pub fn checksum(body: &str) -> u8 {
     xor(body.as_bytes())
 }
 
-/// XOR of some bytes (NMEA's checksum, and the MT frame check sequence).
+/// XOR of some bytes: NMEA's checksum and the MT frame check sequence, the one place either
+/// is computed.
 pub fn xor(bytes: &[u8]) -> u8 {
     bytes.iter().fold(0, |x, b| x ^ b)
 }

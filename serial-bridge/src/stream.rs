@@ -29,6 +29,7 @@ use crate::agrelo;
 use crate::kraken::{
     CsvDecoder, KrakenCsv, KrakenError, KrakenXml, SPECTRUM_LEN, Step, XmlDecoder,
 };
+use crate::nmea::xor;
 
 /// Longest NMEA sentence, `$` to LF inclusive: GPSD's limit (`NMEA_MAX` in its `gpsd.h`), since
 /// RTK receivers print more decimals than NMEA 0183's 82 characters allow.
@@ -67,16 +68,7 @@ pub struct KrakenCsvFrame<'a> {
     pub spectrum: Option<&'a [f32]>,
 }
 
-/// A Monitor-and-Test frame: command bytes and data (SOF, LEN and FCS stripped).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct MtFrame<'a> {
-    /// Type (bits 7-5) and subsystem (bits 4-0).
-    pub cmd0: u8,
-    /// Command id within the subsystem.
-    pub cmd1: u8,
-    /// Payload, LEN bytes.
-    pub data: &'a [u8],
-}
+pub use crate::mt::MtFrame;
 
 /// What the demultiplexer has seen and thrown away, by reason.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -235,7 +227,7 @@ fn check_sentence(line: &[u8]) -> Scan {
     if body.contains(&b'*') {
         return Scan::Invalid(Reject::Malformed);
     }
-    if body.iter().fold(0u8, |x, b| x ^ b) == (hi << 4 | lo) {
+    if xor(body) == (hi << 4 | lo) {
         Scan::Valid(line.len())
     } else {
         Scan::Invalid(Reject::Checksum)
@@ -251,7 +243,7 @@ fn scan_mt(bytes: &[u8]) -> Scan {
     if bytes.len() < total {
         return Scan::Incomplete;
     }
-    let fcs = bytes[1..total - 1].iter().fold(0u8, |x, b| x ^ b);
+    let fcs = xor(&bytes[1..total - 1]);
     if fcs == bytes[total - 1] {
         Scan::Valid(total)
     } else {
@@ -840,6 +832,14 @@ mod tests {
         d.feed(&s, &mut |_| n += 1);
         d.finish_into(&mut |_| n += 1);
         assert_eq!(d.counters().bytes, s.len() as u64);
+        // Settled with what the buffer held: O is delivered (no valid frame follows its inner
+        // candidate within the buffer), and the 260-byte candidate after it fails its FCS.
+        let c = d.counters();
+        assert_eq!(
+            (n, c.mt_frames, c.bad_fcs, c.overlapping),
+            (1, 1, 1, 0),
+            "{c:?}"
+        );
     }
 
     #[test]
