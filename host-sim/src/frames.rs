@@ -27,6 +27,11 @@ fn position(v: &mut Value, p: LatLon) {
     v["lon"] = json!(p.lon);
 }
 
+/// An `f32` as the decimal it prints as (0.41, not 0.4099999964).
+fn short(x: f32) -> f64 {
+    x.to_string().parse().unwrap_or(f64::NAN)
+}
+
 fn talker(t: &[u8; 2]) -> String {
     String::from_utf8_lossy(t).into_owned()
 }
@@ -129,18 +134,19 @@ pub fn frame_json(f: &Frame<'_>, map: &LinkQualityMap) -> Value {
         },
         Frame::Agrelo(text) => match Agrelo::parse(text) {
             // Relative to the vehicle, clockwise; 0 means no bearing (`bearing_deg` null).
-            Ok(a) => json!({"kind": "agrelo", "bearing_deg": a.bearing(),
+            Ok(a) => json!({"kind": "agrelo", "bearing_deg": a.bearing().map(short),
                 "reference": "relative", "quality": a.quality,
-                "magnetic_deg": a.magnetic_deg, "record": text}),
+                "magnetic_deg": a.magnetic_deg.map(short), "record": text}),
             Err(e) => json!({"kind": "agrelo", "record": text, "error": e.to_string()}),
         },
         Frame::KrakenCsv(k) => {
             let r = &k.record;
-            let mut v = json!({"kind": "kraken_csv", "bearing_deg": r.bearing_deg,
-                "reference": "relative", "quality": r.confidence, "power_db": r.power_db,
+            let mut v = json!({"kind": "kraken_csv", "bearing_deg": short(r.bearing_deg),
+                "reference": "relative", "quality": short(r.confidence),
+                "power_db": short(r.power_db),
                 "freq_mhz": r.freq_hz as f64 / 1e6, "time": time(UtcTime {
                     ms_of_day: (r.epoch_ms % 86_400_000) as u32 }),
-                "epoch_ms": r.epoch_ms, "heading_deg": r.heading_deg,
+                "epoch_ms": r.epoch_ms, "heading_deg": short(r.heading_deg),
                 "station": r.station.as_str(), "latency_ms": r.latency_ms,
                 "spectrum": k.spectrum.map(|s| s.to_vec())});
             if let Some(p) = r.position {
@@ -150,12 +156,12 @@ pub fn frame_json(f: &Frame<'_>, map: &LinkQualityMap) -> Value {
         }
         Frame::KrakenXml(r) => {
             // DOA counts anticlockwise from the array's front; true = heading + 360 - DOA.
-            let mut v = json!({"kind": "kraken_xml", "bearing_deg": r.doa_deg,
-                "reference": "relative", "anticlockwise": true, "quality": r.conf,
-                "pwr": r.pwr, "freq_mhz": r.freq_mhz,
+            let mut v = json!({"kind": "kraken_xml", "bearing_deg": short(r.doa_deg),
+                "reference": "relative", "anticlockwise": true, "quality": r.conf.map(short),
+                "pwr": r.pwr.map(short), "freq_mhz": r.freq_mhz,
                 "time": r.time_ms.map(|t| time(UtcTime { ms_of_day: (t % 86_400_000) as u32 })),
-                "epoch_ms": r.time_ms, "heading_deg": r.heading_deg,
-                "true_bearing_deg": r.true_deg(), "station": r.station.as_str()});
+                "epoch_ms": r.time_ms, "heading_deg": r.heading_deg.map(short),
+                "true_bearing_deg": r.true_deg().map(short), "station": r.station.as_str()});
             if let Some(p) = r.position {
                 position(&mut v, p);
             }
@@ -190,4 +196,90 @@ pub fn write_frames(bytes: &[u8], out: &mut impl std::io::Write) -> std::io::Res
             "kraken_bad_field": c.kraken_bad_field, "kraken_too_long": c.kraken_too_long,
             "kraken_structure": c.kraken_structure})
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sentence(body: &str) -> String {
+        let mut s = String::new();
+        foxhunt_bridge::nmea::write_sentence(&mut s, body).expect("string");
+        s
+    }
+
+    #[test]
+    fn every_kind_with_its_stable_fields() {
+        let mut bytes = String::new();
+        for body in [
+            "GPGGA,120000.000,4700.0000,N,00800.0000,E,1,08,1.0,0.0,M,0.0,M,,",
+            "GPRMC,120000.000,A,4700.0000,N,00800.0000,E,0.0,,010626,,,A",
+            "GPGLL,4700.0000,N,00800.0000,E,120000.000,A,A",
+            "GNGNS,120000.000,4700.0000,N,00800.0000,E,AA,10,0.9,400.0,48.0,,",
+            "GPVTG,330.63,T,345.26,M,0.00,N,0.00,K,A",
+            "GPHDT,274.07,T",
+            "GNTHS,244.28,A",
+            "SDHDG,229.8,,,1.3,E",
+            "APHDM,218.634,M",
+            "PFOXB,120000.50,57.3,T,83,433.920",
+        ] {
+            bytes.push_str(&sentence(body));
+        }
+        bytes.push_str("%136.5/8/158\r\n");
+        bytes.push_str("1679512414650, 134, 0.41, -48.5, 151880000, UCA, 100, dingus, 66.961348, -66.4438057, 0, 0, GPS, R, R, R, R");
+        bytes.push_str(&", 0.07".repeat(360));
+        bytes.push_str(" \n<DATA><STATION_ID>K3CPK-1</STATION_ID><TIME>1568052311</TIME><FREQUENCY>162.4</FREQUENCY><LOCATION><LATITUDE>39.124526</LATITUDE><LONGITUDE>-76.519717</LONGITUDE><HEADING>0</HEADING></LOCATION><DOA>120</DOA><PWR>19.3</PWR><CONF>15</CONF></DATA>");
+        let mut out = Vec::new();
+        write_frames(bytes.as_bytes(), &mut out).expect("write");
+        let lines: Vec<Value> = String::from_utf8(out)
+            .expect("utf-8")
+            .lines()
+            .map(|l| serde_json::from_str(l).expect("JSON"))
+            .collect();
+        let kinds: Vec<&str> = lines.iter().filter_map(|v| v["kind"].as_str()).collect();
+        assert_eq!(
+            kinds,
+            [
+                "gga",
+                "rmc",
+                "gll",
+                "gns",
+                "vtg",
+                "hdt",
+                "ths",
+                "hdg",
+                "hdm",
+                "pfoxb",
+                "agrelo",
+                "kraken_csv",
+                "kraken_xml",
+                "counters"
+            ]
+        );
+        for v in &lines[..4] {
+            assert_eq!(
+                (v["lat"].as_f64(), v["lon"].as_f64()),
+                (Some(47.0), Some(8.0)),
+                "{v}"
+            );
+            assert_eq!(v["time"], "12:00:00.000", "{v}");
+        }
+        let bearings = &lines[9..13];
+        for v in bearings {
+            for key in ["bearing_deg", "reference", "quality"] {
+                assert!(v.get(key).is_some(), "{key} in {v}");
+            }
+        }
+        assert_eq!(bearings[0]["reference"], "true");
+        assert_eq!(bearings[1]["bearing_deg"], 136.5);
+        assert_eq!(bearings[1]["reference"], "relative");
+        assert_eq!(bearings[2]["bearing_deg"], 134.0);
+        assert_eq!(bearings[2]["quality"], 0.41);
+        assert_eq!(bearings[2]["freq_mhz"], 151.88);
+        assert_eq!(bearings[2]["time"], "19:13:34.650");
+        assert_eq!(bearings[3]["bearing_deg"], 120.0);
+        assert_eq!(bearings[3]["true_bearing_deg"], 240.0);
+        assert_eq!(bearings[3]["freq_mhz"], 162.4);
+        assert_eq!(lines[13]["kraken_csv"], 1);
+    }
 }
