@@ -3,7 +3,7 @@
 //! to the same record.
 #![no_main]
 use foxhunt_bridge::kraken::SPECTRUM_LEN;
-use foxhunt_bridge::{BridgeConfig, Bridge, Demux, Frame};
+use foxhunt_bridge::{Bridge, BridgeConfig, Demux, Frame};
 use libfuzzer_sys::fuzz_target;
 
 const PREFIX: &[u8] = b"1679512414650, 134, 0.41, -48.5, 151880000, UCA, 100, dingus, 66.961348, -66.4438057, 0, 0, GPS, R, R, R, R";
@@ -19,7 +19,9 @@ fuzz_target!(|data: &[u8]| {
     let mut sink = |f: Frame<'_>| {
         if let Frame::KrakenCsv(k) = f {
             let mut line = String::new();
-            k.record.emit(k.spectrum.unwrap_or(&[]), &mut line).expect("string");
+            k.record
+                .emit(k.spectrum.unwrap_or(&[]), &mut line)
+                .expect("string");
             let mut again = Demux::<600, SPECTRUM_LEN>::new();
             let mut n = 0;
             again.feed(line.as_bytes(), &mut |g| {

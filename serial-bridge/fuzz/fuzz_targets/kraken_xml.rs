@@ -1,7 +1,7 @@
 //! Arbitrary bytes after `<DATA>`, in arbitrary reads, through the demultiplexer and the
 //! bridge; decoded records re-encode (both forms) to records that decode the same.
 #![no_main]
-use foxhunt_bridge::{BridgeConfig, Bridge, Demux, Frame};
+use foxhunt_bridge::{Bridge, BridgeConfig, Demux, Frame};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

@@ -109,7 +109,10 @@ fn rejected(chk: &str) -> Vec<String> {
     let lines: Vec<&str> = chk.lines().filter(|l| !l.starts_with('#')).collect();
     let mut out = Vec::new();
     for (i, line) in lines.iter().enumerate() {
-        let Some(body) = line.strip_prefix('$').and_then(|l| l.rsplit_once('*')).map(|x| x.0)
+        let Some(body) = line
+            .strip_prefix('$')
+            .and_then(|l| l.rsplit_once('*'))
+            .map(|x| x.0)
         else {
             continue;
         };
@@ -127,23 +130,34 @@ fn rejected(chk: &str) -> Vec<String> {
 }
 
 fn main() {
-    let dir = std::env::args().nth(1).unwrap_or_else(|| "../../../../shared/data/gpsd".into());
+    let dir = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "../../../../shared/data/gpsd".into());
     let mut names: Vec<String> = std::fs::read_dir(&dir)
         .expect("data folder")
-        .filter_map(|e| e.ok()?.file_name().to_str()?.strip_suffix(".log.chk").map(String::from))
+        .filter_map(|e| {
+            e.ok()?
+                .file_name()
+                .to_str()?
+                .strip_suffix(".log.chk")
+                .map(String::from)
+        })
         .collect();
     names.sort();
     let (mut total, mut hit_ours, mut hit_theirs, mut bad_ours, mut bad_theirs) = (0, 0, 0, 0, 0);
     for name in &names {
         let raw = std::fs::read(format!("{dir}/{name}.log")).expect("log");
-        let chk = String::from_utf8_lossy(&std::fs::read(format!("{dir}/{name}.log.chk")).expect("chk")).into_owned();
+        let chk =
+            String::from_utf8_lossy(&std::fs::read(format!("{dir}/{name}.log.chk")).expect("chk"))
+                .into_owned();
         let stream = stream_of(&raw);
         let gpsd = gpsd_positions(&chk, &sent(&stream));
         let b = bodies(&stream);
         let o: Vec<_> = b.iter().filter_map(|s| ours(s)).collect();
         let t: Vec<_> = b.iter().filter_map(|s| theirs(s)).collect();
         let near = |list: &[(f64, f64)], p: &(f64, f64)| {
-            list.iter().any(|q| (q.0 - p.0).abs() <= 1e-7 && (q.1 - p.1).abs() <= 1e-7)
+            list.iter()
+                .any(|q| (q.0 - p.0).abs() <= 1e-7 && (q.1 - p.1).abs() <= 1e-7)
         };
         let (ho, ht) = (
             gpsd.iter().filter(|p| near(&o, p)).count(),
@@ -154,7 +168,10 @@ fn main() {
             rej.iter().filter(|s| ours(s).is_some()).count(),
             rej.iter().filter(|s| theirs(s).is_some()).count(),
         );
-        println!("{name:32} GPSD {:4}  ours {ho:4}  nmea {ht:4}  fixes from rejected: ours {ro} nmea {rt}", gpsd.len());
+        println!(
+            "{name:32} GPSD {:4}  ours {ho:4}  nmea {ht:4}  fixes from rejected: ours {ro} nmea {rt}",
+            gpsd.len()
+        );
         total += gpsd.len();
         hit_ours += ho;
         hit_theirs += ht;
