@@ -740,7 +740,7 @@ impl XmlDecoder {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use std::string::String;
 

@@ -68,6 +68,15 @@ pub struct KrakenCsvFrame<'a> {
     pub spectrum: Option<&'a [f32]>,
 }
 
+impl KrakenCsvFrame<'_> {
+    /// The spectrum at a bearing `deg` degrees clockwise from the array's front: value
+    /// `(360 − deg) mod 360` of the anticlockwise list.
+    pub fn spectrum_clockwise(&self, deg: u16) -> Option<f32> {
+        let i = (360 - usize::from(deg % 360)) % SPECTRUM_LEN;
+        self.spectrum?.get(i).copied()
+    }
+}
+
 pub use crate::mt::MtFrame;
 
 /// What the demultiplexer has seen and thrown away, by reason.
@@ -871,6 +880,35 @@ mod tests {
             let (out, c) = frames(line.as_bytes());
             assert_eq!((out.len() == 1, c.too_long == 1), (ok, !ok), "{len}");
         }
+    }
+
+    #[test]
+    fn a_kraken_line_in_odd_reads_keeps_its_spectrum_only_when_asked() {
+        let line = crate::kraken::tests::issue_11_line();
+        let mut keep = Demux::<DEFAULT_CAPACITY, SPECTRUM_LEN>::new();
+        let mut drop = Demux::<DEFAULT_CAPACITY>::new();
+        let mut seen = std::vec::Vec::new();
+        for chunk in line.as_bytes().chunks(7) {
+            keep.feed(chunk, &mut |f| {
+                if let Frame::KrakenCsv(k) = f {
+                    // Index 0 is the front; clockwise 1 degree is anticlockwise index 359.
+                    seen.push((k.spectrum_clockwise(0), k.spectrum_clockwise(1)));
+                }
+            });
+            drop.feed(chunk, &mut |f| {
+                if let Frame::KrakenCsv(k) = f {
+                    assert_eq!(k.spectrum, None);
+                    assert_eq!(k.record.epoch_ms, 1_679_512_414_650);
+                }
+            });
+        }
+        assert_eq!(seen, [(Some(0.07), Some(3.59))]);
+        assert_eq!(
+            (keep.counters().kraken_csv, drop.counters().kraken_csv),
+            (1, 1)
+        );
+        // Nothing of the 2.5 KB line is held once it is read.
+        assert_eq!(keep.pending(), 0);
     }
 
     #[test]
