@@ -912,6 +912,17 @@ mod tests {
     }
 
     #[test]
+    fn a_form_feed_after_digits_is_garbage_not_a_stall() {
+        // Found by the flipped-byte property: ',' ^ 0x20 is a form feed, ASCII whitespace
+        // that no record starts with; the scan once stopped on it without moving.
+        let s = std::format!("1600000000005\x0c 134.5{}", sentence("GPXXX,1"));
+        let (out, c) = frames(s.as_bytes());
+        assert_eq!(out, ["Nmea(\"GPXXX,1\")"]);
+        // 13 digits, the form feed and "134.5"; the space is skipped silently.
+        assert_eq!(c.garbage_bytes, 19, "{c:?}");
+    }
+
+    #[test]
     fn a_payload_carrying_whole_frames_is_one_frame() {
         // Found by cargo-fuzz: this payload holds two valid MT frames back to back; the
         // outer frame comes first and in sync, so it is delivered whole.
