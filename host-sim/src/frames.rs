@@ -1,6 +1,10 @@
 //! `foxhunt frames`: every decoded frame of a capture as one JSON object per line, then the
-//! counters, for debugging a serial link. Field names are stable.
+//! counters, for debugging a serial link. Field names are stable: every object has `kind`;
+//! positions are `lat`/`lon`, times `time` (`hh:mm:ss.sss` UTC); bearings have `bearing_deg`
+//! as the unit reported it and `reference` (`true` or `relative`) after the format's own
+//! convention, with `quality` and `freq_mhz` where the format has them.
 
+use foxhunt_bridge::agrelo::Agrelo;
 use foxhunt_bridge::mt::{AfIncomingMsg, LinkQualityMap};
 use foxhunt_bridge::nmea::{LatLon, NmeaError, Reference, Sentence, UtcTime};
 use foxhunt_bridge::{Demux, Frame};
@@ -23,49 +27,104 @@ fn position(v: &mut Value, p: LatLon) {
     v["lon"] = json!(p.lon);
 }
 
+/// An `f32` as the decimal it prints as (0.41, not 0.4099999964).
+fn short(x: f32) -> f64 {
+    x.to_string().parse().unwrap_or(f64::NAN)
+}
+
+fn talker(t: &[u8; 2]) -> String {
+    String::from_utf8_lossy(t).into_owned()
+}
+
+fn reference(r: Reference) -> &'static str {
+    match r {
+        Reference::True => "true",
+        Reference::Relative => "relative",
+    }
+}
+
+/// The JSON object of one NMEA sentence.
+fn sentence_json(text: &str) -> Value {
+    match Sentence::parse(text) {
+        Ok(Sentence::Gga(g)) => {
+            let mut v = json!({"kind": "gga", "talker": talker(&g.talker),
+                "time": time(g.time), "quality": g.quality, "satellites": g.satellites,
+                "hdop": g.hdop, "altitude_m": g.altitude_m});
+            position(&mut v, g.position);
+            v
+        }
+        Ok(Sentence::Rmc(r)) => {
+            let mut v = json!({"kind": "rmc", "talker": talker(&r.talker),
+                "time": time(r.time), "speed_kn": r.speed_kn, "course_deg": r.course_deg,
+                "date": r.date.map(|d| format!("{:04}-{:02}-{:02}", d.year, d.month, d.day))});
+            position(&mut v, r.position);
+            v
+        }
+        Ok(Sentence::Gll(g)) => {
+            let mut v = json!({"kind": "gll", "talker": talker(&g.talker),
+                "time": g.time.map(time)});
+            position(&mut v, g.position);
+            v
+        }
+        Ok(Sentence::Gns(g)) => {
+            let mut v = json!({"kind": "gns", "talker": talker(&g.talker),
+                "time": time(g.time), "mode": (g.mode as char).to_string(),
+                "satellites": g.satellites, "hdop": g.hdop, "altitude_m": g.altitude_m});
+            position(&mut v, g.position);
+            v
+        }
+        Ok(Sentence::Vtg(t)) => json!({"kind": "vtg", "talker": talker(&t.talker),
+            "course_deg": t.course_deg, "course_magnetic_deg": t.course_magnetic_deg,
+            "speed_kn": t.speed_kn, "speed_kmh": t.speed_kmh, "old_form": t.old_form}),
+        Ok(Sentence::Hdt(h)) => json!({"kind": "hdt", "talker": talker(&h.talker),
+            "heading_deg": h.heading_deg, "reference": "true"}),
+        Ok(Sentence::Ths(h)) => json!({"kind": "ths", "talker": talker(&h.talker),
+            "heading_deg": h.heading_deg, "reference": "true",
+            "mode": (h.mode as char).to_string()}),
+        Ok(Sentence::Hdg(h)) => json!({"kind": "hdg", "talker": talker(&h.talker),
+            "sensor_deg": h.sensor_deg, "deviation_deg": h.deviation_deg,
+            "variation_deg": h.variation_deg, "heading_deg": h.magnetic_deg(),
+            "reference": "magnetic", "true_heading_deg": h.true_deg()}),
+        Ok(Sentence::Hdm(h)) => json!({"kind": "hdm", "talker": talker(&h.talker),
+            "heading_deg": h.heading_deg, "reference": "magnetic"}),
+        Ok(Sentence::Pfoxb(b)) => {
+            let mut v = json!({"kind": "pfoxb", "time": time(b.time),
+                "bearing_deg": b.azimuth_deg, "azimuth_deg": b.azimuth_deg,
+                "reference": reference(b.reference),
+                "quality": b.quality, "freq_mhz": b.freq_mhz});
+            if let Some(p) = b.position {
+                position(&mut v, p);
+            }
+            v
+        }
+        Err(e) => {
+            let kind = match text.get(2..5) {
+                _ if text.starts_with("PFOXB") => "pfoxb",
+                Some("GGA") => "gga",
+                Some("RMC") => "rmc",
+                Some("GLL") => "gll",
+                Some("GNS") => "gns",
+                Some("VTG") => "vtg",
+                Some("HDT") => "hdt",
+                Some("THS") => "ths",
+                Some("HDG") => "hdg",
+                Some("HDM") => "hdm",
+                _ => "nmea",
+            };
+            let error = match e {
+                NmeaError::Unsupported => None,
+                NmeaError::NoFix => Some("no_fix".to_string()),
+                NmeaError::BadField(n) => Some(format!("bad_field_{n}")),
+            };
+            json!({"kind": kind, "sentence": text, "error": error})
+        }
+    }
+}
+
 /// The JSON object of one frame.
 pub fn frame_json(f: &Frame<'_>, map: &LinkQualityMap) -> Value {
     match f {
-        Frame::Nmea(text) => match Sentence::parse(text) {
-            Ok(Sentence::Gga(g)) => {
-                let mut v = json!({"kind": "gga", "talker": String::from_utf8_lossy(&g.talker),
-                    "time": time(g.time), "quality": g.quality, "satellites": g.satellites,
-                    "hdop": g.hdop, "altitude_m": g.altitude_m});
-                position(&mut v, g.position);
-                v
-            }
-            Ok(Sentence::Rmc(r)) => {
-                let mut v = json!({"kind": "rmc", "talker": String::from_utf8_lossy(&r.talker),
-                    "time": time(r.time), "speed_kn": r.speed_kn, "course_deg": r.course_deg,
-                    "date": r.date.map(|d| format!("{:04}-{:02}-{:02}", d.year, d.month, d.day))});
-                position(&mut v, r.position);
-                v
-            }
-            Ok(Sentence::Pfoxb(b)) => {
-                let mut v = json!({"kind": "pfoxb", "time": time(b.time),
-                    "azimuth_deg": b.azimuth_deg,
-                    "reference": match b.reference { Reference::True => "true", Reference::Relative => "relative" },
-                    "quality": b.quality, "freq_mhz": b.freq_mhz});
-                if let Some(p) = b.position {
-                    position(&mut v, p);
-                }
-                v
-            }
-            Err(e) => {
-                let kind = match text.get(2..5) {
-                    Some("GGA") => "gga",
-                    Some("RMC") => "rmc",
-                    _ if text.starts_with("PFOXB") => "pfoxb",
-                    _ => "nmea",
-                };
-                let error = match e {
-                    NmeaError::Unsupported => None,
-                    NmeaError::NoFix => Some("no_fix".to_string()),
-                    NmeaError::BadField(n) => Some(format!("bad_field_{n}")),
-                };
-                json!({"kind": kind, "sentence": text, "error": error})
-            }
-        },
+        Frame::Nmea(text) => sentence_json(text),
         Frame::Mt(m) => match AfIncomingMsg::parse(m) {
             Ok(a) => json!({"kind": "af_incoming_msg", "src_addr": a.src_addr,
                 "link_quality": a.link_quality, "rssi_dbm": map.rssi_dbm(a.link_quality),
@@ -73,6 +132,41 @@ pub fn frame_json(f: &Frame<'_>, map: &LinkQualityMap) -> Value {
                 "src_endpoint": a.src_endpoint, "trans_seq": a.trans_seq, "len": a.data.len()}),
             Err(_) => json!({"kind": "mt", "cmd0": m.cmd0, "cmd1": m.cmd1, "len": m.data.len()}),
         },
+        Frame::Agrelo(text) => match Agrelo::parse(text) {
+            // Relative to the vehicle, clockwise; 0 means no bearing (`bearing_deg` null).
+            Ok(a) => json!({"kind": "agrelo", "bearing_deg": a.bearing().map(short),
+                "reference": "relative", "quality": a.quality,
+                "magnetic_deg": a.magnetic_deg.map(short), "record": text}),
+            Err(e) => json!({"kind": "agrelo", "record": text, "error": e.to_string()}),
+        },
+        Frame::KrakenCsv(k) => {
+            let r = &k.record;
+            let mut v = json!({"kind": "kraken_csv", "bearing_deg": short(r.bearing_deg),
+                "reference": "relative", "quality": short(r.confidence),
+                "power_db": short(r.power_db),
+                "freq_mhz": r.freq_hz as f64 / 1e6, "time": time(UtcTime {
+                    ms_of_day: (r.epoch_ms % 86_400_000) as u32 }),
+                "epoch_ms": r.epoch_ms, "heading_deg": short(r.heading_deg),
+                "station": r.station.as_str(), "latency_ms": r.latency_ms,
+                "spectrum": k.spectrum.map(|s| s.to_vec())});
+            if let Some(p) = r.position {
+                position(&mut v, p);
+            }
+            v
+        }
+        Frame::KrakenXml(r) => {
+            // DOA counts anticlockwise from the array's front; true = heading + 360 - DOA.
+            let mut v = json!({"kind": "kraken_xml", "bearing_deg": short(r.doa_deg),
+                "reference": "relative", "anticlockwise": true, "quality": r.conf.map(short),
+                "pwr": r.pwr.map(short), "freq_mhz": r.freq_mhz,
+                "time": r.time_ms.map(|t| time(UtcTime { ms_of_day: (t % 86_400_000) as u32 })),
+                "epoch_ms": r.time_ms, "heading_deg": r.heading_deg.map(short),
+                "true_bearing_deg": r.true_deg().map(short), "station": r.station.as_str()});
+            if let Some(p) = r.position {
+                position(&mut v, p);
+            }
+            v
+        }
     }
 }
 
@@ -96,6 +190,96 @@ pub fn write_frames(bytes: &[u8], out: &mut impl std::io::Write) -> std::io::Res
         json!({"kind": "counters", "bytes": c.bytes, "sentences": c.sentences,
             "mt_frames": c.mt_frames, "garbage_bytes": c.garbage_bytes,
             "bad_checksum": c.bad_checksum, "malformed": c.malformed, "too_long": c.too_long,
-            "bad_fcs": c.bad_fcs, "overlapping": c.overlapping, "truncated": c.truncated})
+            "bad_fcs": c.bad_fcs, "overlapping": c.overlapping, "truncated": c.truncated,
+            "agrelo": c.agrelo, "agrelo_malformed": c.agrelo_malformed,
+            "kraken_csv": c.kraken_csv, "kraken_xml": c.kraken_xml,
+            "kraken_bad_field": c.kraken_bad_field, "kraken_too_long": c.kraken_too_long,
+            "kraken_structure": c.kraken_structure})
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sentence(body: &str) -> String {
+        let mut s = String::new();
+        foxhunt_bridge::nmea::write_sentence(&mut s, body).expect("string");
+        s
+    }
+
+    #[test]
+    fn every_kind_with_its_stable_fields() {
+        let mut bytes = String::new();
+        for body in [
+            "GPGGA,120000.000,4700.0000,N,00800.0000,E,1,08,1.0,0.0,M,0.0,M,,",
+            "GPRMC,120000.000,A,4700.0000,N,00800.0000,E,0.0,,010626,,,A",
+            "GPGLL,4700.0000,N,00800.0000,E,120000.000,A,A",
+            "GNGNS,120000.000,4700.0000,N,00800.0000,E,AA,10,0.9,400.0,48.0,,",
+            "GPVTG,330.63,T,345.26,M,0.00,N,0.00,K,A",
+            "GPHDT,274.07,T",
+            "GNTHS,244.28,A",
+            "SDHDG,229.8,,,1.3,E",
+            "APHDM,218.634,M",
+            "PFOXB,120000.50,57.3,T,83,433.920",
+        ] {
+            bytes.push_str(&sentence(body));
+        }
+        bytes.push_str("%136.5/8/158\r\n");
+        bytes.push_str("1679512414650, 134, 0.41, -48.5, 151880000, UCA, 100, dingus, 66.961348, -66.4438057, 0, 0, GPS, R, R, R, R");
+        bytes.push_str(&", 0.07".repeat(360));
+        bytes.push_str(" \n<DATA><STATION_ID>K3CPK-1</STATION_ID><TIME>1568052311</TIME><FREQUENCY>162.4</FREQUENCY><LOCATION><LATITUDE>39.124526</LATITUDE><LONGITUDE>-76.519717</LONGITUDE><HEADING>0</HEADING></LOCATION><DOA>120</DOA><PWR>19.3</PWR><CONF>15</CONF></DATA>");
+        let mut out = Vec::new();
+        write_frames(bytes.as_bytes(), &mut out).expect("write");
+        let lines: Vec<Value> = String::from_utf8(out)
+            .expect("utf-8")
+            .lines()
+            .map(|l| serde_json::from_str(l).expect("JSON"))
+            .collect();
+        let kinds: Vec<&str> = lines.iter().filter_map(|v| v["kind"].as_str()).collect();
+        assert_eq!(
+            kinds,
+            [
+                "gga",
+                "rmc",
+                "gll",
+                "gns",
+                "vtg",
+                "hdt",
+                "ths",
+                "hdg",
+                "hdm",
+                "pfoxb",
+                "agrelo",
+                "kraken_csv",
+                "kraken_xml",
+                "counters"
+            ]
+        );
+        for v in &lines[..4] {
+            assert_eq!(
+                (v["lat"].as_f64(), v["lon"].as_f64()),
+                (Some(47.0), Some(8.0)),
+                "{v}"
+            );
+            assert_eq!(v["time"], "12:00:00.000", "{v}");
+        }
+        let bearings = &lines[9..13];
+        for v in bearings {
+            for key in ["bearing_deg", "reference", "quality"] {
+                assert!(v.get(key).is_some(), "{key} in {v}");
+            }
+        }
+        assert_eq!(bearings[0]["reference"], "true");
+        assert_eq!(bearings[1]["bearing_deg"], 136.5);
+        assert_eq!(bearings[1]["reference"], "relative");
+        assert_eq!(bearings[2]["bearing_deg"], 134.0);
+        assert_eq!(bearings[2]["quality"], 0.41);
+        assert_eq!(bearings[2]["freq_mhz"], 151.88);
+        assert_eq!(bearings[2]["time"], "19:13:34.650");
+        assert_eq!(bearings[3]["bearing_deg"], 120.0);
+        assert_eq!(bearings[3]["true_bearing_deg"], 240.0);
+        assert_eq!(bearings[3]["freq_mhz"], 162.4);
+        assert_eq!(lines[13]["kraken_csv"], 1);
+    }
 }

@@ -318,7 +318,7 @@ pub fn rejections(d: &Decoded, outliers: u32) -> BTreeMap<&'static str, u32> {
         ("gps_no_fix", b.no_fix_sentences),
         ("bad_position", b.bad_position),
         ("low_quality", b.low_quality),
-        ("no_course", b.no_course),
+        ("no_course", b.no_heading),
         ("no_fix", b.no_fix),
         ("stale_fix", b.stale_fix),
         ("outlier", outliers),

@@ -1,21 +1,49 @@
 //! The bridge: decoded frames in, core measurements out.
 //!
-//! GPS fixes become vehicle positions in the local frame (origin: the configured reference, or
-//! the first valid fix). A bearing is placed where the vehicle was at the bearing's own time,
-//! interpolated between the fixes around it, so a DF unit that reports half a second after the
-//! GPS does not smear the fix along the route; a bearing newer than the latest fix waits for
-//! the next one. Relative bearings are turned by the latest valid course. Link-quality frames
-//! from known anchors become RSSI readings. Everything rejected is counted by reason.
+//! GPS fixes (GGA, RMC, GLL, GNS) become vehicle positions in the local frame (origin: the
+//! configured reference, or the first valid fix). A bearing (PFOXB, Agrelo, KrakenSDR CSV or
+//! XML) is placed at its own position when the record carries one (Kraken), else where the
+//! vehicle was at the bearing's time, interpolated between the fixes around it, so a DF unit
+//! that reports half a second after the GPS does not smear the fix along the route; a bearing
+//! newer than the latest fix waits for the next one, and one with no fix within the configured
+//! gap is rejected. Link-quality frames from known anchors become RSSI readings. Everything
+//! rejected is counted by reason.
+//!
+//! Times: the bridge's clock is UTC time of day from the sentences, unwrapped across midnight.
+//! An Agrelo record has no time: it takes the clock's time when it arrives (the latest GPS
+//! sentence's). A Kraken record's epoch milliseconds (the unit's clock) are taken modulo a day.
+//!
+//! Relative bearings are turned to true by one rule, [`Bridge::heading_at`]: a fresh true
+//! heading (HDT, THS) > the record's own heading (Kraken) > a fresh magnetic heading (HDG,
+//! HDM) corrected to true by its own variation, else the configured declination > the course
+//! over ground once the speed has stayed above a gate for a time (KrakenSDR's 2 m/s for 3 s by
+//! default) > none: the bearing is rejected and counted "no heading". The mounting offset of
+//! the DF antenna is added in the same place; each bearing records which source turned it.
 
+use crate::agrelo::Agrelo;
 use crate::geo::{GeoError, LocalFrame};
+use crate::kraken::CsvConvention;
 use crate::mt::{AfIncomingMsg, LinkQualityMap, MtError};
-use crate::nmea::{LatLon, NmeaError, Pfoxb, Reference, Sentence};
+use crate::nmea::{KNOT_MPS, LatLon, NmeaError, Reference, Sentence, UtcTime};
 use crate::stream::{DEFAULT_CAPACITY, Demux, Frame, StreamCounters};
 use foxhunt_core::Bearing;
 use foxhunt_core::preprocess::{DEFAULT_MIN_QUALITY, error_weight};
 use heapless::Deque;
 
 const DAY_MS: i64 = 86_400_000;
+
+/// Degrees to [0, 360), for sums of a few angles (no fmod linked).
+fn wrap_deg(x: f64) -> f64 {
+    let mut a = x;
+    for _ in 0..4 {
+        if a >= 360.0 {
+            a -= 360.0;
+        } else if a < 0.0 {
+            a += 360.0;
+        }
+    }
+    if (0.0..360.0).contains(&a) { a } else { 0.0 }
+}
 
 /// How a bearing's DF quality sets its noise.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -44,6 +72,25 @@ pub struct BridgeConfig {
     pub weighting: QualityWeighting,
     /// Link quality to dBm.
     pub link_quality: LinkQualityMap,
+    /// Magnetic declination, degrees east, for HDG without a variation and for HDM; `None`:
+    /// such headings are not used.
+    pub declination_deg: Option<f32>,
+    /// The DF antenna's mounting offset, degrees clockwise from the vehicle's front, added to
+    /// every relative bearing.
+    pub mount_offset_deg: f32,
+    /// A heading sentence (HDT, THS, HDG, HDM) is fresh for this long, ms.
+    pub heading_max_age_ms: u32,
+    /// Course over ground turns bearings only at this speed or more, m/s...
+    pub course_min_speed_mps: f32,
+    /// ...held for this long, ms.
+    pub course_hold_ms: u32,
+    /// Which way the Kraken CSV's bearing turns (the 2023-05 to 2024-07 builds differ).
+    pub kraken_convention: CsvConvention,
+    /// Kraken bearings need this confidence or more, in the XML's CONF units
+    /// (int(confidence × 100); df-aggregator's default minimum is 10).
+    pub kraken_min_conf: f32,
+    /// Agrelo bearings need this quality digit or more (0 is "unusable").
+    pub agrelo_min_quality: u8,
 }
 
 impl Default for BridgeConfig {
@@ -55,8 +102,46 @@ impl Default for BridgeConfig {
             sigma_rad: 1.0f32.to_radians(),
             weighting: QualityWeighting::Uniform,
             link_quality: LinkQualityMap::default(),
+            declination_deg: None,
+            mount_offset_deg: 0.0,
+            heading_max_age_ms: 2000,
+            course_min_speed_mps: 2.0,
+            course_hold_ms: 3000,
+            kraken_convention: CsvConvention::Clockwise,
+            kraken_min_conf: 10.0,
+            agrelo_min_quality: 1,
         }
     }
+}
+
+/// What turned a bearing to true.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum HeadingSource {
+    /// The bearing came true: nothing turned it.
+    TrueBearing,
+    /// A fresh true heading sentence (HDT, THS).
+    TrueHeading,
+    /// The record's own heading (KrakenSDR).
+    Record,
+    /// A fresh magnetic heading (HDG, HDM) corrected to true.
+    Magnetic,
+    /// Course over ground above the speed gate.
+    Course,
+}
+
+/// Which kind of record a bearing came in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum BearingKind {
+    /// `$PFOXB`.
+    Pfoxb,
+    /// Agrelo `%BBB/Q`.
+    Agrelo,
+    /// KrakenSDR CSV.
+    KrakenCsv,
+    /// KrakenSDR / KerberosSDR XML.
+    KrakenXml,
 }
 
 /// A vehicle fix in the local frame.
@@ -81,10 +166,14 @@ pub struct BearingMeasurement {
     pub time_ms: i64,
     /// The bearing in the local frame.
     pub bearing: Bearing,
-    /// DF quality.
+    /// DF quality, 0-100.
     pub quality: f32,
-    /// Frequency, MHz.
+    /// Frequency, MHz (0 when the format has none: Agrelo).
     pub freq_mhz: f64,
+    /// The record kind.
+    pub kind: BearingKind,
+    /// What turned it to true.
+    pub heading: HeadingSource,
 }
 
 /// An RSSI reading from a known anchor.
@@ -127,14 +216,18 @@ pub struct BridgeCounters {
     pub unsupported_sentences: u32,
     /// GGA/RMC saying the receiver has no fix.
     pub no_fix_sentences: u32,
-    /// Sentences with a missing or malformed field.
+    /// Sentences or records with a missing or malformed field.
     pub bad_field: u32,
+    /// Heading sentences taken (HDT, THS, HDG, HDM).
+    pub headings: u32,
     /// Positions outside the valid range.
     pub bad_position: u32,
-    /// Bearings at or below the quality gate.
+    /// Bearings at or below the quality gate (PFOXB quality, Agrelo digit, Kraken CONF).
     pub low_quality: u32,
-    /// Relative bearings with no course to turn them by.
-    pub no_course: u32,
+    /// Agrelo records saying "no bearing" (`0`).
+    pub no_bearing: u32,
+    /// Relative bearings with no fresh heading, magnetic heading or gated course.
+    pub no_heading: u32,
     /// Bearings with no fix at all.
     pub no_fix: u32,
     /// Bearings whose nearest fix is further than the allowed gap.
@@ -154,7 +247,33 @@ struct Pending {
     azimuth_deg: f64,
     quality: f32,
     freq_mhz: f64,
+    kind: BearingKind,
+    heading: HeadingSource,
 }
+
+/// A bearing as it arrives, before the heading rule and the placement.
+#[derive(Debug, Clone, Copy)]
+struct Incoming {
+    time_ms: i64,
+    /// Degrees, clockwise from true north or (relative) from the vehicle's front.
+    azimuth_deg: f64,
+    relative: bool,
+    /// The record's own true heading, if it has one.
+    record_heading: Option<f32>,
+    quality: f32,
+    freq_mhz: f64,
+    position: Option<LatLon>,
+    kind: BearingKind,
+}
+
+/// A heading and the clock time it arrived.
+#[derive(Debug, Clone, Copy)]
+struct Stamped {
+    deg: f32,
+    time_ms: i64,
+}
+
+const DAY_MS_U64: u64 = 86_400_000;
 
 /// Fixes kept for interpolation.
 const HISTORY: usize = 8;
@@ -169,7 +288,13 @@ pub struct Bridge<const A: usize = 0> {
     frame: Option<LocalFrame>,
     clock: Option<i64>,
     fixes: Deque<VehicleFix, HISTORY>,
-    course: Option<f32>,
+    /// Latest course over ground.
+    course: Option<Stamped>,
+    /// Since when the speed has stayed at or above the gate.
+    fast_since: Option<i64>,
+    true_heading: Option<Stamped>,
+    /// Latest magnetic heading, and the true one its own variation gives.
+    magnetic: Option<(Stamped, Option<f32>)>,
     waiting: Deque<Pending, WAITING>,
     counters: BridgeCounters,
 }
@@ -184,6 +309,9 @@ impl<const A: usize> Bridge<A> {
             clock: None,
             fixes: Deque::new(),
             course: None,
+            fast_since: None,
+            true_heading: None,
+            magnetic: None,
             waiting: Deque::new(),
             counters: BridgeCounters::default(),
         }
@@ -238,29 +366,227 @@ impl<const A: usize> Bridge<A> {
     /// Take one frame; hand what it yields to `sink`.
     pub fn push(&mut self, frame: &Frame<'_>, sink: &mut impl FnMut(Event)) {
         match frame {
-            Frame::Nmea(text) => match Sentence::parse(text) {
-                Ok(Sentence::Gga(g)) => self.fix(g.time.ms_of_day, g.position, None, None, sink),
-                Ok(Sentence::Rmc(r)) => {
-                    let speed = r.speed_kn.map(|k| (k * 1852.0 / 3600.0) as f32);
-                    let course = r.course_deg.map(|c| c as f32);
-                    self.fix(r.time.ms_of_day, r.position, speed, course, sink)
-                }
-                Ok(Sentence::Pfoxb(b)) => self.bearing(&b, sink),
-                Err(NmeaError::Unsupported) => self.counters.unsupported_sentences += 1,
-                Err(NmeaError::NoFix) => self.counters.no_fix_sentences += 1,
-                Err(NmeaError::BadField(_)) => self.counters.bad_field += 1,
-            },
+            Frame::Nmea(text) => self.sentence(text, sink),
             Frame::Mt(m) => match AfIncomingMsg::parse(m) {
                 Ok(msg) => self.rssi(&msg, sink),
                 Err(MtError::Unsupported) => self.counters.other_mt += 1,
                 Err(_) => self.counters.short_mt += 1,
             },
+            Frame::Agrelo(text) => match Agrelo::parse(text) {
+                Ok(a) => self.agrelo(&a, sink),
+                Err(_) => self.counters.bad_field += 1,
+            },
+            Frame::KrakenCsv(k) => {
+                let r = &k.record;
+                let conf = r.confidence * 100.0;
+                if !(conf >= self.config.kraken_min_conf) {
+                    self.counters.low_quality += 1;
+                    return;
+                }
+                let time_ms = self.unwrap_time((r.epoch_ms % DAY_MS_U64) as u32);
+                self.bearing_in(
+                    Incoming {
+                        time_ms,
+                        azimuth_deg: f64::from(r.relative_deg(self.config.kraken_convention)),
+                        relative: true,
+                        record_heading: r.position.map(|_| r.heading_deg),
+                        quality: conf.clamp(0.0, 100.0),
+                        freq_mhz: r.freq_hz as f64 / 1e6,
+                        position: r.position,
+                        kind: BearingKind::KrakenCsv,
+                    },
+                    sink,
+                );
+            }
+            Frame::KrakenXml(r) => {
+                if r.conf.is_some_and(|c| !(c >= self.config.kraken_min_conf)) {
+                    self.counters.low_quality += 1;
+                    return;
+                }
+                let Some(time_ms) = r
+                    .time_ms
+                    .map(|t| self.unwrap_time((t % DAY_MS_U64) as u32))
+                    .or(self.clock)
+                else {
+                    self.counters.no_fix += 1;
+                    return;
+                };
+                self.bearing_in(
+                    Incoming {
+                        time_ms,
+                        azimuth_deg: f64::from(r.relative_deg()),
+                        relative: true,
+                        record_heading: r.position.and(r.heading_deg),
+                        quality: r.conf.unwrap_or(100.0).clamp(0.0, 100.0),
+                        freq_mhz: r.freq_mhz.unwrap_or(0.0),
+                        position: r.position,
+                        kind: BearingKind::KrakenXml,
+                    },
+                    sink,
+                );
+            }
         }
+    }
+
+    fn sentence(&mut self, text: &str, sink: &mut impl FnMut(Event)) {
+        let knots = |k: f64| (k * KNOT_MPS) as f32;
+        match Sentence::parse(text) {
+            Ok(Sentence::Gga(g)) => self.fix(g.time, g.position, None, None, sink),
+            Ok(Sentence::Rmc(r)) => self.fix(
+                r.time,
+                r.position,
+                r.speed_kn.map(knots),
+                r.course_deg.map(|c| c as f32),
+                sink,
+            ),
+            Ok(Sentence::Gll(g)) => match g.time.map(|t| t.ms_of_day).or(self.clock_of_day()) {
+                Some(ms_of_day) => self.fix(UtcTime { ms_of_day }, g.position, None, None, sink),
+                None => self.counters.no_fix_sentences += 1,
+            },
+            Ok(Sentence::Gns(g)) => self.fix(g.time, g.position, None, None, sink),
+            Ok(Sentence::Vtg(v)) => {
+                if let Some(t) = self.clock {
+                    self.motion(
+                        t,
+                        v.speed_mps().map(|s| s as f32),
+                        v.course_deg.map(|c| c as f32),
+                    );
+                }
+            }
+            Ok(Sentence::Hdt(h)) => self.true_heading(h.heading_deg),
+            Ok(Sentence::Ths(h)) => self.true_heading(h.heading_deg),
+            Ok(Sentence::Hdg(h)) => {
+                self.magnetic_heading(h.magnetic_deg(), h.true_deg().map(|t| t as f32))
+            }
+            Ok(Sentence::Hdm(h)) => self.magnetic_heading(h.heading_deg, None),
+            Ok(Sentence::Pfoxb(b)) => {
+                if !(b.quality > self.config.min_quality) {
+                    self.counters.low_quality += 1;
+                    return;
+                }
+                let time_ms = self.unwrap_time(b.time.ms_of_day);
+                self.bearing_in(
+                    Incoming {
+                        time_ms,
+                        azimuth_deg: b.azimuth_deg,
+                        relative: b.reference == Reference::Relative,
+                        record_heading: None,
+                        quality: b.quality,
+                        freq_mhz: b.freq_mhz,
+                        position: b.position,
+                        kind: BearingKind::Pfoxb,
+                    },
+                    sink,
+                );
+            }
+            Err(NmeaError::Unsupported) => self.counters.unsupported_sentences += 1,
+            Err(NmeaError::NoFix) => {
+                // The receiver's clock runs on while it has no fix: a later bearing then sees
+                // how old the last fix is.
+                if let Some(t) = Sentence::time_of(text) {
+                    self.unwrap_time(t.ms_of_day);
+                }
+                self.counters.no_fix_sentences += 1;
+            }
+            Err(NmeaError::BadField(_)) => self.counters.bad_field += 1,
+        }
+    }
+
+    fn clock_of_day(&self) -> Option<u32> {
+        self.clock.map(|c| c.rem_euclid(DAY_MS) as u32)
+    }
+
+    fn true_heading(&mut self, deg: f64) {
+        self.counters.headings += 1;
+        self.true_heading = Some(Stamped {
+            deg: deg as f32,
+            time_ms: self.clock.unwrap_or(i64::MIN / 2),
+        });
+    }
+
+    fn magnetic_heading(&mut self, magnetic_deg: f64, true_deg: Option<f32>) {
+        self.counters.headings += 1;
+        let stamped = Stamped {
+            deg: magnetic_deg as f32,
+            time_ms: self.clock.unwrap_or(i64::MIN / 2),
+        };
+        self.magnetic = Some((stamped, true_deg));
+    }
+
+    /// Speed and course at `time_ms`: the speed gate's state and the latest course.
+    fn motion(&mut self, time_ms: i64, speed_mps: Option<f32>, course_deg: Option<f32>) {
+        if let Some(v) = speed_mps {
+            if v >= self.config.course_min_speed_mps {
+                self.fast_since.get_or_insert(time_ms);
+            } else {
+                self.fast_since = None;
+            }
+        }
+        if let Some(deg) = course_deg {
+            self.course = Some(Stamped { deg, time_ms });
+        }
+    }
+
+    /// The heading rule (see the module doc): the true heading of the vehicle at `time_ms`
+    /// and its source, given the record's own heading.
+    pub fn heading_at(&self, time_ms: i64, record: Option<f32>) -> Option<(f32, HeadingSource)> {
+        let fresh =
+            |s: &Stamped| (time_ms - s.time_ms).abs() <= i64::from(self.config.heading_max_age_ms);
+        if let Some(h) = self.true_heading.filter(fresh) {
+            return Some((h.deg, HeadingSource::TrueHeading));
+        }
+        if let Some(h) = record {
+            return Some((h, HeadingSource::Record));
+        }
+        if let Some((m, own)) = self.magnetic.filter(|(m, _)| fresh(m)) {
+            let t = own.or(self.config.declination_deg.map(|d| m.deg + d));
+            if let Some(t) = t {
+                return Some((t, HeadingSource::Magnetic));
+            }
+        }
+        let gap = i64::from(self.config.max_fix_gap_ms);
+        let held = self
+            .fast_since
+            .is_some_and(|s| time_ms - s >= i64::from(self.config.course_hold_ms));
+        match self.course {
+            Some(c) if held && (time_ms - c.time_ms).abs() <= gap => {
+                Some((c.deg, HeadingSource::Course))
+            }
+            _ => None,
+        }
+    }
+
+    fn agrelo(&mut self, a: &Agrelo, sink: &mut impl FnMut(Event)) {
+        let Some(bearing) = a.bearing() else {
+            self.counters.no_bearing += 1;
+            return;
+        };
+        if a.quality < self.config.agrelo_min_quality {
+            self.counters.low_quality += 1;
+            return;
+        }
+        let Some(time_ms) = self.clock else {
+            self.counters.no_fix += 1;
+            return;
+        };
+        self.bearing_in(
+            Incoming {
+                time_ms,
+                azimuth_deg: f64::from(bearing),
+                relative: true,
+                record_heading: None,
+                quality: a.quality_percent(),
+                freq_mhz: 0.0,
+                position: None,
+                kind: BearingKind::Agrelo,
+            },
+            sink,
+        );
     }
 
     fn fix(
         &mut self,
-        ms_of_day: u32,
+        time: UtcTime,
         position: LatLon,
         speed_mps: Option<f32>,
         course_deg: Option<f32>,
@@ -270,14 +596,12 @@ impl<const A: usize> Bridge<A> {
             self.counters.bad_position += 1;
             return;
         };
-        let time_ms = self.unwrap_time(ms_of_day);
-        if course_deg.is_some() {
-            self.course = course_deg;
-        }
+        let time_ms = self.unwrap_time(time.ms_of_day);
+        self.motion(time_ms, speed_mps, course_deg);
         if let Some(last) = self.fixes.back_mut()
             && last.time_ms == time_ms
         {
-            // GGA and RMC of one epoch: one fix, with the RMC's speed and course.
+            // The sentences of one epoch: one fix, with the RMC's speed and course.
             last.speed_mps = speed_mps.or(last.speed_mps);
             last.course_deg = course_deg.or(last.course_deg);
             return;
@@ -305,31 +629,29 @@ impl<const A: usize> Bridge<A> {
         }
     }
 
-    fn bearing(&mut self, b: &Pfoxb, sink: &mut impl FnMut(Event)) {
-        if !(b.quality > self.config.min_quality) {
-            self.counters.low_quality += 1;
-            return;
-        }
-        let azimuth_deg = match b.reference {
-            Reference::True => b.azimuth_deg,
-            Reference::Relative => match self.course {
-                Some(c) => {
-                    // Both lie in [0, 360]: one subtraction wraps the sum (no fmod linked).
-                    let a = b.azimuth_deg + f64::from(c);
-                    if a >= 360.0 { a - 360.0 } else { a }
+    /// Every bearing kind ends here: the heading rule, the mounting offset, the placement.
+    fn bearing_in(&mut self, b: Incoming, sink: &mut impl FnMut(Event)) {
+        let (azimuth_deg, heading) = if b.relative {
+            match self.heading_at(b.time_ms, b.record_heading) {
+                Some((h, source)) => {
+                    let a = b.azimuth_deg + f64::from(self.config.mount_offset_deg) + f64::from(h);
+                    (wrap_deg(a), source)
                 }
                 None => {
-                    self.counters.no_course += 1;
+                    self.counters.no_heading += 1;
                     return;
                 }
-            },
+            }
+        } else {
+            (b.azimuth_deg, HeadingSource::TrueBearing)
         };
-        let time_ms = self.unwrap_time(b.time.ms_of_day);
         let pending = Pending {
-            time_ms,
+            time_ms: b.time_ms,
             azimuth_deg,
             quality: b.quality,
             freq_mhz: b.freq_mhz,
+            kind: b.kind,
+            heading,
         };
         if let Some(p) = b.position {
             match self.local(p) {
@@ -339,7 +661,7 @@ impl<const A: usize> Bridge<A> {
             return;
         }
         let newest = self.fixes.back().map(|f| f.time_ms);
-        if newest.is_some_and(|t| t >= time_ms) {
+        if newest.is_some_and(|t| t >= b.time_ms) {
             self.place(&pending, sink);
             return;
         }
@@ -388,6 +710,8 @@ impl<const A: usize> Bridge<A> {
             bearing: Bearing::from_azimuth(vehicle, azimuth, self.config.sigma_rad * scale),
             quality: p.quality,
             freq_mhz: p.freq_mhz,
+            kind: p.kind,
+            heading: p.heading,
         }));
     }
 

@@ -1,19 +1,23 @@
 //! foxhunt-bridge: the bytes the radios send, turned into measurements for foxhunt-core.
 //!
-//! [`stream`] splits a raw serial stream into checked frames (NMEA sentences and TI
-//! Monitor-and-Test frames), [`nmea`] and [`mt`] decode them, [`geo`] puts positions in local
-//! metres, and [`bridge`] turns fixes, bearings and link qualities into core measurements.
+//! [`stream`] splits a raw serial stream into checked records (NMEA sentences, TI
+//! Monitor-and-Test frames, Agrelo bearings, KrakenSDR CSV lines and XML records), [`nmea`],
+//! [`mt`], [`agrelo`] and [`kraken`] decode and encode them, [`geo`] puts positions in local
+//! metres, and [`bridge`] turns fixes, headings, bearings and link qualities into core
+//! measurements.
 //! Nothing allocates; every buffer has a fixed capacity; every rejection is counted by reason.
 #![cfg_attr(not(any(feature = "std", test)), no_std)]
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod agrelo;
 pub mod bridge;
 pub mod geo;
+pub mod kraken;
 pub mod mt;
 pub mod nmea;
 pub mod replay;
 pub mod stream;
 
 pub use bridge::{Bridge, BridgeConfig, BridgeCounters, Event, Receiver};
-pub use stream::{Demux, Frame, MtFrame, StreamCounters};
+pub use stream::{Demux, Frame, KrakenCsvFrame, MtFrame, StreamCounters};

@@ -4,14 +4,33 @@
 //! Layout: `0xFE | LEN | CMD0 | CMD1 | DATA[LEN] | FCS`, CMD0 = type << 5 | subsystem, FCS =
 //! XOR of LEN, CMD0, CMD1 and DATA. Multi-byte fields are little-endian.
 
-use crate::stream::{MT_SOF, MtFrame};
+use crate::nmea::xor;
+use crate::stream::MT_SOF;
 
 /// CMD0 of `AF_INCOMING_MSG`: type AREQ (2), subsystem AF (4).
 pub const AF_INCOMING_MSG_CMD0: u8 = 0x44;
 /// CMD1 of `AF_INCOMING_MSG`.
 pub const AF_INCOMING_MSG_CMD1: u8 = 0x81;
 /// Bytes of `AF_INCOMING_MSG` before its application data.
-pub const AF_HEADER: usize = 17;
+pub const AF_HEADER: usize = field::DATA;
+
+/// Where each field of `AF_INCOMING_MSG` sits in the frame's data: the one table that parse
+/// and encode both read (smoltcp's `mod field`).
+mod field {
+    use core::ops::Range;
+    pub const GROUP_ID: Range<usize> = 0..2;
+    pub const CLUSTER_ID: Range<usize> = 2..4;
+    pub const SRC_ADDR: Range<usize> = 4..6;
+    pub const SRC_ENDPOINT: usize = 6;
+    pub const DST_ENDPOINT: usize = 7;
+    pub const WAS_BROADCAST: usize = 8;
+    pub const LINK_QUALITY: usize = 9;
+    pub const SECURITY_USE: usize = 10;
+    pub const TIMESTAMP: Range<usize> = 11..15;
+    pub const TRANS_SEQ: usize = 15;
+    pub const LEN: usize = 16;
+    pub const DATA: usize = 17;
+}
 
 /// Why an MT frame gave nothing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -39,6 +58,17 @@ pub enum CommandType {
     Srsp,
     /// 4-7: reserved.
     Reserved(u8),
+}
+
+/// A Monitor-and-Test frame: command bytes and data (SOF, LEN and FCS stripped).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MtFrame<'a> {
+    /// Type (bits 7-5) and subsystem (bits 4-0).
+    pub cmd0: u8,
+    /// Command id within the subsystem.
+    pub cmd1: u8,
+    /// Payload, LEN bytes.
+    pub data: &'a [u8],
 }
 
 impl MtFrame<'_> {
@@ -70,7 +100,7 @@ impl MtFrame<'_> {
         out[2] = self.cmd0;
         out[3] = self.cmd1;
         out[4..4 + self.data.len()].copy_from_slice(self.data);
-        out[total - 1] = out[1..total - 1].iter().fold(0, |x, b| x ^ b);
+        out[total - 1] = xor(&out[1..total - 1]);
         Ok(total)
     }
 }
@@ -103,8 +133,8 @@ pub struct AfIncomingMsg<'a> {
     pub data: &'a [u8],
 }
 
-fn u16_at(d: &[u8], i: usize) -> u16 {
-    u16::from_le_bytes([d[i], d[i + 1]])
+fn u16_at(d: &[u8], r: core::ops::Range<usize>) -> u16 {
+    u16::from_le_bytes([d[r.start], d[r.start + 1]])
 }
 
 impl<'a> AfIncomingMsg<'a> {
@@ -118,19 +148,20 @@ impl<'a> AfIncomingMsg<'a> {
         if d.len() < AF_HEADER {
             return Err(MtError::Short);
         }
-        let len = d[16] as usize;
+        let len = d[field::LEN] as usize;
         let data = d.get(AF_HEADER..AF_HEADER + len).ok_or(MtError::Short)?;
+        let t = field::TIMESTAMP.start;
         Ok(Self {
-            group_id: u16_at(d, 0),
-            cluster_id: u16_at(d, 2),
-            src_addr: u16_at(d, 4),
-            src_endpoint: d[6],
-            dst_endpoint: d[7],
-            was_broadcast: d[8] != 0,
-            link_quality: d[9],
-            security_use: d[10] != 0,
-            timestamp: u32::from_le_bytes([d[11], d[12], d[13], d[14]]),
-            trans_seq: d[15],
+            group_id: u16_at(d, field::GROUP_ID),
+            cluster_id: u16_at(d, field::CLUSTER_ID),
+            src_addr: u16_at(d, field::SRC_ADDR),
+            src_endpoint: d[field::SRC_ENDPOINT],
+            dst_endpoint: d[field::DST_ENDPOINT],
+            was_broadcast: d[field::WAS_BROADCAST] != 0,
+            link_quality: d[field::LINK_QUALITY],
+            security_use: d[field::SECURITY_USE] != 0,
+            timestamp: u32::from_le_bytes([d[t], d[t + 1], d[t + 2], d[t + 3]]),
+            trans_seq: d[field::TRANS_SEQ],
             data,
         })
     }
@@ -142,17 +173,17 @@ impl<'a> AfIncomingMsg<'a> {
         if total > 255 || out.len() < total {
             return Err(MtError::TooLong);
         }
-        out[0..2].copy_from_slice(&self.group_id.to_le_bytes());
-        out[2..4].copy_from_slice(&self.cluster_id.to_le_bytes());
-        out[4..6].copy_from_slice(&self.src_addr.to_le_bytes());
-        out[6] = self.src_endpoint;
-        out[7] = self.dst_endpoint;
-        out[8] = u8::from(self.was_broadcast);
-        out[9] = self.link_quality;
-        out[10] = u8::from(self.security_use);
-        out[11..15].copy_from_slice(&self.timestamp.to_le_bytes());
-        out[15] = self.trans_seq;
-        out[16] = len;
+        out[field::GROUP_ID].copy_from_slice(&self.group_id.to_le_bytes());
+        out[field::CLUSTER_ID].copy_from_slice(&self.cluster_id.to_le_bytes());
+        out[field::SRC_ADDR].copy_from_slice(&self.src_addr.to_le_bytes());
+        out[field::SRC_ENDPOINT] = self.src_endpoint;
+        out[field::DST_ENDPOINT] = self.dst_endpoint;
+        out[field::WAS_BROADCAST] = u8::from(self.was_broadcast);
+        out[field::LINK_QUALITY] = self.link_quality;
+        out[field::SECURITY_USE] = u8::from(self.security_use);
+        out[field::TIMESTAMP].copy_from_slice(&self.timestamp.to_le_bytes());
+        out[field::TRANS_SEQ] = self.trans_seq;
+        out[field::LEN] = len;
         out[AF_HEADER..total].copy_from_slice(self.data);
         Ok(total)
     }

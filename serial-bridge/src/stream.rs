@@ -1,11 +1,21 @@
-//! The byte-stream demultiplexer: bytes in any chunking in, whole checked frames out.
+//! The byte-stream demultiplexer: bytes in any chunking in, whole checked records out.
 //!
-//! One UART may interleave NMEA sentences (`$` ... `*hh` CRLF) and TI Monitor-and-Test frames
-//! (`0xFE`, LEN, CMD0, CMD1, DATA, FCS). The demultiplexer keeps the unparsed bytes in a fixed
-//! buffer and looks only at the first one: `$` starts a sentence, `0xFE` an MT frame, anything
-//! else is garbage, skipped and counted. A candidate that fails its check costs only its first
-//! byte: scanning resumes at the next byte, so a corrupt byte never swallows the valid frames
-//! after it.
+//! One UART (or one file) may interleave NMEA sentences (`$` ... `*hh` CRLF), TI
+//! Monitor-and-Test frames (`0xFE`, LEN, CMD0, CMD1, DATA, FCS), Agrelo bearings (`%`), KrakenSDR
+//! XML records (`<`) and KrakenSDR CSV lines (a digit). The demultiplexer keeps the unparsed
+//! bytes in a fixed buffer and looks only at the first one; anything else is garbage, skipped
+//! and counted (whitespace between records is skipped silently). A candidate that fails its
+//! check costs only its first byte: scanning resumes at the next byte, so a corrupt byte never
+//! swallows the valid records after it. Binary protocols of GPS receivers (u-blox UBX, SiRF,
+//! RTCM) are garbage here: skipped, with the sentences around them kept.
+//!
+//! The Kraken records are decoded as they arrive, a field or a tag at a time
+//! ([`crate::kraken`]), so a 2.5 KB CSV line needs no 2.5 KB buffer. A record that fails
+//! after its first field is dropped (counted by reason) and scanning resumes at the field that
+//! failed, which may be the start of the next record (a corrupted line end); one that fails
+//! in its first field was never a record: its first byte is garbage. CSV has no checksum: a
+//! corrupt digit that keeps a field well formed gives a wrong value, as it would for any
+//! reader of the format.
 //!
 //! An 8-bit XOR check passes one forgery in 256. A forged MT frame (a corrupt LEN, or a `0xFE`
 //! inside a damaged sentence) would span and swallow the genuine frames after it, so an MT
@@ -15,8 +25,15 @@
 //! wait at once. A sentence cannot be forged across frames: its body must be printable ASCII
 //! without `$`, which the bytes of any other frame break.
 
-/// Longest NMEA sentence, `$` to LF inclusive (NMEA 0183: 82 characters).
-pub const MAX_SENTENCE: usize = 82;
+use crate::agrelo;
+use crate::kraken::{
+    CsvDecoder, KrakenCsv, KrakenError, KrakenXml, SPECTRUM_LEN, Step, XmlDecoder,
+};
+use crate::nmea::xor;
+
+/// Longest NMEA sentence, `$` to LF inclusive: GPSD's limit (`NMEA_MAX` in its `gpsd.h`), since
+/// RTK receivers print more decimals than NMEA 0183's 82 characters allow.
+pub const MAX_SENTENCE: usize = 130;
 /// Longest MT frame: SOF, LEN, CMD0, CMD1, 255 data bytes, FCS.
 pub const MAX_MT_FRAME: usize = 255 + 5;
 /// Default buffer: room for an MT frame and a second one starting inside it, so every wait
@@ -26,24 +43,41 @@ pub const DEFAULT_CAPACITY: usize = 2 * MAX_MT_FRAME + 8;
 pub const MT_SOF: u8 = 0xFE;
 
 /// One checked frame, borrowed from the demultiplexer's buffer until the next call.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Frame<'a> {
     /// An NMEA sentence whose checksum matched: the text between `$` and `*`.
     Nmea(&'a str),
     /// A Monitor-and-Test frame whose FCS matched.
     Mt(MtFrame<'a>),
+    /// An Agrelo record that parses: its text from `%` up to the line end
+    /// ([`crate::agrelo::Agrelo::parse`] decodes it).
+    Agrelo(&'a str),
+    /// A KrakenSDR CSV line, decoded.
+    KrakenCsv(KrakenCsvFrame<'a>),
+    /// A KrakenSDR / KerberosSDR XML record, decoded.
+    KrakenXml(KrakenXml),
 }
 
-/// A Monitor-and-Test frame: command bytes and data (SOF, LEN and FCS stripped).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct MtFrame<'a> {
-    /// Type (bits 7-5) and subsystem (bits 4-0).
-    pub cmd0: u8,
-    /// Command id within the subsystem.
-    pub cmd1: u8,
-    /// Payload, LEN bytes.
-    pub data: &'a [u8],
+/// A decoded CSV line and, when the demultiplexer keeps one, its DoA spectrum (dB above its
+/// minimum, indexed anticlockwise from the array's front as the unit writes it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct KrakenCsvFrame<'a> {
+    /// The line's fields.
+    pub record: KrakenCsv,
+    /// The 360 spectrum values, if kept.
+    pub spectrum: Option<&'a [f32]>,
 }
+
+impl KrakenCsvFrame<'_> {
+    /// The spectrum at a bearing `deg` degrees clockwise from the array's front: value
+    /// `(360 − deg) mod 360` of the anticlockwise list.
+    pub fn spectrum_clockwise(&self, deg: u16) -> Option<f32> {
+        let i = (360 - usize::from(deg % 360)) % SPECTRUM_LEN;
+        self.spectrum?.get(i).copied()
+    }
+}
+
+pub use crate::mt::MtFrame;
 
 /// What the demultiplexer has seen and thrown away, by reason.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -69,6 +103,42 @@ pub struct StreamCounters {
     pub overlapping: u32,
     /// Unfinished frames dropped at the end of the stream.
     pub truncated: u32,
+    /// Agrelo records delivered.
+    pub agrelo: u32,
+    /// `%` and a digit that did not make an Agrelo record.
+    pub agrelo_malformed: u32,
+    /// KrakenSDR CSV lines delivered.
+    pub kraken_csv: u32,
+    /// KrakenSDR XML records delivered.
+    pub kraken_xml: u32,
+    /// Kraken records with a field that did not parse.
+    pub kraken_bad_field: u32,
+    /// Kraken records with a field, text or tag longer than the framing holds.
+    pub kraken_too_long: u32,
+    /// Kraken records of the wrong shape (field count, tag order, no DOA).
+    pub kraken_structure: u32,
+}
+
+impl StreamCounters {
+    const ZERO: Self = Self {
+        bytes: 0,
+        sentences: 0,
+        mt_frames: 0,
+        garbage_bytes: 0,
+        bad_checksum: 0,
+        malformed: 0,
+        too_long: 0,
+        bad_fcs: 0,
+        overlapping: 0,
+        truncated: 0,
+        agrelo: 0,
+        agrelo_malformed: 0,
+        kraken_csv: 0,
+        kraken_xml: 0,
+        kraken_bad_field: 0,
+        kraken_too_long: 0,
+        kraken_structure: 0,
+    };
 }
 
 impl StreamCounters {
@@ -80,6 +150,10 @@ impl StreamCounters {
             .saturating_add(self.bad_fcs)
             .saturating_add(self.overlapping)
             .saturating_add(self.truncated)
+            .saturating_add(self.agrelo_malformed)
+            .saturating_add(self.kraken_bad_field)
+            .saturating_add(self.kraken_too_long)
+            .saturating_add(self.kraken_structure)
     }
 }
 
@@ -123,8 +197,10 @@ fn scan_sentence_from(bytes: &[u8], from: usize) -> Scan {
     for i in from.max(1)..limit {
         match bytes[i] {
             b'\n' => return check_sentence(&bytes[..=i]),
+            // CR LF, CR CR LF (Telit) or a bare LF end a line; a CR before anything else
+            // is no line end.
             b'\r' => {
-                if i + 1 < bytes.len() && bytes[i + 1] != b'\n' {
+                if bytes.get(i + 1).is_some_and(|&b| b != b'\n' && b != b'\r') {
                     return Scan::Invalid(Reject::Malformed);
                 }
             }
@@ -140,10 +216,10 @@ fn scan_sentence_from(bytes: &[u8], from: usize) -> Scan {
     }
 }
 
-/// `line` runs from `$` to LF; CRLF or a bare LF both end a line.
+/// `line` runs from `$` to LF; any CRs before the LF belong to the line end.
 fn check_sentence(line: &[u8]) -> Scan {
     let mut end = line.len() - 1;
-    if end > 0 && line[end - 1] == b'\r' {
+    while end > 1 && line[end - 1] == b'\r' {
         end -= 1;
     }
     let text = &line[1..end];
@@ -160,7 +236,7 @@ fn check_sentence(line: &[u8]) -> Scan {
     if body.contains(&b'*') {
         return Scan::Invalid(Reject::Malformed);
     }
-    if body.iter().fold(0u8, |x, b| x ^ b) == (hi << 4 | lo) {
+    if xor(body) == (hi << 4 | lo) {
         Scan::Valid(line.len())
     } else {
         Scan::Invalid(Reject::Checksum)
@@ -176,7 +252,7 @@ fn scan_mt(bytes: &[u8]) -> Scan {
     if bytes.len() < total {
         return Scan::Incomplete;
     }
-    let fcs = bytes[1..total - 1].iter().fold(0u8, |x, b| x ^ b);
+    let fcs = xor(&bytes[1..total - 1]);
     if fcs == bytes[total - 1] {
         Scan::Valid(total)
     } else {
@@ -288,9 +364,19 @@ fn resolve_overlap(bytes: &[u8], len: usize, ended: bool, in_sync: bool) -> Over
     }
 }
 
-/// The demultiplexer, with a buffer of `CAP` bytes (at least [`DEFAULT_CAPACITY`]).
+/// A record being decoded as it arrives.
+#[derive(Debug, Clone, Copy)]
+enum Streaming {
+    None,
+    Csv(CsvDecoder),
+    Xml(XmlDecoder),
+}
+
+/// The demultiplexer, with a buffer of `CAP` bytes (at least [`DEFAULT_CAPACITY`]) and room
+/// for `SPECTRUM` values of a Kraken CSV line's DoA spectrum ([`SPECTRUM_LEN`] to keep it,
+/// 0, the default, to drop it).
 #[derive(Debug, Clone)]
-pub struct Demux<const CAP: usize = DEFAULT_CAPACITY> {
+pub struct Demux<const CAP: usize = DEFAULT_CAPACITY, const SPECTRUM: usize = 0> {
     buf: [u8; CAP],
     start: usize,
     end: usize,
@@ -304,16 +390,26 @@ pub struct Demux<const CAP: usize = DEFAULT_CAPACITY> {
     in_sync: bool,
     /// Bytes of the sentence candidate at the start already found plain.
     plain: usize,
+    streaming: Streaming,
+    ready: Option<Ready>,
+    spectrum: [f32; SPECTRUM],
     counters: StreamCounters,
 }
 
-impl<const CAP: usize> Default for Demux<CAP> {
+/// A streamed record, ready to hand out.
+#[derive(Debug, Clone, Copy)]
+enum Ready {
+    Csv(KrakenCsv),
+    Xml(KrakenXml),
+}
+
+impl<const CAP: usize, const SPECTRUM: usize> Default for Demux<CAP, SPECTRUM> {
     fn default() -> Self {
         Self::new()
     }
 }
 
-impl<const CAP: usize> Demux<CAP> {
+impl<const CAP: usize, const SPECTRUM: usize> Demux<CAP, SPECTRUM> {
     const ROOM: () = assert!(
         CAP >= DEFAULT_CAPACITY,
         "Demux buffer under DEFAULT_CAPACITY"
@@ -331,18 +427,10 @@ impl<const CAP: usize> Demux<CAP> {
             ended: false,
             in_sync: true,
             plain: 0,
-            counters: StreamCounters {
-                bytes: 0,
-                sentences: 0,
-                mt_frames: 0,
-                garbage_bytes: 0,
-                bad_checksum: 0,
-                malformed: 0,
-                too_long: 0,
-                bad_fcs: 0,
-                overlapping: 0,
-                truncated: 0,
-            },
+            streaming: Streaming::None,
+            ready: None,
+            spectrum: [0.0; SPECTRUM],
+            counters: StreamCounters::ZERO,
         }
     }
 
@@ -405,13 +493,128 @@ impl<const CAP: usize> Demux<CAP> {
         self.plain = 0;
     }
 
+    /// A record decoded as it arrives: one step. `Some(true)`: a record is ready in
+    /// `self.ready`; `Some(false)`: go on; `None`: more bytes needed.
+    fn stream_step(&mut self) -> Option<bool> {
+        let data = &self.buf[self.start..self.end];
+        let (first, step) = match &mut self.streaming {
+            Streaming::None => return Some(false),
+            Streaming::Csv(d) => {
+                let first = d.at_start();
+                let spectrum: &mut [f32] = if SPECTRUM >= SPECTRUM_LEN {
+                    &mut self.spectrum
+                } else {
+                    &mut []
+                };
+                (first, d.step(data, self.ended, spectrum).map(Ready::Csv))
+            }
+            Streaming::Xml(d) => (d.at_start(), d.step(data).map(Ready::Xml)),
+        };
+        match step {
+            Step::NeedMore if !self.ended => None,
+            Step::NeedMore => {
+                self.streaming = Streaming::None;
+                if first {
+                    self.counters.garbage_bytes += 1;
+                    self.drop_first();
+                } else {
+                    self.counters.truncated += 1;
+                    self.in_sync = false;
+                }
+                Some(false)
+            }
+            Step::Took(n) => {
+                self.start += n;
+                Some(false)
+            }
+            Step::Done(n, r) => {
+                self.start += n;
+                self.streaming = Streaming::None;
+                self.in_sync = true;
+                match r {
+                    Ready::Csv(_) => self.counters.kraken_csv += 1,
+                    Ready::Xml(_) => self.counters.kraken_xml += 1,
+                }
+                self.ready = Some(r);
+                Some(true)
+            }
+            Step::Reject(e, skip) => {
+                self.streaming = Streaming::None;
+                if first {
+                    self.counters.garbage_bytes += 1;
+                    self.drop_first();
+                } else {
+                    let c = &mut self.counters;
+                    match e {
+                        KrakenError::BadField(_) => c.kraken_bad_field += 1,
+                        KrakenError::TooLong => c.kraken_too_long += 1,
+                        KrakenError::Structure | KrakenError::NoBearing => c.kraken_structure += 1,
+                    }
+                    self.start += skip;
+                    self.in_sync = false;
+                    self.plain = 0;
+                }
+                Some(false)
+            }
+        }
+    }
+
     /// The next checked frame, or `None` when more bytes are needed.
     pub fn next_frame(&mut self) -> Option<Frame<'_>> {
         self.release();
         loop {
+            if !matches!(self.streaming, Streaming::None) {
+                if !self.stream_step()? {
+                    continue;
+                }
+                return match self.ready.take()? {
+                    Ready::Csv(record) => Some(Frame::KrakenCsv(KrakenCsvFrame {
+                        record,
+                        spectrum: (SPECTRUM >= SPECTRUM_LEN).then_some(&self.spectrum[..]),
+                    })),
+                    Ready::Xml(r) => Some(Frame::KrakenXml(r)),
+                };
+            }
             let data = &self.buf[self.start..self.end];
             let first = *data.first()?;
             let verdict = match first {
+                b'%' => {
+                    match agrelo::scan(data, self.ended) {
+                        agrelo::Scan::Valid { text, end } => {
+                            self.counters.agrelo += 1;
+                            self.delivered = text + end;
+                            self.in_sync = true;
+                            let t = &self.buf[self.start..self.start + text];
+                            // Checked ASCII, so this never fails.
+                            return Some(Frame::Agrelo(core::str::from_utf8(t).unwrap_or("%")));
+                        }
+                        agrelo::Scan::Invalid { started: true } => {
+                            self.counters.agrelo_malformed += 1;
+                        }
+                        agrelo::Scan::Invalid { started: false } => {
+                            self.counters.garbage_bytes += 1;
+                        }
+                        agrelo::Scan::Incomplete if self.ended => {
+                            self.counters.garbage_bytes += 1;
+                        }
+                        agrelo::Scan::Incomplete => return None,
+                    }
+                    self.drop_first();
+                    continue;
+                }
+                b'<' => {
+                    self.streaming = Streaming::Xml(XmlDecoder::new());
+                    continue;
+                }
+                b'0'..=b'9' => {
+                    self.streaming = Streaming::Csv(CsvDecoder::new());
+                    continue;
+                }
+                b' ' | b'\t' | b'\r' | b'\n' => {
+                    self.start += 1;
+                    self.plain = 0;
+                    continue;
+                }
                 b'$' => {
                     let v = scan_sentence_from(data, self.plain);
                     if v == Scan::Incomplete {
@@ -424,10 +627,18 @@ impl<const CAP: usize> Demux<CAP> {
                 }
                 MT_SOF => scan_mt(data),
                 _ => {
-                    let skip = data
+                    // The first byte starts nothing: skip it and what follows up to a byte
+                    // that may start a record (or whitespace, skipped silently).
+                    let skip = 1 + data[1..]
                         .iter()
-                        .position(|&b| b == b'$' || b == MT_SOF)
-                        .unwrap_or(data.len());
+                        .position(|&b| {
+                            matches!(
+                                b,
+                                b'$' | MT_SOF | b'%' | b'<' | b'0'
+                                    ..=b'9' | b' ' | b'\t' | b'\r' | b'\n'
+                            )
+                        })
+                        .unwrap_or(data.len() - 1);
                     self.counters.garbage_bytes =
                         self.counters.garbage_bytes.saturating_add(skip as u32);
                     self.start += skip;
@@ -630,6 +841,85 @@ mod tests {
         d.feed(&s, &mut |_| n += 1);
         d.finish_into(&mut |_| n += 1);
         assert_eq!(d.counters().bytes, s.len() as u64);
+        // Settled with what the buffer held: O is delivered (no valid frame follows its inner
+        // candidate within the buffer), and the 260-byte candidate after it fails its FCS.
+        let c = d.counters();
+        assert_eq!(
+            (n, c.mt_frames, c.bad_fcs, c.overlapping),
+            (1, 1, 1, 0),
+            "{c:?}"
+        );
+    }
+
+    #[test]
+    fn gpsd_grade_line_ends_lengths_and_binary_neighbours() {
+        let rtk = "GPGGA,132820.60,4134.49821229,N,09345.03351845,W,2,09,1.0,278.020,M,-31.442,M,7.6,0133";
+        let mut s = std::vec::Vec::new();
+        // u-blox UBX (0xB5 0x62) and SiRF (0xA0 0xA2 ... 0xB0 0xB3) frames, one with an MT
+        // start byte and a '$' in its payload, between sentences with every line end.
+        s.extend_from_slice(&[
+            0xB5, 0x62, 0x01, 0x07, 0x04, 0x00, 0xFE, 0x10, b'$', 0x00, 0x3A, 0x9C,
+        ]);
+        s.extend_from_slice(std::format!("${rtk}*7E\r\r\n").as_bytes());
+        s.extend_from_slice(&[0xA0, 0xA2, 0x00, 0x02, 0xFE, 0x05, 0x01, 0x03, 0xB0, 0xB3]);
+        s.extend_from_slice(sentence("GPXXX,1").trim_end().as_bytes());
+        s.extend_from_slice(b"\n");
+        s.extend_from_slice(sentence("GPXXX,2").as_bytes());
+        let (out, c) = frames(&s);
+        let want = [
+            std::format!("Nmea({rtk:?})"),
+            "Nmea(\"GPXXX,1\")".into(),
+            "Nmea(\"GPXXX,2\")".into(),
+        ];
+        assert_eq!(out, want, "{c:?}");
+        // 130 bytes from '$' to LF is GPSD's limit; 131 is too long.
+        for (len, ok) in [(130, true), (131, false)] {
+            let body = std::format!("GPXXX,{}", "9".repeat(len - 12));
+            let line = sentence(&body);
+            assert_eq!(line.len(), len);
+            let (out, c) = frames(line.as_bytes());
+            assert_eq!((out.len() == 1, c.too_long == 1), (ok, !ok), "{len}");
+        }
+    }
+
+    #[test]
+    fn a_kraken_line_in_odd_reads_keeps_its_spectrum_only_when_asked() {
+        let line = crate::kraken::tests::issue_11_line();
+        let mut keep = Demux::<DEFAULT_CAPACITY, SPECTRUM_LEN>::new();
+        let mut drop = Demux::<DEFAULT_CAPACITY>::new();
+        let mut seen = std::vec::Vec::new();
+        for chunk in line.as_bytes().chunks(7) {
+            keep.feed(chunk, &mut |f| {
+                if let Frame::KrakenCsv(k) = f {
+                    // Index 0 is the front; clockwise 1 degree is anticlockwise index 359.
+                    seen.push((k.spectrum_clockwise(0), k.spectrum_clockwise(1)));
+                }
+            });
+            drop.feed(chunk, &mut |f| {
+                if let Frame::KrakenCsv(k) = f {
+                    assert_eq!(k.spectrum, None);
+                    assert_eq!(k.record.epoch_ms, 1_679_512_414_650);
+                }
+            });
+        }
+        assert_eq!(seen, [(Some(0.07), Some(3.59))]);
+        assert_eq!(
+            (keep.counters().kraken_csv, drop.counters().kraken_csv),
+            (1, 1)
+        );
+        // Nothing of the 2.5 KB line is held once it is read.
+        assert_eq!(keep.pending(), 0);
+    }
+
+    #[test]
+    fn a_form_feed_after_digits_is_garbage_not_a_stall() {
+        // Found by the flipped-byte property: ',' ^ 0x20 is a form feed, ASCII whitespace
+        // that no record starts with; the scan once stopped on it without moving.
+        let s = std::format!("1600000000005\x0c 134.5{}", sentence("GPXXX,1"));
+        let (out, c) = frames(s.as_bytes());
+        assert_eq!(out, ["Nmea(\"GPXXX,1\")"]);
+        // 13 digits, the form feed and "134.5"; the space is skipped silently.
+        assert_eq!(c.garbage_bytes, 19, "{c:?}");
     }
 
     #[test]

@@ -1,17 +1,23 @@
-//! The NMEA decoder against GPSD's own decoding of four real receivers' captures.
+//! The NMEA decoder against GPSD's own decoding of the 54 real receivers' captures in
+//! `../shared/data/gpsd` (GPSD's regression suite: `*.log` raw bytes, `*.log.chk` GPSD's JSON
+//! reports after each sentence).
 //!
-//! `../shared/data/gpsd` holds raw captures (`*.log`) and, beside each, GPSD's regression
-//! output (`*.log.chk`): every sentence followed by the JSON reports GPSD made after it. GPSD
-//! reports a TPV at the end of each receiver cycle, not after every sentence, so the comparison
-//! is: for each GGA or RMC we decode to a fix, the first TPV with a position after it has the
-//! same time of day (else the sentence was superseded by a newer epoch before GPSD reported,
-//! and is counted as such), and then the same latitude and longitude (1e-7 degrees), date
-//! (RMC), speed and track (RMC, to GPSD's printed precision). For each GGA or RMC we reject as
-//! no fix, GPSD's next TPV before the following GGA/RMC has no position.
+//! GPSD reports a TPV whenever a sentence updates its fix, often repeating a position, and
+//! merges sentences of one cycle; so sets are compared, not sequences:
+//! - every position in GPSD's TPVs (latitude and longitude to 1e-7 degrees) is one we decode
+//!   from some GGA, RMC, GLL or GNS;
+//! - every TPV time (to the millisecond) goes with a fix of ours at that position and time;
+//! - every TPV speed and track (to GPSD's printed precision, 3 and 4 decimals) is one of ours
+//!   (RMC or VTG) at the same time;
+//! - every fix we decode is a position GPSD reported (no sentence GPSD rejected gives a fix).
+//!
+//! The data folder is not part of the repository. Without it the test prints SKIPPED, except
+//! under CI (the `CI` variable set), where a missing folder is a failure.
 
-use foxhunt_bridge::nmea::{NmeaError, Sentence};
+use foxhunt_bridge::nmea::{KNOT_MPS, LatLon, Sentence};
 use foxhunt_bridge::{Demux, Frame};
 use serde_json::Value;
+use std::collections::HashSet;
 use std::path::PathBuf;
 
 fn data_dir() -> Option<PathBuf> {
@@ -20,56 +26,154 @@ fn data_dir() -> Option<PathBuf> {
         .unwrap_or_else(|| {
             PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/gpsd")
         });
-    dir.is_dir().then_some(dir)
+    if dir.is_dir() {
+        return Some(dir);
+    }
+    assert!(
+        std::env::var_os("CI").is_none(),
+        "CI is set but the GPSD captures are missing at {} (set FOXHUNT_GPSD_DATA)",
+        dir.display()
+    );
+    eprintln!(
+        "SKIPPED: {} is absent (set FOXHUNT_GPSD_DATA)",
+        dir.display()
+    );
+    None
 }
 
-/// GGA/RMC sentences as the demultiplexer delivers them from the raw capture.
-fn decoded(raw: &[u8]) -> Vec<(String, Result<Sentence, NmeaError>)> {
-    // Lines starting with '#' are GPSD's comments, not serial bytes.
+/// One fix we decoded.
+#[derive(Debug, Clone)]
+struct OurFix {
+    time: Option<u32>,
+    position: LatLon,
+}
+
+#[derive(Debug, Default)]
+struct Ours {
+    fixes: Vec<OurFix>,
+}
+
+/// The serial bytes of a capture: GPSD's `#` comment lines are not part of the stream, nor is
+/// the delay cookie a header may declare (`# Delay-Cookie: | 0.01`: gpsfake's write
+/// boundaries).
+fn stream_of(raw: &[u8]) -> Vec<u8> {
     let mut stream = Vec::new();
+    let mut cookie = None;
     for line in raw.split_inclusive(|&b| b == b'\n') {
-        if !line.starts_with(b"#") {
-            stream.extend_from_slice(line);
+        if let Some(rest) = line.strip_prefix(b"# Delay-Cookie: ") {
+            cookie = rest.first().copied();
+        } else if !line.starts_with(b"#") {
+            stream.extend(line.iter().filter(|&&b| Some(b) != cookie));
         }
     }
-    let mut out = Vec::new();
+    stream
+}
+
+/// Every sentence the receiver itself sent (from each `$` of each line to its end): GPSD's
+/// output also holds sentences it generated from binary packets, and TPVs from those.
+fn sent(stream: &[u8]) -> HashSet<Vec<u8>> {
+    let mut out = HashSet::new();
+    for line in stream.split(|&b| b == b'\n') {
+        let line = line.strip_suffix(b"\r").unwrap_or(line);
+        let line = line.strip_suffix(b"\r").unwrap_or(line);
+        for (i, &b) in line.iter().enumerate() {
+            if b == b'$' {
+                out.insert(line[i..].to_vec());
+            }
+        }
+    }
+    out
+}
+
+fn decode(stream: &[u8]) -> Ours {
+    let mut ours = Ours::default();
     let mut demux = Demux::<600>::new();
     let mut sink = |f: Frame<'_>| {
-        if let Frame::Nmea(text) = f
-            && matches!(text.get(2..5), Some("GGA" | "RMC"))
-        {
-            out.push((text.to_string(), Sentence::parse(text)));
-        }
+        let Frame::Nmea(text) = f else { return };
+        let (time, position) = match Sentence::parse(text) {
+            Ok(Sentence::Gga(g)) => (Some(g.time), g.position),
+            Ok(Sentence::Rmc(r)) => (Some(r.time), r.position),
+            Ok(Sentence::Gll(g)) => (g.time, g.position),
+            Ok(Sentence::Gns(g)) => (Some(g.time), g.position),
+            _ => return,
+        };
+        ours.fixes.push(OurFix {
+            time: time.map(|t| t.ms_of_day),
+            position,
+        });
     };
     // Odd reads, as a UART driver would deliver them.
     for chunk in stream.chunks(37) {
         demux.feed(chunk, &mut sink);
     }
     demux.finish_into(&mut sink);
+    ours
+}
+
+/// A TPV of GPSD's with a position.
+#[derive(Debug, Clone)]
+struct Tpv {
+    time: Option<u32>,
+    lat: f64,
+    lon: f64,
+}
+
+/// "2014-12-31T03:07:19.000Z" to ms of day.
+fn tpv_time(t: &str) -> Option<u32> {
+    let n = |a: usize, b: usize| t.get(a..b)?.parse::<u32>().ok();
+    Some(((n(11, 13)? * 60 + n(14, 16)?) * 60 + n(17, 19)?) * 1000 + n(20, 23).unwrap_or(0))
+}
+
+/// GPSD's TPVs with a position reported right after a sentence the receiver sent (not after a
+/// binary packet, nor after a sentence GPSD generated from one).
+fn gpsd_tpvs(chk: &str, sent: &HashSet<Vec<u8>>) -> Vec<Tpv> {
+    let mut out = Vec::new();
+    let mut from_receiver = false;
+    for line in chk.lines() {
+        if line.starts_with('$') {
+            from_receiver = sent.contains(line.as_bytes());
+            continue;
+        }
+        if !line.starts_with('{') {
+            from_receiver = false;
+            continue;
+        }
+        let Ok(v) = serde_json::from_str::<Value>(line) else {
+            continue;
+        };
+        if !from_receiver || v["class"] != "TPV" {
+            continue;
+        }
+        if let (Some(lat), Some(lon)) = (v["lat"].as_f64(), v["lon"].as_f64()) {
+            out.push(Tpv {
+                time: v["time"].as_str().and_then(tpv_time),
+                lat,
+                lon,
+            });
+        }
+    }
     out
 }
 
-/// "2014-12-31T03:07:19.000Z" to (date, ms of day).
-fn tpv_time(t: &str) -> ((u16, u8, u8), u32) {
-    let n = |a: usize, b: usize| t[a..b].parse::<u32>().expect("digits");
-    let ms = ((n(11, 13) * 60 + n(14, 16)) * 60 + n(17, 19)) * 1000 + n(20, 23);
-    ((n(0, 4) as u16, n(5, 7) as u8, n(8, 10) as u8), ms)
+fn same_place(p: &LatLon, lat: f64, lon: f64) -> bool {
+    (p.lat - lat).abs() <= 1e-7 && (p.lon - lon).abs() <= 1e-7
 }
 
-#[derive(Default, Debug)]
+#[derive(Debug, Default)]
 struct Tally {
-    compared: usize,
-    no_fix: usize,
-    superseded: usize,
-    unreported_at_end: usize,
+    gpsd_positions: usize,
+    reproduced: usize,
+    our_fixes: usize,
+    unprinted: usize,
     disagreements: Vec<String>,
 }
 
-fn check_capture(name: &str, raw: &[u8], chk: &str) -> Tally {
-    let ours = decoded(raw);
+/// GPSD's speed and track right after each RMC or VTG against ours from that sentence.
+/// (Elsewhere GPSD derives them from successive fixes, or holds them: nothing decoded to
+/// compare.)
+fn speed_and_track(name: &str, chk: &str) -> Vec<String> {
+    let mut out = Vec::new();
     let lines: Vec<&str> = chk.lines().filter(|l| !l.starts_with('#')).collect();
-    let mut t = Tally::default();
-    let mut k = 0; // index into ours
     for (i, line) in lines.iter().enumerate() {
         let Some(body) = line
             .strip_prefix('$')
@@ -78,127 +182,171 @@ fn check_capture(name: &str, raw: &[u8], chk: &str) -> Tally {
         else {
             continue;
         };
-        if !matches!(body.get(2..5), Some("GGA" | "RMC")) {
-            continue;
-        }
-        let Some((text, result)) = ours.get(k) else {
-            t.disagreements
-                .push(format!("{name}: sentence not delivered: {line}"));
+        let (kn, track) = match Sentence::parse(body) {
+            Ok(Sentence::Rmc(r)) => (r.speed_kn, r.course_deg),
+            Ok(Sentence::Vtg(v)) => (v.speed_kn, v.course_deg),
+            _ => continue,
+        };
+        let Some(tpv) = lines[i + 1..]
+            .iter()
+            .take_while(|l| !l.starts_with('$'))
+            .filter_map(|l| serde_json::from_str::<Value>(l).ok())
+            .find(|v| v["class"] == "TPV")
+        else {
             continue;
         };
-        k += 1;
-        if text != body {
-            t.disagreements
-                .push(format!("{name}: order differs at {line} (we have {text})"));
+        if let (Some(kn), Some(v)) = (kn, tpv["speed"].as_f64())
+            && (kn * KNOT_MPS - v).abs() > 0.0005 + 1e-9
+        {
+            out.push(format!("{name}: speed {kn} kn vs GPSD {v} m/s: {line}"));
+        }
+        if let (Some(c), Some(v)) = (track, tpv["track"].as_f64())
+            && (c - v).abs() > 0.000_05 + 1e-9
+        {
+            out.push(format!("{name}: track {c} vs GPSD {v}: {line}"));
+        }
+    }
+    out
+}
+
+/// Sentences GPSD rejected (its TPV right after says no fix) from which we decode a fix.
+fn rejected_but_taken(name: &str, chk: &str) -> Vec<String> {
+    let lines: Vec<&str> = chk.lines().filter(|l| !l.starts_with('#')).collect();
+    let mut out = Vec::new();
+    for (i, line) in lines.iter().enumerate() {
+        let Some(body) = line
+            .strip_prefix('$')
+            .and_then(|l| l.rsplit_once('*'))
+            .map(|x| x.0)
+        else {
             continue;
-        }
-        let reports = lines[i + 1..].iter().filter(|l| l.starts_with('{'));
-        let tpvs = reports
-            .map(|l| serde_json::from_str::<Value>(l).expect("GPSD JSON"))
-            .filter(|v| v["class"] == "TPV");
-        match result {
-            Ok(s) => {
-                let (time, pos) = match s {
-                    Sentence::Gga(g) => (g.time, g.position),
-                    Sentence::Rmc(r) => (r.time, r.position),
-                    Sentence::Pfoxb(_) => unreachable!(),
-                };
-                let mut tpvs = tpvs.filter(|v| v.get("lat").is_some());
-                let Some(tpv) = tpvs.next() else {
-                    t.unreported_at_end += 1;
-                    continue;
-                };
-                if let Some(tt) = tpv["time"].as_str() {
-                    let (date, ms) = tpv_time(tt);
-                    if ms != time.ms_of_day {
-                        t.superseded += 1;
-                        continue;
-                    }
-                    if let Sentence::Rmc(r) = s {
-                        let d = r.date.map(|d| (d.year, d.month, d.day));
-                        if d != Some(date) {
-                            t.disagreements
-                                .push(format!("{name}: date {d:?} vs {tt}: {line}"));
-                        }
-                    }
-                }
-                let (lat, lon) = (
-                    tpv["lat"].as_f64().expect("lat"),
-                    tpv["lon"].as_f64().expect("lon"),
-                );
-                if (lat - pos.lat).abs() > 1e-7 || (lon - pos.lon).abs() > 1e-7 {
-                    t.disagreements
-                        .push(format!("{name}: {pos:?} vs {lat},{lon}: {line}"));
-                }
-                if let Sentence::Rmc(r) = s {
-                    // GPSD prints speed in m/s to 3 decimals and track to 4.
-                    if let (Some(kn), Some(v)) = (r.speed_kn, tpv["speed"].as_f64())
-                        && (kn * 1852.0 / 3600.0 - v).abs() > 0.0005 + 1e-9
-                    {
-                        t.disagreements
-                            .push(format!("{name}: speed {kn} kn vs {v}: {line}"));
-                    }
-                    if let (Some(c), Some(v)) = (r.course_deg, tpv["track"].as_f64())
-                        && (c - v).abs() > 0.000_05 + 1e-9
-                    {
-                        t.disagreements
-                            .push(format!("{name}: course {c} vs {v}: {line}"));
-                    }
-                }
-                t.compared += 1;
-            }
-            Err(NmeaError::NoFix) => {
-                // GPSD's report for this epoch (if any before the next fix sentence) has no
-                // position either.
-                let next_fix = lines[i + 1..]
-                    .iter()
-                    .position(|l| matches!(l.get(3..6), Some("GGA" | "RMC")))
-                    .map_or(lines.len(), |p| i + 1 + p);
-                let positioned = lines[i + 1..next_fix]
-                    .iter()
-                    .filter(|l| l.starts_with('{'))
-                    .map(|l| serde_json::from_str::<Value>(l).expect("GPSD JSON"))
-                    .any(|v| v["class"] == "TPV" && v.get("lat").is_some());
-                if positioned {
-                    t.disagreements
-                        .push(format!("{name}: we say no fix, GPSD has one: {line}"));
-                }
-                t.no_fix += 1;
-            }
-            Err(e) => t.disagreements.push(format!("{name}: {e:?}: {line}")),
+        };
+        let fix = matches!(
+            Sentence::parse(body),
+            Ok(Sentence::Gga(_) | Sentence::Rmc(_) | Sentence::Gll(_) | Sentence::Gns(_))
+        );
+        let gpsd_no_fix = lines[i + 1..]
+            .iter()
+            .take_while(|l| !l.starts_with('$'))
+            .filter_map(|l| serde_json::from_str::<Value>(l).ok())
+            .find(|v| v["class"] == "TPV")
+            .is_some_and(|v| v["mode"].as_u64().unwrap_or(0) < 2 || v.get("lat").is_none());
+        if fix && gpsd_no_fix {
+            out.push(format!("{name}: GPSD says no fix, we take one: {line}"));
         }
     }
-    if k != ours.len() {
-        t.disagreements.push(format!(
-            "{name}: {} sentences GPSD never saw",
-            ours.len() - k
-        ));
+    out
+}
+
+fn check_capture(name: &str, raw: &[u8], chk: &str) -> Tally {
+    let stream = stream_of(raw);
+    let ours = decode(&stream);
+    let tpvs = gpsd_tpvs(chk, &sent(&stream));
+    let mut t = Tally {
+        our_fixes: ours.fixes.len(),
+        ..Tally::default()
+    };
+    let mut distinct: Vec<(f64, f64)> = tpvs.iter().map(|p| (p.lat, p.lon)).collect();
+    distinct.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
+    distinct.dedup();
+    t.gpsd_positions = distinct.len();
+    for &(lat, lon) in &distinct {
+        if ours.fixes.iter().any(|f| same_place(&f.position, lat, lon)) {
+            t.reproduced += 1;
+        } else {
+            t.disagreements
+                .push(format!("{name}: GPSD position {lat},{lon} not decoded"));
+        }
     }
+    for p in &tpvs {
+        if let Some(time) = p.time
+            && !ours
+                .fixes
+                .iter()
+                .any(|f| f.time == Some(time) && same_place(&f.position, p.lat, p.lon))
+        {
+            t.disagreements.push(format!(
+                "{name}: no fix of ours at {},{} with time {time} ms",
+                p.lat, p.lon
+            ));
+        }
+    }
+    t.disagreements.extend(speed_and_track(name, chk));
+    t.disagreements.extend(rejected_but_taken(name, chk));
+    // GPSD merges the sentences of one cycle and reports the last position: a fix of ours
+    // that it never printed is one it overwrote (an RMC before the GGA of the same second),
+    // not one it rejected. Counted, not failed.
+    t.unprinted = ours
+        .fixes
+        .iter()
+        .filter(|f| {
+            !distinct
+                .iter()
+                .any(|&(lat, lon)| same_place(&f.position, lat, lon))
+        })
+        .count();
     t
 }
 
+fn captures(dir: &std::path::Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .expect("data folder")
+        .filter_map(|e| e.ok())
+        .filter_map(|e| {
+            e.file_name()
+                .to_str()
+                .and_then(|n| n.strip_suffix(".log.chk"))
+                .map(str::to_string)
+        })
+        .collect();
+    names.sort();
+    names
+}
+
 #[test]
-fn gga_and_rmc_agree_with_gpsd_on_four_real_receivers() {
+fn every_position_gpsd_reports_from_the_54_captures() {
     let Some(dir) = data_dir() else {
-        eprintln!("SKIPPED: ../shared/data/gpsd is absent (set FOXHUNT_GPSD_DATA to its path)");
         return;
     };
+    let names = captures(&dir);
+    assert_eq!(names.len(), 54, "captures in {}", dir.display());
     let mut total = Tally::default();
-    for name in ["bu353s4", "haicom-305N", "quectel-l76k-nmea", "ublox-8"] {
+    for name in &names {
         let raw = std::fs::read(dir.join(format!("{name}.log"))).expect("capture");
         let chk = std::fs::read(dir.join(format!("{name}.log.chk"))).expect("GPSD output");
         let t = check_capture(name, &raw, &String::from_utf8_lossy(&chk));
         eprintln!(
-            "{name}: {} fixes agree, {} no-fix agree, {} superseded before GPSD reported, {} unreported at the end",
-            t.compared, t.no_fix, t.superseded, t.unreported_at_end
+            "{name}: {} of {} GPSD positions, {} fixes decoded ({} merged away by GPSD), {} disagreements",
+            t.reproduced,
+            t.gpsd_positions,
+            t.our_fixes,
+            t.unprinted,
+            t.disagreements.len()
         );
-        total.compared += t.compared;
-        total.no_fix += t.no_fix;
-        total.superseded += t.superseded;
+        total.gpsd_positions += t.gpsd_positions;
+        total.reproduced += t.reproduced;
+        total.our_fixes += t.our_fixes;
+        total.unprinted += t.unprinted;
         total.disagreements.extend(t.disagreements);
     }
-    assert!(total.disagreements.is_empty(), "{:#?}", total.disagreements);
-    // Every capture contributes: 50 + 135 + 299 + 144 fixes and 11 no-fix sentences were
-    // compared when this was written.
-    assert!(total.compared > 600 && total.no_fix > 0, "{total:?}");
+    let share = total.reproduced as f64 / total.gpsd_positions.max(1) as f64;
+    eprintln!(
+        "all: {} of {} GPSD positions ({:.2} %), {} fixes decoded ({} merged away by GPSD), {} disagreements",
+        total.reproduced,
+        total.gpsd_positions,
+        100.0 * share,
+        total.our_fixes,
+        total.unprinted,
+        total.disagreements.len()
+    );
+    // The issue's bar: all of them, and no fix from a sentence GPSD rejected. 819 distinct
+    // positions (3 024 fixes of ours) take part when this was written, so an empty comparison
+    // cannot pass.
+    assert!(
+        total.disagreements.is_empty(),
+        "{:.2} % of GPSD's positions; {:#?}",
+        100.0 * share,
+        &total.disagreements[..total.disagreements.len().min(40)]
+    );
+    assert!(total.gpsd_positions > 800, "{total:?}");
 }

@@ -1,15 +1,104 @@
 //! Property tests of the demultiplexer and the bridge on arbitrary and damaged streams.
 
+use foxhunt_bridge::agrelo::Agrelo;
+use foxhunt_bridge::kraken::{ArrayType, KrakenCsv, KrakenXml, SPECTRUM_LEN, Station};
 use foxhunt_bridge::mt::AfIncomingMsg;
-use foxhunt_bridge::nmea::{Sentence, write_sentence};
+use foxhunt_bridge::nmea::{LatLon, Sentence, write_sentence};
 use foxhunt_bridge::{BridgeConfig, Demux, Frame, MtFrame, Receiver};
 use proptest::prelude::*;
 
 /// A frame as the tests describe it: its bytes on the wire and what it decodes to.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone)]
 enum Expected {
     Nmea(String),
     Mt(u8, u8, Vec<u8>),
+    /// Record text, `%` to the quality or magnetic field.
+    Agrelo(String),
+    /// The line as the decoder's record re-emits it (spectrum included).
+    Csv(String),
+    /// The one-line XML form the record re-emits; `true`: sent in the KerberosSDR form.
+    Xml(String, bool),
+}
+
+impl PartialEq for Expected {
+    fn eq(&self, other: &Self) -> bool {
+        use Expected::*;
+        match (self, other) {
+            (Nmea(a), Nmea(b)) | (Agrelo(a), Agrelo(b)) | (Csv(a), Csv(b)) => a == b,
+            (Mt(a, b, c), Mt(x, y, z)) => (a, b, c) == (x, y, z),
+            (Xml(a, _), Xml(b, _)) => a == b,
+            _ => false,
+        }
+    }
+}
+
+fn csv_line(r: &KrakenCsv, spectrum: &[f32]) -> String {
+    let mut s = String::new();
+    r.emit(spectrum, &mut s).expect("string");
+    s
+}
+
+fn xml_line(r: &KrakenXml) -> String {
+    let mut s = String::new();
+    r.emit(&mut s).expect("string");
+    s
+}
+
+/// The description of the one frame `wire` decodes to alone.
+fn canonical(wire: &[u8]) -> Expected {
+    let (got, _) = parse(&[wire]);
+    assert_eq!(got.len(), 1, "{}", String::from_utf8_lossy(wire));
+    got.into_iter().next().expect("one")
+}
+
+fn csv_case(epoch: u64, bearing10: u16, conf: u8, lat7: i32, spectrum_seed: u32) -> Expected {
+    let r = KrakenCsv {
+        epoch_ms: 1_600_000_000_000 + epoch,
+        bearing_deg: f32::from(bearing10 % 3600) / 10.0,
+        confidence: f32::from(conf) / 100.0,
+        power_db: -48.5,
+        freq_hz: 151_880_000,
+        array: ArrayType::Uca,
+        latency_ms: 100,
+        station: Station::new("dingus"),
+        position: Some(LatLon {
+            lat: f64::from(lat7) * 1e-7,
+            lon: -66.443_805_7,
+        }),
+        heading_deg: 12.5,
+    };
+    let spectrum: Vec<f32> = (0..SPECTRUM_LEN as u32)
+        .map(|i| ((i * 7 + spectrum_seed) % 3000) as f32 / 100.0)
+        .collect();
+    canonical(csv_line(&r, &spectrum).as_bytes())
+}
+
+fn xml_case(time: u64, doa10: u16, legacy: bool) -> Expected {
+    let r = KrakenXml {
+        station: Station::new("K3CPK-1"),
+        time_ms: Some(1_568_052_311_000 + time * 1000),
+        gps_time_ms: None,
+        freq_mhz: Some(162.4),
+        position: Some(LatLon {
+            lat: 39.124_526,
+            lon: -76.519_717,
+        }),
+        heading_deg: Some(0.0),
+        speed_mps: None,
+        doa_deg: f32::from(doa10 % 3600) / 10.0,
+        pwr: Some(19.3),
+        conf: Some(15.0),
+    };
+    let mut wire = String::new();
+    if legacy {
+        r.emit_legacy(&mut wire).expect("string");
+    } else {
+        r.emit(&mut wire).expect("string");
+    }
+    match canonical(wire.as_bytes()) {
+        Expected::Xml(c, _) => Expected::Xml(c, legacy),
+        other => panic!("{other:?}"),
+    }
 }
 
 fn wire(e: &Expected) -> Vec<u8> {
@@ -18,6 +107,20 @@ fn wire(e: &Expected) -> Vec<u8> {
             let mut s = String::new();
             write_sentence(&mut s, body).expect("string");
             s.into_bytes()
+        }
+        Expected::Agrelo(text) => format!("{text}\r\n").into_bytes(),
+        Expected::Csv(line) => line.clone().into_bytes(),
+        Expected::Xml(line, false) => line.clone().into_bytes(),
+        Expected::Xml(line, true) => {
+            let mut d = Demux::<600>::new();
+            let mut legacy = String::new();
+            d.feed(line.as_bytes(), &mut |f| {
+                if let Frame::KrakenXml(r) = f {
+                    r.emit_legacy(&mut legacy).expect("string");
+                }
+            });
+            d.finish_into(&mut |_| {});
+            legacy.into_bytes()
         }
         Expected::Mt(cmd0, cmd1, data) => {
             let mut out = vec![0; data.len() + 5];
@@ -38,6 +141,9 @@ fn describe(f: Frame<'_>) -> Expected {
     match f {
         Frame::Nmea(s) => Expected::Nmea(s.to_string()),
         Frame::Mt(m) => Expected::Mt(m.cmd0, m.cmd1, m.data.to_vec()),
+        Frame::Agrelo(t) => Expected::Agrelo(t.to_string()),
+        Frame::KrakenCsv(k) => Expected::Csv(csv_line(&k.record, k.spectrum.unwrap_or(&[]))),
+        Frame::KrakenXml(r) => Expected::Xml(xml_line(&r), false),
     }
 }
 
@@ -57,11 +163,40 @@ fn frame() -> impl Strategy<Value = Expected> {
         // Payloads full of start bytes.
         (0usize..40).prop_map(|n| Expected::Mt(0x44, 0x81, vec![0xFE; n])),
         (0usize..20).prop_map(|n| Expected::Mt(0x44, 0x81, b"$GP".repeat(n))),
+        (
+            0u16..=3600,
+            0u8..10,
+            prop::option::of(0u16..3600),
+            any::<bool>()
+        )
+            .prop_map(|(b, q, m, dec)| {
+                let a = Agrelo {
+                    bearing_deg: if dec {
+                        f32::from(b) / 10.0
+                    } else {
+                        f32::from(b / 10)
+                    },
+                    quality: q,
+                    magnetic_deg: m.map(|m| f32::from(m / 10)),
+                };
+                let mut t = String::new();
+                a.emit(&mut t).expect("string");
+                Expected::Agrelo(t)
+            }),
+        (
+            0u64..1_000_000,
+            any::<u16>(),
+            0u8..100,
+            -900_000_000i32..900_000_000,
+            any::<u32>()
+        )
+            .prop_map(|(e, b, c, lat, sp)| csv_case(e, b, c, lat, sp)),
+        (0u64..1_000_000, any::<u16>(), any::<bool>()).prop_map(|(t, d, l)| xml_case(t, d, l)),
     ]
 }
 
 fn parse(chunks: &[&[u8]]) -> (Vec<Expected>, foxhunt_bridge::StreamCounters) {
-    let mut d = Demux::<600>::new();
+    let mut d = Demux::<600, SPECTRUM_LEN>::new();
     let mut out = Vec::new();
     let mut sink = |f: Frame<'_>| out.push(describe(f));
     for c in chunks {
@@ -221,4 +356,36 @@ fn flipped_byte_loss_rate() {
         lost <= 20,
         "{lost} of {trials} flips cost a frame they did not touch"
     );
+}
+
+/// Every byte of every new record kind flipped by several masks, between other records: only
+/// the record holding the byte may be lost (exhaustive, unlike the sampled property above).
+#[test]
+fn every_flip_in_agrelo_and_kraken_records_costs_only_that_record() {
+    let gga =
+        Expected::Nmea("GPGGA,092750.000,5321.6802,N,00630.3372,W,1,8,1.03,61.7,M,55.2,M,,".into());
+    let kinds = [
+        Expected::Agrelo("%136.5/8/158".into()),
+        Expected::Agrelo("%0/7".into()),
+        csv_case(5, 1345, 41, 669_613_480, 7),
+        xml_case(3, 1200, true),
+        xml_case(3, 1200, false),
+    ];
+    let mut flips = 0;
+    for k in &kinds {
+        for next in [&gga, k, &Expected::Agrelo("%90/3".into())] {
+            let frames = [gga.clone(), k.clone(), next.clone(), gga.clone()];
+            let start = wire(&gga).len();
+            for p in start..start + wire(k).len() {
+                for mask in [0x01, 0x02, 0x10, 0x20, 0x40, 0x80, 0xff, 0x0f, 0x55] {
+                    flips += 1;
+                    assert!(
+                        survives_flip(&frames, p, mask),
+                        "byte {p} ^ {mask:#x} of {k:?} then {next:?}"
+                    );
+                }
+            }
+        }
+    }
+    assert!(flips > 50_000, "{flips}");
 }
