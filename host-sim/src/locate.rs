@@ -203,8 +203,8 @@ fn kind(f: &Frame<'_>) -> Kind {
             Some("GGA" | "RMC" | "GLL" | "GNS") => Kind::Gps,
             _ => Kind::Other,
         },
-        #[allow(unreachable_patterns)]
-        _ => Kind::Other,
+        Frame::Agrelo(_) | Frame::KrakenCsv(_) | Frame::KrakenXml(_) => Kind::Bearing,
+        Frame::Mt(_) => Kind::Other,
     }
 }
 
@@ -318,7 +318,8 @@ pub fn rejections(d: &Decoded, outliers: u32) -> BTreeMap<&'static str, u32> {
         ("gps_no_fix", b.no_fix_sentences),
         ("bad_position", b.bad_position),
         ("low_quality", b.low_quality),
-        ("no_course", b.no_heading),
+        ("no_heading", b.no_heading),
+        ("no_bearing", b.no_bearing),
         ("no_fix", b.no_fix),
         ("stale_fix", b.stale_fix),
         ("outlier", outliers),
@@ -352,7 +353,7 @@ fn no_vehicle_position(d: &Decoded) -> String {
 fn no_bearing(d: &Decoded) -> String {
     let (r, b) = (d.bearing_records, &d.bridge);
     if r.seen == 0 {
-        return "no bearing record in the capture (no $PFOXB sentence)".into();
+        return "no bearing record in the capture (no $PFOXB, Agrelo or KrakenSDR record)".into();
     }
     let mut why = Vec::new();
     let mut reason = |n: u32, text: &str| {
@@ -362,7 +363,8 @@ fn no_bearing(d: &Decoded) -> String {
     };
     reason(r.malformed, "with a malformed or out-of-range field");
     reason(b.low_quality, "at or below the quality gate");
-    reason(b.no_course, "relative with no course to turn them by");
+    reason(b.no_heading, "relative with no heading to turn them by");
+    reason(b.no_bearing, "saying the DF unit had no bearing");
     reason(b.no_fix, "before any GPS fix");
     reason(
         b.stale_fix,

@@ -253,7 +253,7 @@ fn bad_captures_give_one_line_errors_that_say_what_is_wrong() {
     let garbage: Vec<u8> = (0..4000u32)
         .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8 | 0x80)
         .collect();
-    // 59 bearings out of range (azimuth 400), and relative ones with no course to turn them.
+    // 59 bearings out of range (azimuth 400), and relative ones with no heading to turn them by.
     let out_of_range: String = (0..59)
         .map(|k| {
             let t = format!("1200{:02}.000", k % 60);
@@ -296,7 +296,7 @@ fn bad_captures_give_one_line_errors_that_say_what_is_wrong() {
         (
             "relative",
             relative.into_bytes(),
-            &["5 relative with no course"],
+            &["5 relative with no heading"],
         ),
         (
             "badgps",
