@@ -1,5 +1,5 @@
 //! The firmware image links with cortex-m-rt's `link.x` and the workspace's `memory.x`; host
-//! builds link nothing extra.
+//! builds link nothing extra. The firmware image also links defmt's `defmt.x`.
 
 use std::path::PathBuf;
 
@@ -14,5 +14,7 @@ fn main() {
     println!("cargo:rerun-if-changed=build.rs");
     if std::env::var("CARGO_CFG_TARGET_OS").as_deref() == Ok("none") {
         println!("cargo:rustc-link-arg-bins=-Tlink.x");
+        // Only the firmware image logs through defmt (the step bench prints over semihosting).
+        println!("cargo:rustc-link-arg-bin=foxhunt-firmware=-Tdefmt.x");
     }
 }

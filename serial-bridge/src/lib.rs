@@ -12,12 +12,16 @@
 
 pub mod agrelo;
 pub mod bridge;
+pub mod command;
 pub mod geo;
 pub mod kraken;
 pub mod mt;
 pub mod nmea;
 pub mod replay;
 pub mod stream;
+pub mod telemetry;
+pub mod track;
+pub mod unit;
 
 pub use bridge::{Bridge, BridgeConfig, BridgeCounters, Event, Receiver};
 pub use stream::{Demux, Frame, KrakenCsvFrame, MtFrame, StreamCounters};

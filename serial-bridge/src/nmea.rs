@@ -354,7 +354,7 @@ impl Decimal {
     }
 }
 
-fn number(s: &str) -> Option<f64> {
+pub(crate) fn number(s: &str) -> Option<f64> {
     Decimal::parse(s).map(Decimal::to_f64)
 }
 
@@ -409,7 +409,7 @@ fn two_digits(s: &[u8]) -> Option<u32> {
 }
 
 /// `hhmmss[.s...]`, fraction rounded to the millisecond.
-fn time(s: &str) -> Option<UtcTime> {
+pub(crate) fn time(s: &str) -> Option<UtcTime> {
     let b = s.as_bytes();
     if b.len() < 6 {
         return None;
@@ -459,7 +459,13 @@ fn date(s: &str) -> Option<Date> {
 }
 
 /// `ddmm.mmmm` (or `dddmm.mmmm`) and a hemisphere to signed degrees.
-fn angle(value: &str, hemisphere: &str, max_deg: f64, positive: u8, negative: u8) -> Option<f64> {
+pub(crate) fn angle(
+    value: &str,
+    hemisphere: &str,
+    max_deg: f64,
+    positive: u8,
+    negative: u8,
+) -> Option<f64> {
     let d = Decimal::parse(value)?;
     if d.mantissa < 0 || d.scale > 16 {
         return None;

@@ -1,218 +1,190 @@
-//! A recorded drive, end to end: bytes through the bridge into a SIR filter and the ML fix.
+//! The MCU's run replayed on the host: the same [`Unit`] fed the same bytes of each port in
+//! the order the MCU read them.
 //!
-//! The firmware image and the host run this same function on the same capture and seed; the
-//! QEMU test compares their answers bit for bit.
+//! The unit's sentences depend only on the order in which the ports' frames reach it (see
+//! [`crate::unit`]). The firmware logs (through defmt) one line per read that completed a frame,
+//! `feed <port> <bytes so far>`, and one per quiet-line settle that did, `idle <port> <bytes so
+//! far>`; [`Step::parse`] reads those lines back and [`replay`] runs them. Reads that completed
+//! no frame need no line: their bytes only wait in a demultiplexer, and go in with the next
+//! read of their port.
+#![deny(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing,
+    clippy::unreachable,
+    clippy::todo,
+    clippy::unimplemented
+)]
 
-use crate::bridge::{BridgeConfig, BridgeCounters, Event, Receiver};
-use crate::stream::StreamCounters;
-use foxhunt_core::estimator::with_bearing_filter;
-use foxhunt_core::fix::init::initial_particles;
-use foxhunt_core::fix::intersection::MIN_CROSSING;
-use foxhunt_core::fix::ml::{MlOptions, ml};
-use foxhunt_core::{Bearing, Error, Filter, Fix, Gaussian, Method, ParticleSet, WithFilter};
-use rand_core::SeedableRng;
-use rand_xorshift::XorShiftRng;
+use crate::unit::{Fed, Port, Unit};
 
-/// Most bearings one replay keeps (a drive of two minutes at one bearing a second).
-pub const MAX_BEARINGS: usize = 128;
-
-/// What a replay found.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Replay {
-    /// The SIR filter's final mean, or why it has none.
-    pub sir: Result<[f32; 2], Error>,
-    /// The ML fix, or why it has none.
-    pub ml: Result<Fix, Error>,
-    /// Bearings used.
-    pub bearings: usize,
-    /// Bearings beyond [`MAX_BEARINGS`], not used.
-    pub dropped: usize,
-    /// What the demultiplexer rejected.
-    pub stream: StreamCounters,
-    /// What the bridge rejected.
-    pub bridge: BridgeCounters,
+/// One logged step of the MCU's run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Step {
+    /// The port's bytes up to this count were fed (at least one frame completed).
+    Feed {
+        /// The port.
+        port: Port,
+        /// Bytes of the port fed so far.
+        end: u64,
+    },
+    /// The port went quiet after this many bytes, and a held frame was settled.
+    Idle {
+        /// The port.
+        port: Port,
+        /// Bytes of the port fed so far.
+        end: u64,
+    },
 }
 
-/// Feed `capture` in reads of `chunk` bytes (1 to [`READ_BUFFER`]) through a receiver, then
-/// run a SIR filter with `N` particles (initialised from bearing pairs, as the bench does) over
-/// the first `steps` bearings (all of them with `usize::MAX`; 0 gives the cost of everything
-/// but the steps) and the ML fix.
-pub fn replay<const N: usize>(
-    mut capture: &[u8],
-    chunk: usize,
-    config: BridgeConfig,
-    seed: u64,
-    steps: usize,
-) -> Replay {
-    let read = |buf: &mut [u8]| {
-        let n = buf.len().min(capture.len());
-        buf[..n].copy_from_slice(&capture[..n]);
-        capture = &capture[n..];
-        Ok::<usize, core::convert::Infallible>(n)
-    };
-    match replay_from::<N, _>(read, chunk, config, seed, steps) {
-        Ok(r) => r,
-        Err(never) => match never {},
-    }
-}
-
-/// Largest read [`replay_from`] asks for: a UART driver's DMA buffer.
-pub const READ_BUFFER: usize = 64;
-
-/// [`replay`] from a byte source: `read` fills the buffer it is given (at most `chunk` bytes)
-/// and returns how many it wrote, 0 at the end, as a serial driver or a file does. A read
-/// error ends the replay with that error.
-pub fn replay_from<const N: usize, E>(
-    mut read: impl FnMut(&mut [u8]) -> Result<usize, E>,
-    chunk: usize,
-    config: BridgeConfig,
-    seed: u64,
-    steps: usize,
-) -> Result<Replay, E> {
-    let mut rx = Receiver::<0>::new(config, []);
-    let mut bearings = heapless::Vec::<Bearing, MAX_BEARINGS>::new();
-    let mut dropped = 0;
-    let mut sink = |e: Event| {
-        if let Event::Bearing(b) = e
-            && bearings.push(b.bearing).is_err()
-        {
-            dropped += 1;
+impl Step {
+    /// A step from a decoded log line ending in `feed P N` or `idle P N`; `None` for other
+    /// lines.
+    pub fn parse(line: &str) -> Option<Self> {
+        let mut words = line.split_whitespace().rev();
+        let end: u64 = words.next()?.parse().ok()?;
+        let port = Port::from_index(words.next()?.parse().ok()?)?;
+        match words.next()? {
+            "feed" => Some(Self::Feed { port, end }),
+            "idle" => Some(Self::Idle { port, end }),
+            _ => None,
         }
-    };
-    let mut buf = [0u8; READ_BUFFER];
-    let buf = &mut buf[..chunk.clamp(1, READ_BUFFER)];
-    loop {
-        let n = read(buf)?.min(buf.len());
-        if n == 0 {
-            break;
+    }
+}
+
+/// Why a log does not fit the streams.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ReplayError {
+    /// A step's byte count runs past its port's stream, or back before an earlier step.
+    Offset {
+        /// Index of the step.
+        step: usize,
+    },
+}
+
+impl core::fmt::Display for ReplayError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Offset { step } => write!(f, "step {step} does not fit its port's stream"),
         }
-        rx.feed(&buf[..n], &mut sink);
     }
-    rx.finish(&mut sink);
-    let mut rng = XorShiftRng::seed_from_u64(seed);
-    let sir = run_sir::<N>(&bearings, steps, &mut rng);
-    let ml = ml(&bearings, None, &Gaussian, MlOptions::default());
-    let (stream, bridge) = rx.counters();
-    Ok(Replay {
-        sir,
-        ml,
-        bearings: bearings.len(),
-        dropped,
-        stream: *stream,
-        bridge: *bridge,
-    })
 }
 
-/// The registry's tuned `sir` stepped over the first `steps` bearings from `cloud`.
-struct FirstSteps<'a> {
-    cloud: &'a [[f32; 2]],
-    bearings: &'a [Bearing],
-    steps: usize,
-    rng: &'a mut XorShiftRng,
-}
-
-impl WithFilter<2, Bearing> for FirstSteps<'_> {
-    type Output = Result<[f32; 2], Error>;
-    fn visit<F: Filter<2, Measurement = Bearing>>(self, f: &mut F) -> Self::Output {
-        f.initialise(self.cloud, self.rng)?;
-        for b in self.bearings.iter().take(self.steps) {
-            let _ = f.step(b, self.rng);
+/// Run `steps` on `unit` with the bytes each port received (`streams`, by [`Port`] index);
+/// the unit's sentences go to `out`. Returns what the steps did in all.
+pub fn replay(
+    unit: &mut Unit,
+    streams: [&[u8]; 4],
+    steps: impl IntoIterator<Item = Step>,
+    out: &mut impl FnMut(&[u8]) -> bool,
+) -> Result<Fed, ReplayError> {
+    let mut at = [0usize; 4];
+    let mut total = Fed::default();
+    for (k, step) in steps.into_iter().enumerate() {
+        let (port, end) = match step {
+            Step::Feed { port, end } | Step::Idle { port, end } => (port, end),
+        };
+        let i = port as usize;
+        let (Some(stream), Some(from)) = (streams.get(i), at.get(i).copied()) else {
+            return Err(ReplayError::Offset { step: k });
+        };
+        let end = usize::try_from(end).map_err(|_| ReplayError::Offset { step: k })?;
+        let bytes = stream
+            .get(from..end)
+            .ok_or(ReplayError::Offset { step: k })?;
+        let fed = match step {
+            Step::Feed { .. } => unit.feed(port, bytes, out),
+            Step::Idle { .. } => {
+                if !bytes.is_empty() {
+                    return Err(ReplayError::Offset { step: k });
+                }
+                unit.idle(port, out)
+            }
+        };
+        if let Some(a) = at.get_mut(i) {
+            *a = end;
         }
-        Ok(f.estimate()?.mean)
+        total.frames += fed.frames;
+        total.fixes += fed.fixes;
     }
-}
-
-fn run_sir<const N: usize>(
-    bearings: &[Bearing],
-    steps: usize,
-    rng: &mut XorShiftRng,
-) -> Result<[f32; 2], Error> {
-    let mut cloud = ParticleSet::<N, 2>::new();
-    initial_particles(bearings, MIN_CROSSING, &mut cloud, rng)?;
-    let run = FirstSteps {
-        cloud: &cloud.states,
-        bearings,
-        steps,
-        rng,
-    };
-    with_bearing_filter::<N, _>(Method::Sir, 0.0, run)?
-}
-
-/// The lines both the firmware and the host print for a replay: the bits of every result, so
-/// two runs agree exactly or visibly not.
-pub fn write_summary(r: &Replay, out: &mut impl core::fmt::Write) -> core::fmt::Result {
-    match r.sir {
-        Ok(p) => writeln!(out, "sir {:08x} {:08x}", bits(p[0]), bits(p[1]))?,
-        Err(e) => writeln!(out, "sir error {e:?}")?,
-    }
-    match r.ml {
-        Ok(f) => writeln!(
-            out,
-            "ml {:08x} {:08x} cov {:08x} {:08x} {:08x} iterations {}",
-            bits(f.position[0]),
-            bits(f.position[1]),
-            bits(f.covariance[0][0]),
-            bits(f.covariance[0][1]),
-            bits(f.covariance[1][1]),
-            f.iterations
-        )?,
-        Err(e) => writeln!(out, "ml error {e:?}")?,
-    }
-    writeln!(
-        out,
-        "bearings {} dropped {} sentences {} rejected {} fixes {}",
-        r.bearings,
-        r.dropped,
-        r.stream.sentences,
-        r.stream.rejected(),
-        r.bridge.fixes
-    )
-}
-
-/// The bits of a result, NaN made canonical (x86 and ARM differ in NaN payloads only).
-pub fn bits(v: f32) -> u32 {
-    if v.is_nan() { 0x7fc0_0000 } else { v.to_bits() }
+    Ok(total)
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::indexing_slicing, clippy::panic)]
 mod tests {
     use super::*;
 
     const CAPTURE: &[u8] = include_bytes!("../captures/aoa-drive.nmea");
 
-    /// A byte source that hands out `step` bytes per read (fewer than asked, as a UART does)
-    /// and fails after `fail_after` bytes.
-    fn source(
-        step: usize,
-        fail_after: usize,
-    ) -> impl FnMut(&mut [u8]) -> Result<usize, &'static str> {
-        let mut at = 0;
-        move |buf: &mut [u8]| {
-            if at >= fail_after {
-                return Err("line dropped");
+    #[test]
+    fn a_logged_interleaving_replays_to_the_same_bytes() {
+        // Split by port, fed line by line as a log would say, then replayed.
+        let mut streams: [Vec<u8>; 4] = Default::default();
+        let mut steps = Vec::new();
+        let mut direct = Vec::new();
+        let mut unit = Unit::default();
+        for line in CAPTURE.split_inclusive(|b| *b == b'\n') {
+            let port = if line.starts_with(b"$PFOXB") {
+                Port::Df
+            } else {
+                Port::Gps
+            };
+            let s = &mut streams[port as usize];
+            // Half a line, then the rest: only the read that completes it is logged.
+            let (a, b) = line.split_at(line.len() / 2);
+            for part in [a, b] {
+                s.extend_from_slice(part);
+                let fed = unit.feed(port, part, &mut |x| {
+                    direct.extend_from_slice(x);
+                    true
+                });
+                if fed.frames > 0 {
+                    steps.push(Step::Feed {
+                        port,
+                        end: s.len() as u64,
+                    });
+                }
             }
-            let n = step.min(buf.len()).min(CAPTURE.len() - at);
-            buf[..n].copy_from_slice(&CAPTURE[at..at + n]);
-            at += n;
-            Ok(n)
         }
-    }
-
-    #[test]
-    fn short_reads_give_the_same_replay() {
-        let config = BridgeConfig::default();
-        let whole = replay::<20>(CAPTURE, READ_BUFFER, config, 3, usize::MAX);
-        assert_eq!(whole.bearings, 60);
-        for step in [1, 7, 64] {
-            let r =
-                replay_from::<20, _>(source(step, usize::MAX), READ_BUFFER, config, 3, usize::MAX);
-            assert_eq!(r, Ok(whole), "reads of {step}");
-        }
-    }
-
-    #[test]
-    fn a_read_error_ends_the_replay_with_it() {
-        let r = replay_from::<20, _>(source(64, 1000), 64, BridgeConfig::default(), 3, usize::MAX);
-        assert_eq!(r, Err("line dropped"));
+        assert_eq!(
+            steps.len(),
+            CAPTURE
+                .split(|b| *b == b'\n')
+                .filter(|l| !l.is_empty())
+                .count()
+        );
+        let text: Vec<String> = steps
+            .iter()
+            .map(|s| match s {
+                Step::Feed { port, end } => format!("INFO  feed {} {end}", *port as u8),
+                Step::Idle { port, end } => format!("INFO  idle {} {end}", *port as u8),
+            })
+            .collect();
+        let parsed: Vec<Step> = text.iter().filter_map(|l| Step::parse(l)).collect();
+        assert_eq!(parsed, steps);
+        let mut again = Vec::new();
+        let mut host = Unit::default();
+        let fed = replay(
+            &mut host,
+            [&streams[0], &streams[1], &streams[2], &streams[3]],
+            parsed,
+            &mut |x| {
+                again.extend_from_slice(x);
+                true
+            },
+        )
+        .unwrap();
+        assert_eq!(fed.fixes, 60);
+        assert_eq!(again, direct);
+        let bad = [Step::Feed {
+            port: Port::Df,
+            end: 1 << 40,
+        }];
+        assert_eq!(
+            replay(&mut host, [&[]; 4], bad, &mut |_| true),
+            Err(ReplayError::Offset { step: 0 })
+        );
     }
 }

@@ -1,116 +1,386 @@
-//! The MCU image: a recorded drive streamed in 64-byte reads (as from a UART's DMA buffer)
-//! through the bridge into a SIR filter (N = 100) and the ML fix; the results go out over
-//! semihosting and the image exits 0. On the host this binary is an empty stub (the library is
-//! what the host runs).
+//! The DF unit's MCU image (STM32F405; QEMU's netduinoplus2): GPS NMEA on USART1, the DF
+//! unit's bearings on USART2, the ZigBee coordinator's MT frames on UART4 when configured,
+//! commands in and the unit's sentences out on USART3 (see `foxhunt_bridge::telemetry` and
+//! `foxhunt_bridge::command`).
 //!
-//! The bytes come from a host file over semihosting, standing in for the serial port: the
-//! path is the image's first semihosting argument, by default the bundled drive
-//! `serial-bridge/captures/aoa-drive.nmea` (relative to where QEMU runs). So the flash holds
-//! the product, not a recording. Run it from the workspace root: `cargo run --profile firmware
-//! -p foxhunt-bridge --bin foxhunt-firmware --target thumbv7em-none-eabihf` (the runner in
-//! .cargo/config.toml starts QEMU netduinoplus2).
+//! Interrupt-driven on RTIC 2: each receive interrupt puts its byte into a lock-free SPSC
+//! queue (a full queue or a receiver overrun is counted, never silent); the idle loop drains
+//! the queues into `foxhunt_bridge::unit::Unit`, settles a line that went quiet for
+//! [`IDLE_MS`], and sends a status and a link sentence once a second; the user port's
+//! transmitter drains an output queue from its own interrupt, so a sentence never blocks the
+//! loop (one that does not fit is dropped and counted). SysTick counts milliseconds and gives
+//! the cycle clock the latency and fix-cost figures are measured with.
+//!
+//! For each read that completed a frame the loop logs `feed <port> <bytes so far>` (and
+//! `idle ...` for a settle): the host replays exactly that order (`foxhunt_bridge::replay`)
+//! and gets the same bits. Logs go through defmt: semihosting in QEMU, RTT on the board.
+//!
+//! Never stuck: the `board` build feeds the independent watchdog from the loop; the panic and
+//! hard-fault handlers record the reason in RAM that survives the reset, and reset; the next
+//! ready banner and every status sentence say why the unit last reset. The image's own code
+//! denies the lints of panicking paths, and `tests/tests/firmware_image.rs` checks that the
+//! linked image has no panic path at all.
 #![cfg_attr(target_os = "none", no_std, no_main)]
+#![deny(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing,
+    clippy::unreachable,
+    clippy::todo,
+    clippy::unimplemented
+)]
 
-/// Particles of the image's SIR filter.
+/// A line quiet this long has ended its record, ms.
 #[cfg(target_os = "none")]
-const PARTICLES: usize = 100;
+const IDLE_MS: u32 = 20;
 
 #[cfg(target_os = "none")]
-mod image {
+#[path = "firmware/hw.rs"]
+mod hw;
+
+#[cfg(target_os = "none")]
+#[rtic::app(device = stm32f4::stm32f405, peripherals = true)]
+mod app {
+    use super::hw::{self, Received};
+    use core::sync::atomic::{AtomicU32, Ordering};
     use cortex_m as _;
-    use cortex_m_rt::entry;
-    use foxhunt_bridge::BridgeConfig;
-    use foxhunt_bridge::replay::{READ_BUFFER, replay_from, write_summary};
-    use semihosting::{fs::File, io::Read, print, println, process};
+    #[cfg(feature = "board")]
+    use defmt_rtt as _;
+    #[cfg(not(feature = "board"))]
+    use defmt_semihosting as _;
+    use foxhunt_bridge::telemetry::{ReadySentence, ResetCause, StatusSentence};
+    use foxhunt_bridge::unit::{Port, Unit};
+    use heapless::spsc::{Consumer, Producer, Queue};
+    use stm32f4::stm32f405 as pac;
 
-    /// The drive when no path is given: `foxhunt simulate --scenario aoa-drive` (run 0).
-    const DEFAULT_CAPTURE: &str = "serial-bridge/captures/aoa-drive.nmea";
+    /// Receive queue slots (one is kept free by the queue).
+    const RX: usize = 257;
+    /// Output queue slots.
+    const TX: usize = 1025;
+    /// Bytes the loop takes from a queue at once.
+    const CHUNK: usize = 64;
 
-    /// The capture file named by the first semihosting argument (or the default), opened.
-    /// A command line too long for the buffer, a path not UTF-8 or not openable is an error.
-    fn open_capture() -> Result<File, semihosting::io::Error> {
-        use semihosting::io::ErrorKind::InvalidInput;
-        let args = semihosting::experimental::env::args::<512>()?;
-        let mut it = &args;
-        let _program = it.next();
-        let path = it
-            .next()
-            .unwrap_or(Ok(DEFAULT_CAPTURE))
-            .map_err(|_| InvalidInput)?;
-        let mut c_path = [0u8; 512];
-        if path.len() >= c_path.len() {
-            return Err(InvalidInput.into());
-        }
-        c_path[..path.len()].copy_from_slice(path.as_bytes());
-        File::open(core::ffi::CStr::from_bytes_until_nul(&c_path).map_err(|_| InvalidInput)?)
+    /// Bytes lost to receiver overruns and to full queues, by input port.
+    static OVERRUNS: AtomicU32 = AtomicU32::new(0);
+    static FULL: AtomicU32 = AtomicU32::new(0);
+    /// Queue high-water marks: GPS, DF, ZigBee, user input.
+    static HIGH: [AtomicU32; 4] = [const { AtomicU32::new(0) }; 4];
+    /// Bytes the user port has sent, and the tick at which byte number `MARK` went.
+    static SENT: AtomicU32 = AtomicU32::new(0);
+    static MARK: AtomicU32 = AtomicU32::new(u32::MAX);
+    static MARK_TICK: AtomicU32 = AtomicU32::new(0);
+    static MARK_DONE: AtomicU32 = AtomicU32::new(0);
+
+    #[shared]
+    struct Shared {
+        user: pac::USART3,
     }
 
-    /// Bytes in, formatted out, through semihosting.
-    struct Console;
-
-    impl core::fmt::Write for Console {
-        fn write_str(&mut self, s: &str) -> core::fmt::Result {
-            print!("{s}");
-            Ok(())
-        }
+    #[local]
+    struct Local {
+        gps: pac::USART1,
+        df: pac::USART2,
+        zigbee: pac::UART4,
+        gps_in: Producer<'static, u8>,
+        df_in: Producer<'static, u8>,
+        zigbee_in: Producer<'static, u8>,
+        user_in: Producer<'static, u8>,
+        rx: [Consumer<'static, u8>; 4],
+        out: Producer<'static, u8>,
+        out_next: Consumer<'static, u8>,
+        reset: ResetCause,
     }
 
-    #[entry]
-    fn main() -> ! {
-        let config = BridgeConfig {
-            // The drive's bearing noise (aoa-drive's).
-            sigma_rad: foxhunt_core::canonical::AOA_SIGMA,
-            ..BridgeConfig::default()
+    #[init(local = [
+        q_gps: Queue<u8, RX> = Queue::new(),
+        q_df: Queue<u8, RX> = Queue::new(),
+        q_zigbee: Queue<u8, RX> = Queue::new(),
+        q_user: Queue<u8, RX> = Queue::new(),
+        q_out: Queue<u8, TX> = Queue::new(),
+    ])]
+    fn init(cx: init::Context) -> (Shared, Local) {
+        let dp = cx.device;
+        let record = hw::take_record();
+        #[cfg(feature = "board")]
+        let watchdog = hw::watchdog_reset(&dp.RCC);
+        #[cfg(not(feature = "board"))]
+        let watchdog = false;
+        let reset = match record {
+            Some((b'P', _)) => ResetCause::Panic,
+            Some((b'H', _)) => ResetCause::HardFault,
+            _ if watchdog => ResetCause::Watchdog,
+            _ => ResetCause::PowerOn,
         };
-        // The baseline image skips the filter steps: the difference of two instruction counts
-        // is the cost of the steps alone.
-        let steps = if cfg!(feature = "baseline") {
-            0
-        } else {
-            usize::MAX
-        };
-        let mut capture = match open_capture() {
-            Ok(file) => file,
-            Err(e) => {
-                println!("capture error: {e}");
-                process::exit(2)
+        #[cfg(feature = "board")]
+        if !hw::start_pll(&dp.RCC, &dp.FLASH) {
+            defmt::error!("PLL did not lock: running on the internal oscillator");
+        }
+        hw::enable_clocks_and_pins(&dp.RCC, &dp.GPIOA, &dp.GPIOB);
+        hw::start_systick(cx.core.SYST);
+        hw::start_usart(&dp.USART1, hw::BAUD[0], true, false);
+        hw::start_usart(&dp.USART2, hw::BAUD[1], false, false);
+        hw::start_usart(&dp.USART3, hw::BAUD[2], false, true);
+        hw::start_usart(hw::uart4(&dp.UART4), hw::BAUD[3], false, false);
+        #[cfg(feature = "board")]
+        hw::start_watchdog(&dp.IWDG);
+        if let Some((cause, at)) = record {
+            defmt::warn!("reset by {=u8} at {=u32:#x}", cause, at);
+        }
+        let (gps_in, gps_rx) = cx.local.q_gps.split();
+        let (df_in, df_rx) = cx.local.q_df.split();
+        let (zigbee_in, zigbee_rx) = cx.local.q_zigbee.split();
+        let (user_in, user_rx) = cx.local.q_user.split();
+        let (out, out_next) = cx.local.q_out.split();
+        (
+            Shared { user: dp.USART3 },
+            Local {
+                gps: dp.USART1,
+                df: dp.USART2,
+                zigbee: dp.UART4,
+                gps_in,
+                df_in,
+                zigbee_in,
+                user_in,
+                rx: [gps_rx, df_rx, zigbee_rx, user_rx],
+                out,
+                out_next,
+                reset,
+            },
+        )
+    }
+
+    /// One received byte into its queue, counted.
+    fn take(u: &hw::Usart, q: &mut Producer<'static, u8>, port: usize) {
+        let b = match hw::receive(u) {
+            Received::Byte(b) => b,
+            Received::Overrun(b) => {
+                OVERRUNS.fetch_add(1, Ordering::Relaxed);
+                b
             }
+            Received::Nothing => return,
         };
-        let read = |buf: &mut [u8]| capture.read(buf);
-        let r = match replay_from::<{ super::PARTICLES }, _>(read, READ_BUFFER, config, 1, steps) {
-            Ok(r) => r,
-            Err(e) => {
-                println!("capture error: {e}");
-                process::exit(2)
-            }
-        };
-        let _ = write_summary(&r, &mut Console);
-        let _ = core::fmt::Write::write_fmt(
-            &mut Console,
-            format_args!("stack {}\n", stack_high_water()),
-        );
-        process::exit(if r.sir.is_ok() && r.ml.is_ok() { 0 } else { 1 })
+        if q.enqueue(b).is_err() {
+            FULL.fetch_add(1, Ordering::Relaxed);
+        }
+        if let Some(h) = HIGH.get(port) {
+            h.fetch_max(q.len() as u32, Ordering::Relaxed);
+        }
     }
 
-    /// Peak stack use: cortex-m-rt painted the stack with 0xCCCCCCCC before main; the lowest
-    /// overwritten word marks the deepest the stack went.
-    #[allow(unsafe_code)]
-    fn stack_high_water() -> usize {
-        unsafe extern "C" {
-            static _stack_start: u32;
-            static _stack_end: u32;
-        }
-        // SAFETY: the linker script defines both symbols as the bounds of the stack region,
-        // which is mapped RAM; reading words inside it is always valid.
-        unsafe {
-            let top = core::ptr::addr_of!(_stack_start) as usize;
-            let mut p = core::ptr::addr_of!(_stack_end) as usize;
-            while p < top && core::ptr::read_volatile(p as *const u32) == 0xCCCC_CCCC {
-                p += 4;
+    #[task(binds = USART1, local = [gps, gps_in])]
+    fn usart1(cx: usart1::Context) {
+        take(cx.local.gps, cx.local.gps_in, 0);
+    }
+
+    #[task(binds = USART2, local = [df, df_in])]
+    fn usart2(cx: usart2::Context) {
+        take(cx.local.df, cx.local.df_in, 1);
+    }
+
+    #[task(binds = UART4, local = [zigbee, zigbee_in])]
+    fn uart4(cx: uart4::Context) {
+        take(hw::uart4(cx.local.zigbee), cx.local.zigbee_in, 2);
+    }
+
+    /// The user port: commands in, the output queue out.
+    #[task(binds = USART3, shared = [user], local = [user_in, out_next])]
+    fn usart3(mut cx: usart3::Context) {
+        let out = cx.local.out_next;
+        let input = cx.local.user_in;
+        cx.shared.user.lock(|u| {
+            take(u, input, 3);
+            while hw::tx_ready(u) {
+                let Some(b) = out.dequeue() else {
+                    hw::tx_interrupt(u, false);
+                    break;
+                };
+                hw::transmit(u, b);
+                let n = SENT.fetch_add(1, Ordering::Relaxed).wrapping_add(1);
+                if n == MARK.load(Ordering::Relaxed) {
+                    MARK_TICK.store(hw::ticks(), Ordering::Relaxed);
+                    MARK_DONE.store(1, Ordering::Release);
+                }
             }
-            top - p
+        });
+    }
+
+    #[task(binds = SysTick, priority = 2)]
+    fn systick(_: systick::Context) {
+        hw::MS.fetch_add(1, Ordering::Release);
+    }
+
+    /// What the loop measures.
+    #[derive(Default)]
+    struct Meter {
+        /// Bytes queued for the user port so far.
+        queued: u32,
+        /// A latency being measured: its start tick.
+        pending: Option<u32>,
+        worst_latency: u32,
+        worst_fix: u32,
+        out_high: u32,
+    }
+
+    /// Queue a sentence whole for the user port, or refuse it (no room).
+    fn send(out: &mut Producer<'static, u8>, meter: &mut Meter, bytes: &[u8]) -> bool {
+        if out.capacity() - out.len() < bytes.len() {
+            return false;
+        }
+        for &b in bytes {
+            let _ = out.enqueue(b);
+        }
+        meter.queued = meter.queued.wrapping_add(bytes.len() as u32);
+        meter.out_high = meter.out_high.max(out.len() as u32);
+        true
+    }
+
+    #[idle(shared = [user], local = [rx, out, reset, unit: Option<Unit> = None])]
+    fn idle(cx: idle::Context) -> ! {
+        let local = cx.local;
+        let mut user = cx.shared.user;
+        let reset = *local.reset;
+        let unit = local.unit.insert(Unit::default());
+        hw::repaint_stack();
+        let out = local.out;
+        let rx = local.rx;
+        let mut meter = Meter::default();
+        let mut kick = || user.lock(|u| hw::tx_interrupt(u, true));
+        let mut banner = ReadySentence { version: 1, reset }.write();
+        if let Some(b) = banner.finish() {
+            send(out, &mut meter, b);
+        }
+        kick();
+        defmt::info!("ready");
+        let mut fed = [0u32; 4];
+        let mut last_rx = [0u32; 4];
+        let mut quiet = [true; 4];
+        let mut seen_empty = [hw::ticks(); 4];
+        let mut next_status = hw::ms().wrapping_add(1000);
+        let mut buf = [0u8; CHUNK];
+        loop {
+            #[cfg(feature = "board")]
+            hw::feed_watchdog();
+            let mut busy = false;
+            for (i, (q, port)) in rx.iter_mut().zip(Port::ALL).enumerate() {
+                let checked = hw::ticks();
+                let mut n = 0;
+                for slot in buf.iter_mut() {
+                    match q.dequeue() {
+                        Some(b) => *slot = b,
+                        None => break,
+                    }
+                    n += 1;
+                }
+                let (Some(bytes), Some(empty), Some(count)) =
+                    (buf.get(..n), seen_empty.get_mut(i), fed.get_mut(i))
+                else {
+                    continue;
+                };
+                if n == 0 {
+                    // Whatever arrives later arrived after this tick.
+                    *empty = checked;
+                    continue;
+                }
+                busy = true;
+                if port == Port::Zigbee && !unit.zigbee_enabled() {
+                    continue;
+                }
+                let start = *empty;
+                let t0 = hw::ticks();
+                let mut sink = |s: &[u8]| send(out, &mut meter, s);
+                let r = unit.feed(port, bytes, &mut sink);
+                *count = count.wrapping_add(n as u32);
+                if r.frames > 0 {
+                    defmt::info!("feed {=u8} {=u32}", i as u8, *count);
+                }
+                if r.fixes > 0 {
+                    meter.worst_fix = meter.worst_fix.max(hw::ticks().wrapping_sub(t0));
+                    if meter.pending.is_none() {
+                        MARK_DONE.store(0, Ordering::Relaxed);
+                        MARK.store(meter.queued, Ordering::Relaxed);
+                        meter.pending = Some(start);
+                    }
+                    kick();
+                } else if r.frames > 0 {
+                    kick();
+                }
+                if let (Some(t), Some(q)) = (last_rx.get_mut(i), quiet.get_mut(i)) {
+                    *t = hw::ms();
+                    *q = false;
+                }
+            }
+            let now = hw::ms();
+            for (i, port) in Port::ALL.into_iter().enumerate() {
+                let (Some(t), Some(q), Some(count)) =
+                    (last_rx.get(i), quiet.get_mut(i), fed.get(i))
+                else {
+                    continue;
+                };
+                if !*q && now.wrapping_sub(*t) >= super::IDLE_MS {
+                    *q = true;
+                    let mut sink = |s: &[u8]| send(out, &mut meter, s);
+                    let r = unit.idle(port, &mut sink);
+                    if r.frames > 0 {
+                        defmt::info!("idle {=u8} {=u32}", i as u8, *count);
+                        kick();
+                    }
+                }
+            }
+            if let Some(start) = meter.pending
+                && MARK_DONE.load(Ordering::Acquire) == 1
+            {
+                let end = MARK_TICK.load(Ordering::Relaxed);
+                meter.worst_latency = meter.worst_latency.max(end.wrapping_sub(start));
+                meter.pending = None;
+            }
+            if now.wrapping_sub(next_status) < u32::MAX / 2 {
+                next_status = next_status.wrapping_add(1000);
+                let status = StatusSentence {
+                    uptime_s: now / 1000,
+                    stack_bytes: hw::stack_high_water(),
+                    queue_high: [
+                        HIGH[0].load(Ordering::Relaxed),
+                        HIGH[1].load(Ordering::Relaxed),
+                        HIGH[2].load(Ordering::Relaxed),
+                        meter.out_high,
+                    ],
+                    latency_ticks: meter.worst_latency,
+                    fix_ticks: meter.worst_fix,
+                    reset: Some(reset),
+                };
+                let mut link = unit.link();
+                link.overruns = OVERRUNS.load(Ordering::Relaxed);
+                link.full = FULL.load(Ordering::Relaxed);
+                for mut s in [status.write(), link.write()] {
+                    if let Some(b) = s.finish() {
+                        send(out, &mut meter, b);
+                    }
+                }
+                kick();
+            }
+            if !busy {
+                cortex_m::asm::wfi();
+            }
         }
     }
+}
+
+/// A panic records where and resets (no message formatting: `core::fmt` stays out).
+#[cfg(target_os = "none")]
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo<'_>) -> ! {
+    let line = info.location().map(|l| l.line()).unwrap_or(0);
+    defmt::error!("panic at line {=u32}", line);
+    hw::record_and_reset(b'P', line)
+}
+
+/// A hard fault records the faulting PC and resets.
+#[cfg(target_os = "none")]
+#[cortex_m_rt::exception]
+#[allow(unsafe_code)]
+unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
+    hw::record_and_reset(b'H', frame.pc())
 }
 
 #[cfg(not(target_os = "none"))]

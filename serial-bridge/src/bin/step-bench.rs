@@ -122,6 +122,13 @@ mod image {
             }
         }
     }
+
+    /// A panic prints and exits 1 (QEMU's exit status).
+    #[panic_handler]
+    fn panic(info: &core::panic::PanicInfo<'_>) -> ! {
+        println!("{info}");
+        process::exit(1)
+    }
 }
 
 #[cfg(not(target_os = "none"))]

@@ -1,0 +1,309 @@
+//! The STM32F405's peripherals as the image uses them: clocks, USARTs, the cycle clock, the
+//! watchdog, the reset record and the painted stack.
+//!
+//! QEMU's netduinoplus2 models the USARTs, SysTick and the NVIC; RCC, GPIO, IWDG and the flash
+//! interface read 0 and ignore writes. So everything that only configures (clock enables, pin
+//! functions) is written on both; what waits on those blocks (the PLL locking, the watchdog)
+//! is behind the `board` feature, and every wait is bounded.
+#![allow(unsafe_code)]
+
+use core::sync::atomic::{AtomicU32, Ordering};
+use stm32f4::stm32f405 as pac;
+
+/// The core clock, Hz. QEMU's SysTick counts at 168 MHz whatever RCC says, so the QEMU image's
+/// ticks are 168 MHz ticks too.
+pub const CORE_HZ: u32 = 168_000_000;
+/// SysTick reload: one interrupt a millisecond.
+pub const TICKS_PER_MS: u32 = CORE_HZ / 1000;
+
+/// Milliseconds since start (the SysTick handler counts them).
+pub static MS: AtomicU32 = AtomicU32::new(0);
+
+/// Core clock ticks since start, modulo 2^32 (25.6 s at 168 MHz): the millisecond count and
+/// SysTick's current value, read consistently.
+pub fn ticks() -> u32 {
+    loop {
+        let m1 = MS.load(Ordering::Acquire);
+        let cvr = cortex_m::peripheral::SYST::get_current();
+        let m2 = MS.load(Ordering::Acquire);
+        if m1 == m2 {
+            return m1
+                .wrapping_mul(TICKS_PER_MS)
+                .wrapping_add(TICKS_PER_MS.saturating_sub(1).saturating_sub(cvr));
+        }
+    }
+}
+
+/// Milliseconds since start.
+pub fn ms() -> u32 {
+    MS.load(Ordering::Acquire)
+}
+
+/// Start SysTick at 1 kHz on the core clock.
+pub fn start_systick(mut syst: cortex_m::peripheral::SYST) {
+    syst.set_clock_source(cortex_m::peripheral::syst::SystClkSource::Core);
+    syst.set_reload(TICKS_PER_MS - 1);
+    syst.clear_current();
+    syst.enable_counter();
+    syst.enable_interrupt();
+}
+
+/// Baud rates: GPS receiver, DF unit, user port, ZigBee coordinator.
+pub const BAUD: [u32; 4] = [9600, 4800, 115_200, 115_200];
+
+/// The 168 MHz PLL from the 25 MHz crystal of the Netduino Plus 2 (APB1 42 MHz, APB2
+/// 84 MHz, five flash wait states). Returns whether it locked; if not the chip stays on the
+/// internal 16 MHz oscillator.
+#[cfg(feature = "board")]
+pub fn start_pll(rcc: &pac::RCC, flash: &pac::FLASH) -> bool {
+    const SPINS: u32 = 1_000_000;
+    rcc.cr().modify(|_, w| w.hseon().set_bit());
+    if !(0..SPINS).any(|_| rcc.cr().read().hserdy().bit_is_set()) {
+        return false;
+    }
+    // PLLM 25, PLLN 336, PLLP 2, PLLQ 7, source HSE: 25 / 25 * 336 / 2 = 168 MHz.
+    rcc.pllcfgr()
+        .write(|w| unsafe { w.bits(25 | (336 << 6) | (1 << 22) | (7 << 24)) });
+    // Latency 5, prefetch, instruction and data caches.
+    flash
+        .acr()
+        .write(|w| unsafe { w.bits(5 | (1 << 8) | (1 << 9) | (1 << 10)) });
+    // AHB /1, APB1 /4, APB2 /2.
+    rcc.cfgr()
+        .write(|w| unsafe { w.bits((0b101 << 10) | (0b100 << 13)) });
+    rcc.cr().modify(|_, w| w.pllon().set_bit());
+    if !(0..SPINS).any(|_| rcc.cr().read().pllrdy().bit_is_set()) {
+        return false;
+    }
+    rcc.cfgr()
+        .modify(|r, w| unsafe { w.bits((r.bits() & !0b11) | 0b10) });
+    (0..SPINS).any(|_| (rcc.cfgr().read().bits() >> 2) & 0b11 == 0b10)
+}
+
+/// APB clock of USART1 (APB2) and of the others (APB1), Hz.
+fn pclk(apb2: bool) -> u32 {
+    match (cfg!(feature = "board"), apb2) {
+        (true, true) => 84_000_000,
+        (true, false) => 42_000_000,
+        (false, _) => 16_000_000,
+    }
+}
+
+/// Clock the GPIO ports and the four USARTs, and give their pins to them: USART1 PA9/PA10,
+/// USART2 PA2/PA3, USART3 PB10/PB11 (AF7), UART4 PA0/PA1 (AF8).
+pub fn enable_clocks_and_pins(rcc: &pac::RCC, gpioa: &pac::GPIOA, gpiob: &pac::GPIOB) {
+    rcc.ahb1enr()
+        .modify(|r, w| unsafe { w.bits(r.bits() | 0b11) });
+    // USART2 (17), USART3 (18), UART4 (19) on APB1; USART1 (4) on APB2.
+    rcc.apb1enr()
+        .modify(|r, w| unsafe { w.bits(r.bits() | (1 << 17) | (1 << 18) | (1 << 19)) });
+    rcc.apb2enr()
+        .modify(|r, w| unsafe { w.bits(r.bits() | (1 << 4)) });
+    let alt = |pins: &[u32]| pins.iter().fold(0u32, |m, p| m | (0b10 << (2 * p)));
+    let mask = |pins: &[u32]| pins.iter().fold(0u32, |m, p| m | (0b11 << (2 * p)));
+    let a = [0, 1, 2, 3, 9, 10];
+    gpioa
+        .moder()
+        .modify(|r, w| unsafe { w.bits((r.bits() & !mask(&a)) | alt(&a)) });
+    // AFRL: PA0, PA1 AF8; PA2, PA3 AF7. AFRH: PA9, PA10 AF7.
+    gpioa
+        .afrl()
+        .modify(|r, w| unsafe { w.bits((r.bits() & !0xFFFF) | 0x7788) });
+    gpioa
+        .afrh()
+        .modify(|r, w| unsafe { w.bits((r.bits() & !0xFF0) | 0x770) });
+    let b = [10, 11];
+    gpiob
+        .moder()
+        .modify(|r, w| unsafe { w.bits((r.bits() & !mask(&b)) | alt(&b)) });
+    gpiob
+        .afrh()
+        .modify(|r, w| unsafe { w.bits((r.bits() & !0xFF00) | 0x7700) });
+}
+
+/// The USART register block (USART1-3 and UART4 share its layout).
+pub type Usart = pac::usart1::RegisterBlock;
+
+/// UART4's registers as a USART's (the same layout at the same offsets; it lacks only the
+/// synchronous-mode bits, which the image never touches).
+pub fn uart4(_owned: &pac::UART4) -> &'static Usart {
+    // SAFETY: UART4's block is mapped for the program's life, and its SR, DR, BRR and CR1-3
+    // sit where USART1's do; holding `pac::UART4` proves the caller owns it.
+    unsafe { &*(pac::UART4::ptr() as *const Usart) }
+}
+
+const CR1_UE: u16 = 1 << 13;
+const CR1_TXEIE: u16 = 1 << 7;
+const CR1_RXNEIE: u16 = 1 << 5;
+const CR1_TE: u16 = 1 << 3;
+const CR1_RE: u16 = 1 << 2;
+const SR_ORE: u16 = 1 << 3;
+const SR_RXNE: u16 = 1 << 5;
+const SR_TXE: u16 = 1 << 7;
+
+/// 8N1 at `baud`, receiver and its interrupt on (and the transmitter if `tx`).
+pub fn start_usart(u: &Usart, baud: u32, apb2: bool, tx: bool) {
+    let brr = (pclk(apb2) / baud).min(u32::from(u16::MAX)) as u16;
+    u.brr().write(|w| unsafe { w.bits(brr) });
+    let te = if tx { CR1_TE } else { 0 };
+    u.cr1()
+        .write(|w| unsafe { w.bits(CR1_UE | CR1_RE | CR1_RXNEIE | te) });
+}
+
+/// What a receive interrupt found.
+pub enum Received {
+    /// A byte.
+    Byte(u8),
+    /// A byte, after an overrun lost the one before it.
+    Overrun(u8),
+    /// Nothing to read.
+    Nothing,
+}
+
+/// Read the receiver (reading DR clears RXNE and ORE).
+pub fn receive(u: &Usart) -> Received {
+    let sr = u.sr().read().bits();
+    if sr & (SR_RXNE | SR_ORE) == 0 {
+        return Received::Nothing;
+    }
+    let b = u.dr().read().bits() as u8;
+    if sr & SR_ORE != 0 {
+        Received::Overrun(b)
+    } else {
+        Received::Byte(b)
+    }
+}
+
+/// Whether the transmitter can take a byte.
+pub fn tx_ready(u: &Usart) -> bool {
+    u.sr().read().bits() & SR_TXE != 0
+}
+
+/// Send a byte (the caller checked [`tx_ready`]).
+pub fn transmit(u: &Usart, b: u8) {
+    u.dr().write(|w| unsafe { w.bits(u16::from(b)) });
+}
+
+/// Turn the transmit-empty interrupt on or off.
+pub fn tx_interrupt(u: &Usart, on: bool) {
+    u.cr1().modify(|r, w| unsafe {
+        w.bits(if on {
+            r.bits() | CR1_TXEIE
+        } else {
+            r.bits() & !CR1_TXEIE
+        })
+    });
+}
+
+/// The independent watchdog: about a second without a feed resets the chip.
+#[cfg(feature = "board")]
+pub fn start_watchdog(iwdg: &pac::IWDG) {
+    iwdg.kr().write(|w| unsafe { w.bits(0x5555) });
+    // LSI 32 kHz / 64 = 500 Hz; 500 counts.
+    iwdg.pr().write(|w| unsafe { w.bits(4) });
+    iwdg.rlr().write(|w| unsafe { w.bits(500) });
+    iwdg.kr().write(|w| unsafe { w.bits(0xCCCC) });
+}
+
+/// Feed the watchdog (from the main loop only: a stuck loop starves it).
+#[cfg(feature = "board")]
+pub fn feed_watchdog() {
+    // SAFETY: a write of the reload key to IWDG's key register, which has no other effect.
+    unsafe { (*pac::IWDG::ptr()).kr().write(|w| w.bits(0xAAAA)) };
+}
+
+/// Whether the last reset was the watchdog's (and clear the flags).
+#[cfg(feature = "board")]
+pub fn watchdog_reset(rcc: &pac::RCC) -> bool {
+    let was = rcc.csr().read().bits() & (1 << 29) != 0;
+    rcc.csr()
+        .modify(|r, w| unsafe { w.bits(r.bits() | (1 << 24)) });
+    was
+}
+
+/// Why the last reset happened, kept across the reset in RAM the startup code leaves alone.
+#[repr(C)]
+pub struct ResetRecord {
+    magic: u32,
+    cause: u32,
+    /// Where: the panic's line, or the faulting PC.
+    pub at: u32,
+}
+
+const MAGIC: u32 = 0xF0C5_F0C5;
+
+#[unsafe(link_section = ".uninit.foxhunt")]
+static mut RECORD: core::mem::MaybeUninit<ResetRecord> = core::mem::MaybeUninit::uninit();
+
+/// Record `cause` ('P', 'H') and where, then reset.
+pub fn record_and_reset(cause: u8, at: u32) -> ! {
+    // SAFETY: RECORD is plain words in .uninit; only this function and `take_record` touch
+    // it, this one with interrupts about to be lost to the reset.
+    unsafe {
+        let p = core::ptr::addr_of_mut!(RECORD) as *mut ResetRecord;
+        core::ptr::write_volatile(
+            p,
+            ResetRecord {
+                magic: MAGIC,
+                cause: u32::from(cause),
+                at,
+            },
+        );
+    }
+    cortex_m::peripheral::SCB::sys_reset()
+}
+
+/// The record the last reset left (cause letter and where), cleared.
+pub fn take_record() -> Option<(u8, u32)> {
+    // SAFETY: as in `record_and_reset`; called once at start, before any interrupt.
+    unsafe {
+        let p = core::ptr::addr_of_mut!(RECORD) as *mut ResetRecord;
+        let r = core::ptr::read_volatile(p);
+        core::ptr::write_volatile(core::ptr::addr_of_mut!((*p).magic), 0);
+        (r.magic == MAGIC).then_some((r.cause as u8, r.at))
+    }
+}
+
+const PAINT: u32 = 0xCCCC_CCCC;
+
+unsafe extern "C" {
+    static _stack_start: u32;
+    static _stack_end: u32;
+}
+
+fn stack_bounds() -> (usize, usize) {
+    // The linker script defines both symbols; only their addresses are taken.
+    (
+        core::ptr::addr_of!(_stack_end) as usize,
+        core::ptr::addr_of!(_stack_start) as usize,
+    )
+}
+
+/// Paint the stack below the current frame again (after the start-up, whose one-off moves of
+/// the big state would otherwise stand as the high-water mark): the mark then says what the
+/// running loop needs. Interrupts are off while it paints.
+#[inline(never)]
+pub fn repaint_stack() {
+    let (bottom, _) = stack_bounds();
+    cortex_m::interrupt::free(|_| {
+        let sp = cortex_m::register::msp::read() as usize;
+        // Leave a margin below the stack pointer for this function's own frame.
+        let mut p = bottom;
+        while p + 256 < sp {
+            // SAFETY: [bottom, sp - 256) is stack below every live frame, mapped RAM.
+            unsafe { core::ptr::write_volatile(p as *mut u32, PAINT) };
+            p += 4;
+        }
+    });
+}
+
+/// Peak stack use, bytes: from the top down to the lowest word no longer painted.
+pub fn stack_high_water() -> u32 {
+    let (bottom, top) = stack_bounds();
+    let mut p = bottom;
+    // SAFETY: every word in [bottom, top) is mapped RAM in the stack region.
+    while p < top && unsafe { core::ptr::read_volatile(p as *const u32) } == PAINT {
+        p += 4;
+    }
+    (top - p) as u32
+}
