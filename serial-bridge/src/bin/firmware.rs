@@ -66,11 +66,6 @@ mod app {
     static FULL: AtomicU32 = AtomicU32::new(0);
     /// Queue high-water marks: GPS, DF, ZigBee, user input.
     static HIGH: [AtomicU32; 4] = [const { AtomicU32::new(0) }; 4];
-    /// Bytes the user port has sent, and the tick at which byte number `MARK` went.
-    static SENT: AtomicU32 = AtomicU32::new(0);
-    static MARK: AtomicU32 = AtomicU32::new(u32::MAX);
-    static MARK_TICK: AtomicU32 = AtomicU32::new(0);
-    static MARK_DONE: AtomicU32 = AtomicU32::new(0);
 
     #[shared]
     struct Shared {
@@ -183,26 +178,11 @@ mod app {
         take(hw::uart4(cx.local.zigbee), cx.local.zigbee_in, 2);
     }
 
-    /// The user port: commands in, the output queue out.
-    #[task(binds = USART3, shared = [user], local = [user_in, out_next])]
+    /// The user port's receiver: commands in.
+    #[task(binds = USART3, shared = [user], local = [user_in])]
     fn usart3(mut cx: usart3::Context) {
-        let out = cx.local.out_next;
         let input = cx.local.user_in;
-        cx.shared.user.lock(|u| {
-            take(u, input, 3);
-            while hw::tx_ready(u) {
-                let Some(b) = out.dequeue() else {
-                    hw::tx_interrupt(u, false);
-                    break;
-                };
-                hw::transmit(u, b);
-                let n = SENT.fetch_add(1, Ordering::Relaxed).wrapping_add(1);
-                if n == MARK.load(Ordering::Relaxed) {
-                    MARK_TICK.store(hw::ticks(), Ordering::Relaxed);
-                    MARK_DONE.store(1, Ordering::Release);
-                }
-            }
-        });
+        cx.shared.user.lock(|u| take(u, input, 3));
     }
 
     #[task(binds = SysTick, priority = 2)]
@@ -213,13 +193,21 @@ mod app {
     /// What the loop measures.
     #[derive(Default)]
     struct Meter {
-        /// Bytes queued for the user port so far.
+        /// Bytes queued for the user port so far, and sent.
         queued: u32,
-        /// A latency being measured: its start tick.
-        pending: Option<u32>,
+        sent: u32,
+        /// A latency being measured: its start tick and the count of sent bytes that ends it.
+        pending: Option<(u32, u32)>,
         worst_latency: u32,
         worst_fix: u32,
         out_high: u32,
+    }
+
+    /// The unit, built in its static slot by a call of its own: the temporary it is built
+    /// from lives in this frame, gone when it returns (the idle loop's frame never is).
+    #[inline(never)]
+    fn build(slot: &'static mut Option<Unit>) -> &'static mut Unit {
+        slot.insert(Unit::default())
     }
 
     /// Queue a sentence whole for the user port, or refuse it (no room).
@@ -235,22 +223,43 @@ mod app {
         true
     }
 
-    #[idle(shared = [user], local = [rx, out, reset, unit: Option<Unit> = None])]
+    #[idle(shared = [user], local = [rx, out, out_next, reset, unit: Option<Unit> = None])]
     fn idle(cx: idle::Context) -> ! {
         let local = cx.local;
         let mut user = cx.shared.user;
         let reset = *local.reset;
-        let unit = local.unit.insert(Unit::default());
+        let unit = build(local.unit);
         hw::repaint_stack();
         let out = local.out;
+        let out_next = local.out_next;
         let rx = local.rx;
         let mut meter = Meter::default();
-        let mut kick = || user.lock(|u| hw::tx_interrupt(u, true));
+        // The transmitter, polled: as many bytes as it takes now (QEMU models no transmit
+        // interrupt; its transmitter takes every byte at once).
+        let mut pump = |meter: &mut Meter| {
+            user.lock(|u| {
+                while hw::tx_ready(u) {
+                    let Some(b) = out_next.dequeue() else {
+                        break;
+                    };
+                    hw::transmit(u, b);
+                    meter.sent = meter.sent.wrapping_add(1);
+                    if let Some((start, mark)) = meter.pending
+                        && meter.sent == mark
+                    {
+                        let t = hw::ticks().wrapping_sub(start);
+                        meter.worst_latency = meter.worst_latency.max(t);
+                        meter.pending = None;
+                    }
+                }
+                out_next.is_empty()
+            })
+        };
         let mut banner = ReadySentence { version: 1, reset }.write();
         if let Some(b) = banner.finish() {
             send(out, &mut meter, b);
         }
-        kick();
+        let _ = pump(&mut meter);
         defmt::info!("ready");
         let mut fed = [0u32; 4];
         let mut last_rx = [0u32; 4];
@@ -297,14 +306,10 @@ mod app {
                 if r.fixes > 0 {
                     meter.worst_fix = meter.worst_fix.max(hw::ticks().wrapping_sub(t0));
                     if meter.pending.is_none() {
-                        MARK_DONE.store(0, Ordering::Relaxed);
-                        MARK.store(meter.queued, Ordering::Relaxed);
-                        meter.pending = Some(start);
+                        meter.pending = Some((start, meter.queued));
                     }
-                    kick();
-                } else if r.frames > 0 {
-                    kick();
                 }
+                let _ = pump(&mut meter);
                 if let (Some(t), Some(q)) = (last_rx.get_mut(i), quiet.get_mut(i)) {
                     *t = hw::ms();
                     *q = false;
@@ -323,16 +328,8 @@ mod app {
                     let r = unit.idle(port, &mut sink);
                     if r.frames > 0 {
                         defmt::info!("idle {=u8} {=u32}", i as u8, *count);
-                        kick();
                     }
                 }
-            }
-            if let Some(start) = meter.pending
-                && MARK_DONE.load(Ordering::Acquire) == 1
-            {
-                let end = MARK_TICK.load(Ordering::Relaxed);
-                meter.worst_latency = meter.worst_latency.max(end.wrapping_sub(start));
-                meter.pending = None;
             }
             if now.wrapping_sub(next_status) < u32::MAX / 2 {
                 next_status = next_status.wrapping_add(1000);
@@ -357,9 +354,9 @@ mod app {
                         send(out, &mut meter, b);
                     }
                 }
-                kick();
             }
-            if !busy {
+            let drained = pump(&mut meter);
+            if !busy && drained {
                 cortex_m::asm::wfi();
             }
         }

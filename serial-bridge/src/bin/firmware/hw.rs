@@ -133,7 +133,6 @@ pub fn uart4(_owned: &pac::UART4) -> &'static Usart {
 }
 
 const CR1_UE: u16 = 1 << 13;
-const CR1_TXEIE: u16 = 1 << 7;
 const CR1_RXNEIE: u16 = 1 << 5;
 const CR1_TE: u16 = 1 << 3;
 const CR1_RE: u16 = 1 << 2;
@@ -182,17 +181,6 @@ pub fn tx_ready(u: &Usart) -> bool {
 /// Send a byte (the caller checked [`tx_ready`]).
 pub fn transmit(u: &Usart, b: u8) {
     u.dr().write(|w| unsafe { w.bits(u16::from(b)) });
-}
-
-/// Turn the transmit-empty interrupt on or off.
-pub fn tx_interrupt(u: &Usart, on: bool) {
-    u.cr1().modify(|r, w| unsafe {
-        w.bits(if on {
-            r.bits() | CR1_TXEIE
-        } else {
-            r.bits() & !CR1_TXEIE
-        })
-    });
 }
 
 /// The independent watchdog: about a second without a feed resets the chip.
