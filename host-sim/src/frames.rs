@@ -43,8 +43,57 @@ fn reference(r: Reference) -> &'static str {
     }
 }
 
+/// The JSON object of one of the DF unit's own sentences (`$PFOXF` fix, `$PFOXS` status,
+/// `$PFOXL` link, `$PFOXR` ready, `$PFOXA` acknowledgement), if `text` is one.
+fn unit_json(text: &str) -> Option<Value> {
+    use foxhunt_bridge::telemetry::{TelemetryError, UnitSentence};
+    if !["PFOXF", "PFOXS", "PFOXL", "PFOXR", "PFOXA"]
+        .iter()
+        .any(|a| text.starts_with(a))
+    {
+        return None;
+    }
+    let kind = text.get(..5).unwrap_or("pfox").to_ascii_lowercase();
+    Some(match UnitSentence::parse(text) {
+        Ok(UnitSentence::Fix(f)) => {
+            let mut v = json!({"kind": "pfoxf", "time": time(f.time),
+                "status": (f.status.letter() as char).to_string(), "used": f.used,
+                "window": f.window, "sigma_deg": short(f.sigma_deg)});
+            if let Some(p) = f.position {
+                position(&mut v, p);
+                v["major_m"] = json!(short(f.major_m));
+                v["minor_m"] = json!(short(f.minor_m));
+                v["orientation_deg"] = json!(short(f.orientation_deg));
+                v["cep50_m"] = json!(short(f.cep50_m));
+            }
+            v
+        }
+        Ok(UnitSentence::Status(s)) => json!({"kind": "pfoxs", "uptime_s": s.uptime_s,
+            "stack_bytes": s.stack_bytes, "queue_high": s.queue_high,
+            "latency_ticks": s.latency_ticks, "fix_ticks": s.fix_ticks,
+            "reset": s.reset.map(|r| (r.letter() as char).to_string())}),
+        Ok(UnitSentence::Link(l)) => json!({"kind": "pfoxl", "bytes": l.bytes,
+            "overruns": l.overruns, "full": l.full, "dropped": l.dropped,
+            "rejected": l.rejected, "bearings": l.bearings, "fixes": l.fixes}),
+        Ok(UnitSentence::Ready(r)) => json!({"kind": "pfoxr", "version": r.version,
+            "reset": (r.reset.letter() as char).to_string()}),
+        Ok(UnitSentence::Ack(a)) => json!({"kind": "pfoxa", "command": a.command,
+            "ok": a.ok, "detail": a.detail}),
+        Err(e) => {
+            let error = match e {
+                TelemetryError::Unsupported => None,
+                TelemetryError::BadField(n) => Some(format!("bad_field_{n}")),
+            };
+            json!({"kind": kind, "sentence": text, "error": error})
+        }
+    })
+}
+
 /// The JSON object of one NMEA sentence.
 fn sentence_json(text: &str) -> Value {
+    if let Some(v) = unit_json(text) {
+        return v;
+    }
     match Sentence::parse(text) {
         Ok(Sentence::Gga(g)) => {
             let mut v = json!({"kind": "gga", "talker": talker(&g.talker),
@@ -196,6 +245,28 @@ pub fn write_frames(bytes: &[u8], out: &mut impl std::io::Write) -> std::io::Res
             "kraken_bad_field": c.kraken_bad_field, "kraken_too_long": c.kraken_too_long,
             "kraken_structure": c.kraken_structure})
     )
+}
+
+#[cfg(test)]
+mod unit_sentence_tests {
+    use super::*;
+
+    #[test]
+    fn the_units_sentences_print_their_fields() {
+        let v = sentence_json(
+            "PFOXF,100101.25,4700.607404,N,00800.325926,W,123.5,6.0,180.0,40.0,117,120,1.23,A",
+        );
+        assert_eq!(v["kind"], "pfoxf");
+        assert_eq!(v["status"], "A");
+        assert_eq!(v["used"], 117);
+        assert_eq!(v["major_m"], 123.5);
+        assert!((v["lon"].as_f64().unwrap() + 8.005_432_1).abs() < 1e-7);
+        let s = sentence_json("PFOXS,3,2816,76,41,0,86,43375,42859,N");
+        assert_eq!(s["kind"], "pfoxs");
+        assert_eq!(s["latency_ticks"], 43375);
+        assert_eq!(sentence_json("PFOXA,GATE,ERR,ARGUMENT")["ok"], false);
+        assert_eq!(sentence_json("PFOXF,garbage")["error"], "bad_field_13");
+    }
 }
 
 #[cfg(test)]

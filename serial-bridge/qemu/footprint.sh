@@ -1,43 +1,59 @@
 #!/usr/bin/env bash
-# The firmware image's footprint on the emulated Cortex-M4F: flash, static RAM, painted-stack
-# high-water mark, and exact instructions per particle per SIR step (N = 100), from a counting
-# QEMU plugin. The step cost is the difference between the image and its `baseline` build,
-# which skips the filter steps, divided by particles x steps. The image streams the bundled
-# drive from the host over semihosting (as from a UART), so the flash figure is the product's.
+# The firmware image's figures on the emulated Cortex-M4F, as one markdown table: flash,
+# static RAM, painted stack, queue high-water marks, instructions per byte (all in), per
+# bearing and per fix, and the worst latency from a record's last byte to its fix sentence's
+# last byte.
 #
-# Needs: qemu-system-arm, binutils-arm-none-eabi (arm-none-eabi-size), gcc.
-# Run from anywhere: bash serial-bridge/qemu/footprint.sh
+# A capture (default: the bundled drive) goes through the image's USARTs (uart-replay.sh)
+# under `-icount shift=0` (one instruction, one nanosecond: the image's SysTick ticks at
+# 168 MHz of that time are 0.168 per instruction) and the counting plugin (icount.c): once
+# whole, once without its bearings. Instructions per byte = the whole run's count over the
+# bytes fed (it includes the 1 kHz tick and the once-a-second status over the run's length);
+# per bearing = the difference of the two runs over the bearings (record, bridge, fix and
+# sentence); the worst fix and latency are the image's own tick measurements. Milliseconds
+# are at 168 MHz and one instruction a cycle (a lower bound: flash wait states cost more).
+#
+# Needs: qemu-system-arm, binutils-arm-none-eabi, gcc. Usage:
+#   bash serial-bridge/qemu/footprint.sh [CAPTURE] [SPEED]
 set -euo pipefail
 cd "$(dirname "$0")/../.."
+capture=$(realpath "${1:-serial-bridge/captures/aoa-drive.nmea}")
+speed=${2:-10}
 out=target/footprint
 mkdir -p "$out"
 gcc -O2 -shared -fPIC -o "$out/libicount.so" serial-bridge/qemu/icount.c
+grep -av '^\$PFOXB' "$capture" > "$out/no-bearings.nmea" || true
 
-run() { # $1 = variant name, $2 = extra cargo flags
-  CARGO_TARGET_DIR="$out/$1" cargo build -q --profile firmware -p foxhunt-bridge --bin foxhunt-firmware \
-    --target thumbv7em-none-eabihf $2
-  local elf="$out/$1/thumbv7em-none-eabihf/firmware/foxhunt-firmware"
-  timeout 300 qemu-system-arm -machine netduinoplus2 -nographic \
-    -semihosting-config enable=on,target=native -plugin "$out/libicount.so" -kernel "$elf" \
-    > "$out/$1.out" 2> "$out/$1.err"
-  echo "$elf"
+run() { # $1 = name, $2 = capture
+  bash serial-bridge/qemu/uart-replay.sh --icount --plugin "$(realpath "$out/libicount.so")" \
+    --speed "$speed" --out "$(realpath "$out")/$1" "$2" > "$out/$1.user"
 }
-
-full_elf=$(run full "")
-run baseline "--features baseline" > /dev/null
-count() { sed -n 's/^instructions //p' "$out/$1.err"; }
-full=$(count full)
-base=$(count baseline)
-stack=$(sed -n 's/^stack //p' "$out/full.out")
-read -r text data bss _ < <(arm-none-eabi-size "$full_elf" | tail -1)
-particles=100
-steps=$(sed -n 's/^bearings \([0-9]*\).*/\1/p' "$out/full.out")
-
-echo "| quantity | value |"
-echo "|---|---|"
-echo "| flash (text + rodata + data) | $((text + data)) B |"
-echo "| static RAM (data + bss) | $((data + bss)) B |"
-echo "| stack high-water mark (painted) | $stack B |"
-echo "| instructions, whole run (bridge + SIR + ML) | $full |"
-echo "| instructions, run without the SIR steps | $base |"
-echo "| SIR instructions per particle per step (N = $particles, $steps steps) | $(( (full - base) / (particles * steps) )) |"
+run whole "$capture"
+run gps "$out/no-bearings.nmea"
+elf=${CARGO_TARGET_DIR:-target}/thumbv7em-none-eabihf/firmware/foxhunt-firmware
+count() { sed -n 's/^instructions //p' "$out/$1/qemu.err"; }
+bytes() { cat "$out/$1"/{gps,df,zigbee,user}.bin | wc -c; }
+last() { grep -a "^\$$2," "$out/$1.user" | tail -1 | sed 's/\*.*//'; }
+whole=$(count whole)
+gps=$(count gps)
+IFS=, read -r _ up stack hw_gps hw_df hw_zb hw_out latency fix _ <<< "$(last whole PFOXS)"
+IFS=, read -r _ _ _ _ _ _ _ _ bearings fixes <<< "$(last whole PFOXL)"
+read -r text data bss _ < <(arm-none-eabi-size "$elf" | tail -1)
+awk -v text="$text" -v data="$data" -v bss="$bss" -v stack="$stack" \
+  -v whole="$whole" -v gps="$gps" -v bw="$(bytes whole)" -v bg="$(bytes gps)" \
+  -v bearings="$bearings" -v fixes="$fixes" -v latency="$latency" -v fix="$fix" \
+  -v hw="$hw_gps / $hw_df / $hw_zb / $hw_out" -v name="$(basename "$capture")" 'BEGIN {
+  li = latency / 0.168; fi = fix / 0.168; pb = (whole - gps) / bearings
+  printf "| quantity (%s, %d bearings, %d fixes) | value | budget |\n", name, bearings, fixes
+  print "|---|---:|---:|"
+  printf "| flash (text + data) | %d B | 131072 B |\n", text + data
+  printf "| static RAM (data + bss) | %d B | |\n", data + bss
+  printf "| painted stack, high-water mark | %d B | |\n", stack
+  printf "| RAM + stack | %d B | 32768 B |\n", data + bss + stack
+  printf "| queue high-water marks, bytes (GPS / DF / ZigBee / output) | %s | 256 / 256 / 256 / 1024 |\n", hw
+  printf "| instructions per byte, all in (%d instructions, %d bytes) | %.0f | |\n", whole, bw, whole / bw
+  printf "| instructions per byte, GPS only (no bearings) | %.0f | |\n", gps / bg
+  printf "| instructions per bearing, all in (record, bridge, fix, sentence) | %.0f (%.2f ms) | |\n", pb, pb / 168e3
+  printf "| worst fix update (the read that completed the bearing) | %.0f instructions (%.2f ms) | |\n", fi, fi / 168e3
+  printf "| worst latency, record last byte to fix sentence last byte | %.0f instructions (%.2f ms) | 20 ms |\n", li, li / 168e3
+}'

@@ -35,6 +35,15 @@
 
 use foxhunt_core::Bearing;
 use foxhunt_core::fastmath::{atan2, sincos};
+
+/// (sin, cos) of an angle the tracker holds in (-pi, pi] (anything else, NaN included, reads
+/// as 0): within the core's fast range, so its libm fallback (computed in `f64`) is never taken
+/// and the compiler drops it.
+#[inline(always)]
+fn sin_cos(a: f32) -> (f32, f32) {
+    let a = if libm::fabsf(a) <= 4.0 { a } else { 0.0 };
+    sincos(a)
+}
 use foxhunt_core::fix::consistency::ellipse_scale;
 use foxhunt_core::linalg::{inverse2, solve2};
 use foxhunt_core::model::bearing::wrap;
@@ -498,7 +507,9 @@ impl Tracker {
         for e in self.entries() {
             let dx = p[0] - (e.vehicle[0] - origin[0]);
             let dy = p[1] - (e.vehicle[1] - origin[1]);
-            let d2 = (dx * dx + dy * dy).max(1e-6);
+            let d2 = dx * dx + dy * dy;
+            // A branch, not `max`: the Cortex-M4F build calls `fmaxf` for that.
+            let d2 = if d2 < 1e-6 { 1e-6 } else { d2 };
             let r = fold(e.theta - atan2(dy, dx));
             let sd = sigma * e.rel;
             let u = r / sd;
@@ -517,7 +528,7 @@ impl Tracker {
             if inlier {
                 s.inliers += 1;
                 s.chi2 += u * u;
-                s.front += sincos(r).1;
+                s.front += sin_cos(r).1;
             }
         }
         s
@@ -544,8 +555,8 @@ impl Tracker {
     /// range.
     fn crossing(&self, origin: [f32; 2], i: usize, j: usize) -> Option<[f32; 2]> {
         let (a, b) = (self.entry(i)?, self.entry(j)?);
-        let (sa, ca) = sincos(a.theta);
-        let (sb, cb) = sincos(b.theta);
+        let (sa, ca) = sin_cos(a.theta);
+        let (sb, cb) = sin_cos(b.theta);
         let cross = ca * sb - sa * cb;
         if libm::fabsf(cross) < MIN_CROSSING_SIN {
             return None;
@@ -664,7 +675,10 @@ impl Tracker {
         };
         let mut at = self.pass(origin, lock.position, lock.sigma);
         passes += 1;
-        // Levenberg-Marquardt on the Tukey cost, within the pass budget.
+        // Levenberg-Marquardt on the Tukey cost, within the pass budget: a step under a
+        // millimetre is convergence, and three refused steps in a row end the update (at the
+        // minimum, f32 round-off refuses every step).
+        let mut refused = 0;
         while passes + 1 < MAX_PASSES {
             let damped = [
                 [at.h[0][0] * (1.0 + lock.lambda), at.h[0][1]],
@@ -674,21 +688,26 @@ impl Tracker {
                 lock.lambda = (lock.lambda * 10.0).min(1e6);
                 break;
             };
+            let moved = delta[0] * delta[0] + delta[1] * delta[1];
+            if moved < 1e-6 {
+                break;
+            }
             let next = [lock.position[0] + delta[0], lock.position[1] + delta[1]];
             let trial = self.pass(origin, next, lock.sigma);
             passes += 1;
             if trial.cost.is_finite() && trial.cost <= at.cost {
-                let moved = delta[0] * delta[0] + delta[1] * delta[1];
                 lock.position = next;
                 lock.lambda = (lock.lambda * 0.1).max(1e-7);
-                let settled = moved < 1e-4 || at.cost - trial.cost <= 1e-6 * at.cost;
+                let settled = at.cost - trial.cost <= 1e-6 * at.cost;
                 at = trial;
+                refused = 0;
                 if settled {
                     break;
                 }
             } else {
                 lock.lambda = (lock.lambda * 10.0).min(1e6);
-                if lock.lambda >= 1e6 {
+                refused += 1;
+                if refused >= 3 {
                     break;
                 }
             }

@@ -66,6 +66,11 @@ mod app {
     static FULL: AtomicU32 = AtomicU32::new(0);
     /// Queue high-water marks: GPS, DF, ZigBee, user input.
     static HIGH: [AtomicU32; 4] = [const { AtomicU32::new(0) }; 4];
+    /// Bytes each receive queue took in and gave out: their difference is its fill, without
+    /// the queue's own `len` (whose index arithmetic keeps a division the compiler cannot
+    /// prove safe).
+    static TAKEN: [AtomicU32; 4] = [const { AtomicU32::new(0) }; 4];
+    static GIVEN: [AtomicU32; 4] = [const { AtomicU32::new(0) }; 4];
 
     #[shared]
     struct Shared {
@@ -77,14 +82,27 @@ mod app {
         gps: pac::USART1,
         df: pac::USART2,
         zigbee: pac::UART4,
-        gps_in: Producer<'static, u8>,
-        df_in: Producer<'static, u8>,
-        zigbee_in: Producer<'static, u8>,
-        user_in: Producer<'static, u8>,
-        rx: [Consumer<'static, u8>; 4],
+        gps_in: RxIn,
+        df_in: RxIn,
+        zigbee_in: RxIn,
+        user_in: RxIn,
+        rx: [RxOut; 4],
         out: Producer<'static, u8>,
         out_next: Consumer<'static, u8>,
         reset: ResetCause,
+    }
+
+    /// A receive queue's producer side: each byte and the tick it arrived at (so a latency
+    /// starts at its record's last byte, not at whatever the loop took with it).
+    pub struct RxIn {
+        bytes: Producer<'static, u8>,
+        ticks: Producer<'static, u32>,
+    }
+
+    /// A receive queue's consumer side.
+    pub struct RxOut {
+        bytes: Consumer<'static, u8>,
+        ticks: Consumer<'static, u32>,
     }
 
     #[init(local = [
@@ -92,6 +110,10 @@ mod app {
         q_df: Queue<u8, RX> = Queue::new(),
         q_zigbee: Queue<u8, RX> = Queue::new(),
         q_user: Queue<u8, RX> = Queue::new(),
+        t_gps: Queue<u32, RX> = Queue::new(),
+        t_df: Queue<u32, RX> = Queue::new(),
+        t_zigbee: Queue<u32, RX> = Queue::new(),
+        t_user: Queue<u32, RX> = Queue::new(),
         q_out: Queue<u8, TX> = Queue::new(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
@@ -122,11 +144,26 @@ mod app {
         if let Some((cause, at)) = record {
             defmt::warn!("reset by {=u8} at {=u32:#x}", cause, at);
         }
-        let (gps_in, gps_rx) = cx.local.q_gps.split();
-        let (df_in, df_rx) = cx.local.q_df.split();
-        let (zigbee_in, zigbee_rx) = cx.local.q_zigbee.split();
-        let (user_in, user_rx) = cx.local.q_user.split();
-        let (out, out_next) = cx.local.q_out.split();
+        let pair = |b: &'static mut Queue<u8, RX>, t: &'static mut Queue<u32, RX>| {
+            let (bi, bo) = b.split();
+            let (ti, to) = t.split();
+            (
+                RxIn {
+                    bytes: bi,
+                    ticks: ti,
+                },
+                RxOut {
+                    bytes: bo,
+                    ticks: to,
+                },
+            )
+        };
+        let l = cx.local;
+        let (gps_in, gps_rx) = pair(l.q_gps, l.t_gps);
+        let (df_in, df_rx) = pair(l.q_df, l.t_df);
+        let (zigbee_in, zigbee_rx) = pair(l.q_zigbee, l.t_zigbee);
+        let (user_in, user_rx) = pair(l.q_user, l.t_user);
+        let (out, out_next) = l.q_out.split();
         (
             Shared { user: dp.USART3 },
             Local {
@@ -146,7 +183,7 @@ mod app {
     }
 
     /// One received byte into its queue, counted.
-    fn take(u: &hw::Usart, q: &mut Producer<'static, u8>, port: usize) {
+    fn take(u: &hw::Usart, q: &mut RxIn, port: usize) {
         let b = match hw::receive(u) {
             Received::Byte(b) => b,
             Received::Overrun(b) => {
@@ -155,11 +192,18 @@ mod app {
             }
             Received::Nothing => return,
         };
-        if q.enqueue(b).is_err() {
+        if q.bytes.enqueue(b).is_err() {
             FULL.fetch_add(1, Ordering::Relaxed);
+            return;
         }
-        if let Some(h) = HIGH.get(port) {
-            h.fetch_max(q.len() as u32, Ordering::Relaxed);
+        // The two queues have one capacity and move in step: this cannot fail.
+        let _ = q.ticks.enqueue(hw::ticks());
+        if let (Some(h), Some(t), Some(g)) = (HIGH.get(port), TAKEN.get(port), GIVEN.get(port)) {
+            let taken = t.fetch_add(1, Ordering::Relaxed).wrapping_add(1);
+            h.fetch_max(
+                taken.wrapping_sub(g.load(Ordering::Relaxed)),
+                Ordering::Relaxed,
+            );
         }
     }
 
@@ -203,6 +247,22 @@ mod app {
         out_high: u32,
     }
 
+    /// Sleep until an interrupt, unless a byte came in since the queues were last looked at:
+    /// they are checked with interrupts masked, and WFI wakes on a pending one even then (a
+    /// byte arriving between the check and WFI would otherwise wait for the next SysTick).
+    fn sleep(rx: &[RxOut; 4]) {
+        cortex_m::interrupt::disable();
+        if rx.iter().all(|q| !q.bytes.ready()) {
+            cortex_m::asm::wfi();
+        }
+        // SAFETY: interrupts were enabled when this was called (the idle loop runs with them
+        // on); no critical section spans this point.
+        #[allow(unsafe_code)]
+        unsafe {
+            cortex_m::interrupt::enable()
+        };
+    }
+
     /// The unit, built in its static slot by a call of its own: the temporary it is built
     /// from lives in this frame, gone when it returns (the idle loop's frame never is).
     #[inline(never)]
@@ -212,14 +272,17 @@ mod app {
 
     /// Queue a sentence whole for the user port, or refuse it (no room).
     fn send(out: &mut Producer<'static, u8>, meter: &mut Meter, bytes: &[u8]) -> bool {
-        if out.capacity() - out.len() < bytes.len() {
+        // The fill from the loop's own counts (see TAKEN).
+        let fill = meter.queued.wrapping_sub(meter.sent) as usize;
+        if out.capacity().saturating_sub(fill) < bytes.len() {
             return false;
         }
         for &b in bytes {
             let _ = out.enqueue(b);
         }
         meter.queued = meter.queued.wrapping_add(bytes.len() as u32);
-        meter.out_high = meter.out_high.max(out.len() as u32);
+        let fill = meter.queued.wrapping_sub(meter.sent);
+        meter.out_high = meter.out_high.max(fill);
         true
     }
 
@@ -264,52 +327,64 @@ mod app {
         let mut fed = [0u32; 4];
         let mut last_rx = [0u32; 4];
         let mut quiet = [true; 4];
-        let mut seen_empty = [hw::ticks(); 4];
         let mut next_status = hw::ms().wrapping_add(1000);
         let mut buf = [0u8; CHUNK];
+        let mut arrived = [0u32; CHUNK];
         loop {
             #[cfg(feature = "board")]
             hw::feed_watchdog();
             let mut busy = false;
             for (i, (q, port)) in rx.iter_mut().zip(Port::ALL).enumerate() {
-                let checked = hw::ticks();
                 let mut n = 0;
-                for slot in buf.iter_mut() {
-                    match q.dequeue() {
+                for (slot, tick) in buf.iter_mut().zip(arrived.iter_mut()) {
+                    match q.bytes.dequeue() {
                         Some(b) => *slot = b,
                         None => break,
                     }
+                    *tick = q.ticks.dequeue().unwrap_or(0);
                     n += 1;
                 }
-                let (Some(bytes), Some(empty), Some(count)) =
-                    (buf.get(..n), seen_empty.get_mut(i), fed.get_mut(i))
-                else {
-                    continue;
-                };
                 if n == 0 {
-                    // Whatever arrives later arrived after this tick.
-                    *empty = checked;
                     continue;
+                }
+                if let Some(g) = GIVEN.get(i) {
+                    g.fetch_add(n as u32, Ordering::Relaxed);
                 }
                 busy = true;
                 if port == Port::Zigbee && !unit.zigbee_enabled() {
                     continue;
                 }
-                let start = *empty;
-                let t0 = hw::ticks();
-                let mut sink = |s: &[u8]| send(out, &mut meter, s);
-                let r = unit.feed(port, bytes, &mut sink);
-                *count = count.wrapping_add(n as u32);
-                if r.frames > 0 {
-                    defmt::info!("feed {=u8} {=u32}", i as u8, *count);
-                }
-                if r.fixes > 0 {
-                    meter.worst_fix = meter.worst_fix.max(hw::ticks().wrapping_sub(t0));
-                    if meter.pending.is_none() {
-                        meter.pending = Some((start, meter.queued));
+                let Some(count) = fed.get_mut(i) else {
+                    continue;
+                };
+                // Fed in pieces that end at a record's last byte (a line end, an XML tag's
+                // `>`): a fix's latency starts at the arrival of the piece's last byte.
+                let mut from = 0;
+                while from < n {
+                    let end = buf
+                        .get(from..n)
+                        .and_then(|r| r.iter().position(|b| matches!(b, b'\n' | b'\r' | b'>')))
+                        .map_or(n, |k| from + k + 1);
+                    let (Some(piece), Some(&last)) = (buf.get(from..end), arrived.get(end - 1))
+                    else {
+                        break;
+                    };
+                    let t0 = hw::ticks();
+                    let mut sink = |s: &[u8]| send(out, &mut meter, s);
+                    let r = unit.feed(port, piece, &mut sink);
+                    *count = count.wrapping_add(piece.len() as u32);
+                    if r.frames > 0 {
+                        defmt::info!("feed {=u8} {=u32}", i as u8, *count);
                     }
+                    if r.fixes > 0 {
+                        meter.worst_fix = meter.worst_fix.max(hw::ticks().wrapping_sub(t0));
+                        if meter.pending.is_none() {
+                            meter.pending = Some((last, meter.queued));
+                        }
+                    }
+                    let _ = pump(&mut meter);
+                    from = end;
                 }
-                let _ = pump(&mut meter);
                 if let (Some(t), Some(q)) = (last_rx.get_mut(i), quiet.get_mut(i)) {
                     *t = hw::ms();
                     *q = false;
@@ -357,7 +432,7 @@ mod app {
             }
             let drained = pump(&mut meter);
             if !busy && drained {
-                cortex_m::asm::wfi();
+                sleep(rx);
             }
         }
     }

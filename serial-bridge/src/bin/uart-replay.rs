@@ -3,7 +3,8 @@
 //! `uart-replay [options] CAPTURE` starts QEMU's netduinoplus2 with the image and one unix
 //! socket per USART (`-serial` order: USART1 GPS, USART2 DF, USART3 user, UART4 ZigBee), waits
 //! for the image's ready banner (`$PFOXR`: QEMU drops bytes sent before a receiver is on),
-//! splits the capture into its ports' streams and sends each record at its own time (GPS and
+//! (QEMU waits for the four connections before it starts the image, so the banner is never
+//! sent to a socket nobody holds), splits the capture into its ports' streams and sends each record at its own time (GPS and
 //! PFOXB sentence times, KrakenSDR epochs; a record without a time goes with the one before
 //! it), divided by `--speed`. It then waits until a `$PFOXL` sentence says every byte sent was
 //! parsed, and one more status after that, stops QEMU (SIGTERM, so a plugin prints its count)
@@ -267,7 +268,7 @@ mod host {
         for (name, _) in SOCKETS {
             let path = file(&format!("{name}.sock"));
             qemu.arg("-serial")
-                .arg(format!("unix:{},server=on,wait=off", path.display()));
+                .arg(format!("unix:{},server=on,wait=on", path.display()));
         }
         if o.icount {
             qemu.args(["-icount", "shift=0"]);
@@ -315,6 +316,7 @@ mod host {
             Err(e) => Err(e.to_string()),
         };
         let until = Instant::now() + o.timeout;
+        let deadline = Instant::now() + Duration::from_secs(30);
         let ready = |h: &Arc<Mutex<Heard>>| h.lock().map(|h| h.ready).unwrap_or(0);
         while ready(&heard) == 0 {
             alive(child)?;
@@ -354,7 +356,12 @@ mod host {
         loop {
             alive(child)?;
             if Instant::now() > until {
-                return Err("timed out waiting for the image to parse every byte".into());
+                let h = heard.lock().map_err(|e| e.to_string())?;
+                let _ = std::fs::write(o.out.join("user.out"), &h.bytes);
+                return Err(format!(
+                    "timed out waiting for the image to parse every byte: sent {want:?}, parsed {:?} (its output so far in user.out)",
+                    h.parsed
+                ));
             }
             let (parsed, statuses) = {
                 let h = heard.lock().map_err(|e| e.to_string())?;

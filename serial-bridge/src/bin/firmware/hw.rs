@@ -20,14 +20,22 @@ pub const TICKS_PER_MS: u32 = CORE_HZ / 1000;
 pub static MS: AtomicU32 = AtomicU32::new(0);
 
 /// Core clock ticks since start, modulo 2^32 (25.6 s at 168 MHz): the millisecond count and
-/// SysTick's current value, read consistently.
+/// SysTick's current value, read consistently. SysTick may have wrapped without its handler
+/// having counted the millisecond yet (the exception is pending for a few instructions): a
+/// reload value read while it is pending belongs to the next millisecond.
 pub fn ticks() -> u32 {
     loop {
         let m1 = MS.load(Ordering::Acquire);
         let cvr = cortex_m::peripheral::SYST::get_current();
+        let pending = cortex_m::peripheral::SCB::is_pendst_pending();
         let m2 = MS.load(Ordering::Acquire);
         if m1 == m2 {
-            return m1
+            let ms = if pending && cvr > TICKS_PER_MS / 2 {
+                m1.wrapping_add(1)
+            } else {
+                m1
+            };
+            return ms
                 .wrapping_mul(TICKS_PER_MS)
                 .wrapping_add(TICKS_PER_MS.saturating_sub(1).saturating_sub(cvr));
         }
@@ -285,10 +293,15 @@ pub fn repaint_stack() {
     });
 }
 
+/// Stack the high-water scan looks at, bytes: twice the budget's share. A mark at this
+/// value means at least this much (the budget is then broken anyway); scanning no further
+/// keeps the once-a-second scan to a few thousand words instead of the whole RAM.
+pub const STACK_SCAN: usize = 16 * 1024;
+
 /// Peak stack use, bytes: from the top down to the lowest word no longer painted.
 pub fn stack_high_water() -> u32 {
     let (bottom, top) = stack_bounds();
-    let mut p = bottom;
+    let mut p = bottom.max(top.saturating_sub(STACK_SCAN));
     // SAFETY: every word in [bottom, top) is mapped RAM in the stack region.
     while p < top && unsafe { core::ptr::read_volatile(p as *const u32) } == PAINT {
         p += 4;
