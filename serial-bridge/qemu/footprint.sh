@@ -4,7 +4,9 @@
 # bearing and per fix, and the worst latency from a record's last byte to its fix sentence's
 # last byte.
 #
-# A capture (default: the bundled drive) goes through the image's USARTs (uart-replay.sh)
+# A capture (default: a 15-minute drive round an 800 m loop past an emitter, 900 bearings of
+# 2 degrees, written by `foxhunt simulate` from a scenario file made here: long enough that
+# the window fills and the fix runs at its steady cost) goes through the image's USARTs (uart-replay.sh)
 # under `-icount shift=0` (one instruction, one nanosecond: the image's SysTick ticks at
 # 168 MHz of that time are 0.168 per instruction) and the counting plugin (icount.c): once
 # whole, once without its bearings. Instructions per byte = the whole run's count over the
@@ -17,10 +19,19 @@
 #   bash serial-bridge/qemu/footprint.sh [CAPTURE] [SPEED]
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-capture=$(realpath "${1:-serial-bridge/captures/aoa-drive.nmea}")
-speed=${2:-10}
+speed=${2:-20}
 out=target/footprint
 mkdir -p "$out"
+if [ -n "${1:-}" ]; then
+  capture=$(realpath "$1")
+else
+  awk 'BEGIN { printf "name = \"loop900\"\nemitter = [1500.0, 1200.0]\nbearing_sigma_deg = 2.0\npoints = ["
+    for (k = 0; k < 900; k++) { a = k * 10 / 800; printf "%s[%.3f, %.3f]", (k ? ", " : ""), 800 * sin(a), 800 * (1 - cos(a)) }
+    print "]" }' > "$out/loop900.toml"
+  cargo run -q --profile ci -p foxhunt-sim -- simulate --scenario-file "$out/loop900.toml" \
+    --out "$out/loop900.nmea" --force > /dev/null
+  capture=$(realpath "$out/loop900.nmea")
+fi
 gcc -O2 -shared -fPIC -o "$out/libicount.so" serial-bridge/qemu/icount.c
 grep -av '^\$PFOXB' "$capture" > "$out/no-bearings.nmea" || true
 

@@ -8,7 +8,9 @@
 //! The image builds in its own target directory (target/firmware-test), so it does not wait on
 //! the lock of the `cargo test` that runs this.
 
+use foxhunt_bridge::agrelo::Agrelo;
 use foxhunt_bridge::geo::LocalFrame;
+use foxhunt_bridge::kraken::{ArrayType, KrakenCsv, KrakenXml, Station};
 use foxhunt_bridge::nmea::{
     Date, Line, Pfoxb, Reference, UtcTime, gga_body, pfoxb_body, rmc_body, write_sentence,
 };
@@ -172,6 +174,10 @@ struct Drive {
     seed: u64,
     /// Whether the GPS sends RMC besides GGA.
     rmc: bool,
+    /// Whether the DF line cycles through every format the bridge decodes (PFOXB, Agrelo
+    /// relative to the course, KrakenSDR XML and, one in ten, CSV with the unit's own
+    /// position and heading) instead of PFOXB alone.
+    formats: bool,
 }
 
 impl Drive {
@@ -214,19 +220,69 @@ impl Drive {
             let v = route(t + 0.5);
             let truth = (self.emitter[0] - v[0]).atan2(self.emitter[1] - v[1]);
             let noise = self.sigma_deg * f64::from(random::normal(&mut rng));
-            let b = Pfoxb {
-                time: UtcTime {
-                    ms_of_day: time.ms_of_day + 500,
-                },
-                azimuth_deg: (truth.to_degrees() + noise).rem_euclid(360.0),
-                reference: Reference::True,
-                quality: 90.0,
-                freq_mhz: 433.92,
-                position: None,
-            };
-            let mut line = Line::new();
-            pfoxb_body(&mut line, &b).expect("fits");
-            write_sentence(&mut out, &line).expect("string");
+            let azimuth = (truth.to_degrees() + noise).rem_euclid(360.0);
+            let relative = (azimuth - course).rem_euclid(360.0);
+            let epoch_ms =
+                1_780_000_000_000u64 / 86_400_000 * 86_400_000 + u64::from(time.ms_of_day) + 500;
+            let at = frame.to_geodetic(v).expect("position");
+            let kind = if self.formats { k % 4 } else { 0 };
+            match kind {
+                1 => {
+                    let a = Agrelo {
+                        bearing_deg: ((relative * 10.0).round() / 10.0) as f32,
+                        quality: 8,
+                        magnetic_deg: None,
+                    };
+                    a.emit(&mut out).expect("string");
+                    out.push_str("\r\n");
+                }
+                2 if k % 10 == 2 => {
+                    let c = KrakenCsv {
+                        epoch_ms,
+                        bearing_deg: relative as f32,
+                        confidence: 0.9,
+                        power_db: -48.5,
+                        freq_hz: 433_920_000,
+                        array: ArrayType::Uca,
+                        latency_ms: 100,
+                        station: Station::new("fox"),
+                        position: Some(at),
+                        heading_deg: course as f32,
+                    };
+                    c.emit(&[], &mut out).expect("string");
+                }
+                2 | 3 => {
+                    let x = KrakenXml {
+                        station: Station::new("fox"),
+                        time_ms: Some(epoch_ms),
+                        gps_time_ms: None,
+                        freq_mhz: Some(433.92),
+                        position: Some(at),
+                        heading_deg: Some(course as f32),
+                        speed_mps: Some(speed as f32),
+                        doa_deg: (360.0 - relative).rem_euclid(360.0) as f32,
+                        pwr: Some(60.0),
+                        conf: Some(90.0),
+                    };
+                    x.emit(&mut out).expect("string");
+                    out.push('\n');
+                }
+                _ => {
+                    let b = Pfoxb {
+                        time: UtcTime {
+                            ms_of_day: time.ms_of_day + 500,
+                        },
+                        azimuth_deg: azimuth,
+                        reference: Reference::True,
+                        quality: 90.0,
+                        freq_mhz: 433.92,
+                        position: None,
+                    };
+                    let mut line = Line::new();
+                    pfoxb_body(&mut line, &b).expect("fits");
+                    write_sentence(&mut out, &line).expect("string");
+                }
+            }
         }
         out.into_bytes()
     }
@@ -278,18 +334,21 @@ fn an_hour_keeps_updating_in_flat_memory_within_the_latency_budget() {
         emitter: [1500.0, 1200.0],
         sigma_deg: 2.0,
         seed: 11,
+        formats: false,
         rmc: false,
     };
     let capture = drive.capture(circle);
     // One instruction a nanosecond (-icount shift=0): the image's tick counts are then exact
     // instruction counts times 0.168 (SysTick at 168 MHz of virtual time).
-    // QEMU moves about 5 kB/s through one emulated USART under -icount: at 50 times real
-    // time the GPS line's 75 B/s (GGA alone) stays inside it (faster, its bytes would lag the
-    // DF line's until bearings wait longer than the bridge holds fixes).
-    let run = run_mcu("hour", &capture, 50.0, true);
+    // QEMU moves about 5 kB/s through one emulated USART under -icount: at 40 times real
+    // time the GPS line's 75 B/s (GGA alone) stays well inside it (faster, its bytes would lag
+    // the DF line's until bearings wait longer than the bridge holds fixes).
+    let run = run_mcu("hour", &capture, 40.0, true);
     let (unit, last, link) = check("hour", &run);
-    assert_eq!(link.fixes, 3600, "a fix after every bearing: {link:?}");
-    assert_eq!(link.bearings, 3600);
+    // A fix after every bearing but the last, which waits for a GPS fix after it that never
+    // comes (the capture ends).
+    assert_eq!(link.fixes, 3599, "a fix after every bearing: {link:?}");
+    assert_eq!(link.bearings, 3599);
     inside("hour", &unit, drive.emitter);
     let (all, _, _) = statuses(&run.user);
     // Flat memory: the stack's high-water mark a tenth of the way in is already the last.
@@ -322,6 +381,7 @@ fn parallel_bearings_and_a_stopped_vehicle_are_reported_then_recovered() {
         emitter: [6000.0, 4500.0],
         sigma_deg: 0.0,
         seed: 12,
+        formats: false,
         rmc: true,
     };
     let route = |t: f64| {
@@ -389,6 +449,7 @@ fn damaged_streams_cost_records_not_the_unit() {
         emitter: [1500.0, 1200.0],
         sigma_deg: 1.5,
         seed: 13,
+        formats: false,
         rmc: true,
     };
     let clean = drive.capture(circle);
@@ -421,12 +482,39 @@ fn damaged_streams_cost_records_not_the_unit() {
 }
 
 #[test]
+fn every_df_format_gives_the_hosts_fixes() {
+    let drive = Drive {
+        seconds: 240,
+        emitter: [1500.0, 1200.0],
+        sigma_deg: 1.5,
+        seed: 16,
+        rmc: true,
+        formats: true,
+    };
+    let run = run_mcu("formats", &drive.capture(circle), 20.0, false);
+    let (unit, _, link) = check("formats", &run);
+    // Every record but the first few Agrelo ones (no course held 3 s yet) and the last (its
+    // fix never comes) is a bearing.
+    assert!(link.bearings >= 230, "{link:?}");
+    let c = unit
+        .demux(foxhunt_bridge::unit::Port::Df)
+        .expect("port")
+        .counters();
+    assert!(
+        c.agrelo >= 55 && c.kraken_xml >= 80 && c.kraken_csv >= 20 && c.sentences >= 55,
+        "{c:?}"
+    );
+    inside("formats", &unit, drive.emitter);
+}
+
+#[test]
 fn reconfiguration_is_acknowledged_and_applied_alike() {
     let drive = Drive {
         seconds: 200,
         emitter: [1500.0, 1200.0],
         sigma_deg: 1.0,
         seed: 15,
+        formats: false,
         rmc: true,
     };
     let clean = drive.capture(circle);

@@ -54,8 +54,12 @@ mod app {
     use heapless::spsc::{Consumer, Producer, Queue};
     use stm32f4::stm32f405 as pac;
 
-    /// Receive queue slots (one is kept free by the queue).
-    const RX: usize = 257;
+    /// Receive queue slots of the GPS and DF lines (one is kept free by the queue): 53 ms of
+    /// 9600 baud, and room for QEMU's bursts (it delivers a port's bytes as fast as its main
+    /// loop runs, not at a baud rate).
+    const RX: usize = 513;
+    /// Receive queue slots of the ZigBee and user ports.
+    const RX_SMALL: usize = 257;
     /// Output queue slots.
     const TX: usize = 1025;
     /// Bytes the loop takes from a queue at once.
@@ -108,12 +112,12 @@ mod app {
     #[init(local = [
         q_gps: Queue<u8, RX> = Queue::new(),
         q_df: Queue<u8, RX> = Queue::new(),
-        q_zigbee: Queue<u8, RX> = Queue::new(),
-        q_user: Queue<u8, RX> = Queue::new(),
+        q_zigbee: Queue<u8, RX_SMALL> = Queue::new(),
+        q_user: Queue<u8, RX_SMALL> = Queue::new(),
         t_gps: Queue<u32, RX> = Queue::new(),
         t_df: Queue<u32, RX> = Queue::new(),
-        t_zigbee: Queue<u32, RX> = Queue::new(),
-        t_user: Queue<u32, RX> = Queue::new(),
+        t_zigbee: Queue<u32, RX_SMALL> = Queue::new(),
+        t_user: Queue<u32, RX_SMALL> = Queue::new(),
         q_out: Queue<u8, TX> = Queue::new(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
@@ -144,7 +148,10 @@ mod app {
         if let Some((cause, at)) = record {
             defmt::warn!("reset by {=u8} at {=u32:#x}", cause, at);
         }
-        let pair = |b: &'static mut Queue<u8, RX>, t: &'static mut Queue<u32, RX>| {
+        fn pair<const N: usize>(
+            b: &'static mut Queue<u8, N>,
+            t: &'static mut Queue<u32, N>,
+        ) -> (RxIn, RxOut) {
             let (bi, bo) = b.split();
             let (ti, to) = t.split();
             (
@@ -157,7 +164,7 @@ mod app {
                     ticks: to,
                 },
             )
-        };
+        }
         let l = cx.local;
         let (gps_in, gps_rx) = pair(l.q_gps, l.t_gps);
         let (df_in, df_rx) = pair(l.q_df, l.t_df);
