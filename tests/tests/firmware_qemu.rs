@@ -44,7 +44,11 @@ struct McuRun {
     steps: Vec<Step>,
 }
 
+/// One QEMU at a time: two would share the CPU and each deliver its bytes slower.
+static QEMU: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 fn run_mcu(name: &str, capture: &[u8], speed: f64, icount: bool) -> McuRun {
+    let _one = QEMU.lock().unwrap_or_else(|e| e.into_inner());
     let qemu = Command::new("qemu-system-arm").arg("--version").output();
     assert!(
         qemu.is_ok_and(|o| o.status.success()),
@@ -500,8 +504,10 @@ fn every_df_format_gives_the_hosts_fixes() {
         .demux(foxhunt_bridge::unit::Port::Df)
         .expect("port")
         .counters();
-    assert!(
-        c.agrelo >= 55 && c.kraken_xml >= 80 && c.kraken_csv >= 20 && c.sentences >= 55,
+    // 240 records: a quarter each PFOXB and Agrelo, CSV for k = 2 mod 20, XML for the rest.
+    assert_eq!(
+        (c.sentences, c.agrelo, c.kraken_csv, c.kraken_xml),
+        (60, 60, 12, 108),
         "{c:?}"
     );
     inside("formats", &unit, drive.emitter);

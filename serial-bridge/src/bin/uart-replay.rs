@@ -6,7 +6,9 @@
 //! (QEMU waits for the four connections before it starts the image, so the banner is never
 //! sent to a socket nobody holds), splits the capture into its ports' streams and sends each record at its own time (GPS and
 //! PFOXB sentence times, KrakenSDR epochs; a record without a time goes with the one before
-//! it), divided by `--speed`. It then waits until a `$PFOXL` sentence says every byte sent was
+//! it), divided by `--speed`. QEMU moves a port's bytes only as fast as its main loop runs
+//! (about 10 kB/s, 5 kB/s under `-icount`, less on a loaded machine): a speed that asks more of
+//! a line lets it lag the others. It then waits until a `$PFOXL` sentence says every byte sent was
 //! parsed, and one more status after that, stops QEMU (SIGTERM, so a plugin prints its count)
 //! and writes the user port's bytes, exactly, on stdout.
 //!
