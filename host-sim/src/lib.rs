@@ -3,6 +3,8 @@
 //! every method of the core's registry against the CRLB.
 #![deny(missing_docs)]
 
+pub mod calibration;
+pub mod capture;
 pub mod cmd;
 pub mod field;
 pub mod frames;

@@ -9,8 +9,9 @@
 //! When no byte comes for 100 ms the demultiplexer is told the line is idle (a frame waiting
 //! on look-ahead is delivered), and `--quiet-exit` counts from the last byte.
 
+use crate::capture::{Decoded, Decoder};
 use crate::io::{Out, Stop};
-use crate::locate::{Decoded, Decoder, LocateOptions, locate};
+use crate::locate::{LocateOptions, locate};
 use foxhunt_bridge::BridgeConfig;
 use std::io::{ErrorKind, Read};
 use std::sync::mpsc;
@@ -135,7 +136,7 @@ pub fn run(o: &LiveOptions, out: &mut Out) -> Result<Decoded, Stop> {
             // Bearings still waiting for a later fix are placed with the fixes there are.
             dec.end();
         }
-        let n = dec.decoded.bearings.len();
+        let n = dec.decoded.observations.len();
         if n > reported {
             reported = n;
             dec.snapshot();

@@ -2,9 +2,11 @@
 //! with its maps.
 
 use super::method;
+use crate::calibration::Calibration;
+use crate::capture::{Decoded, Decoder};
 use crate::io::{Out, Outcome, Outputs, Source, Stop, note, stream};
 use crate::live::{LiveOptions, LiveSource};
-use crate::locate::{Decoded, Decoder, LocateOptions, Located, PARTICLES, locate};
+use crate::locate::{LocateOptions, Located, PARTICLES, locate};
 use crate::maps;
 use foxhunt_bridge::BridgeConfig;
 use foxhunt_core::Method;
@@ -21,9 +23,21 @@ pub struct Args {
     /// Capture files (read in order as one stream), `-` for standard input (read live), or
     /// none for the bundled sample drive.
     pub captures: Vec<PathBuf>,
-    /// Fix method, by its registry name (ml-huber, ml, sir, sir-robust, gpf, ekf, afsa-pf, ...).
-    #[arg(long, default_value = "ml-huber", value_parser = method)]
+    /// Fix method, by its registry name: ml-robust (every emitter, offsets and consistency
+    /// checked), or one emitter by ml, ml-huber, sir, sir-robust, gpf, ekf, afsa-pf, ...
+    #[arg(long, default_value = "ml-robust", value_parser = method)]
     pub method: Method,
+    /// Bearings whose frequencies lie within this many MHz share a channel (one emitter
+    /// each).
+    #[arg(long, default_value_t = 0.05)]
+    pub channel_width_mhz: f32,
+    /// Measure the DF unit's mounting offset on a drive past a transmitter at LAT,LON (decimal
+    /// degrees) and save it to --calibration FILE, instead of locating.
+    #[arg(long, allow_hyphen_values = true, requires = "calibration")]
+    pub calibrate: Option<String>,
+    /// A calibration file: with --calibrate where to save it; otherwise the offset to apply.
+    #[arg(long)]
+    pub calibration: Option<PathBuf>,
     /// Particles of sequential methods (a compiled count).
     #[arg(long, default_value_t = PARTICLES)]
     pub particles: usize,
@@ -129,24 +143,40 @@ fn peak_bytes() -> u64 {
 /// Run `foxhunt locate`.
 pub fn run(a: &Args, out: &mut Out) -> Outcome {
     let started = Instant::now();
+    let calibrating = a.calibrate.is_some();
+    let offset = match (&a.calibration, calibrating) {
+        (Some(f), false) => Some(Calibration::load(f)?.prior()),
+        _ => None,
+    };
     let options = LocateOptions {
         method: a.method,
         particles: a.particles,
         sigma_deg: a.sigma_deg,
         seed: a.seed,
+        offset,
+        channel_width_mhz: a.channel_width_mhz,
     };
     options.check()?;
     let quiet = quiet_exit(a)?;
     let input = input(a)?;
+    if calibrating && matches!(input, Input::Live(_)) {
+        return Err("--calibrate reads a recorded drive, not a live line".into());
+    }
     if quiet.is_some() && !matches!(input, Input::Live(_)) {
         return Err("--quiet-exit applies to a live line (--baud, or -)".into());
     }
     // Refuse every output that would destroy an input before reading anything.
-    let inputs: Vec<&Path> = a.captures.iter().map(PathBuf::as_path).collect();
+    let mut inputs: Vec<&Path> = a.captures.iter().map(PathBuf::as_path).collect();
+    if !calibrating {
+        inputs.extend(a.calibration.as_deref());
+    }
     let outputs = Outputs::new(inputs, false);
     let paths = map_paths(a);
     for p in paths.iter().flatten() {
         outputs.check(p, true)?;
+    }
+    if let (Some(f), true) = (&a.calibration, calibrating) {
+        outputs.check(f, true)?;
     }
     let keep_track = paths.iter().any(Option::is_some);
     let decoded = match input {
@@ -176,6 +206,17 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
             return finish(a, &d, started);
         }
     };
+    if let (Some(target), Some(file)) = (&a.calibrate, &a.calibration) {
+        let c = Calibration::measure(&decoded, target)?;
+        outputs.write(file, c.to_toml().as_bytes(), true)?;
+        let text = if a.json {
+            serde_json::to_string(&c).map_err(|e| e.to_string())?
+        } else {
+            c.text()
+        };
+        out.line(text.trim_end())?;
+        return finish(a, &decoded, started);
+    }
     let l = locate(&decoded, &options)?;
     write_maps(&l, &decoded, &paths, &outputs)?;
     if a.json {
@@ -211,7 +252,7 @@ fn finish(a: &Args, d: &Decoded, started: Instant) -> Outcome {
     if a.stats {
         note(&format!(
             "stats: bearings {}, seconds {:.3}, peak_bytes {}",
-            d.bearings.len(),
+            d.observations.len(),
             started.elapsed().as_secs_f64(),
             peak_bytes()
         ));
