@@ -694,28 +694,9 @@ pub const BENCH_METHODS: [Method; 6] = [
 /// Particles of the particle methods in the field bench (what `locate` uses).
 const BENCH_PARTICLES: usize = 1000;
 
-/// A field-bench row with the fields every row shares.
+/// A field-bench row with nothing measured yet.
 fn row(label: &str, method: Method, runs: usize) -> Row {
-    Row {
-        scenario: label.to_string(),
-        method: method.name().to_string(),
-        particles: method.uses_particles().then_some(BENCH_PARTICLES),
-        runs,
-        rmse: None,
-        rel_x: None,
-        rel_y: None,
-        crlb: None,
-        ratio: None,
-        time_s: 0.0,
-        evaluations: 0.0,
-        failures: 0,
-        coverage: None,
-        cep50_share: None,
-        found: None,
-        beyond_3_sigma: None,
-        note: None,
-        paper: None,
-    }
+    Row::new(label.to_string(), method, BENCH_PARTICLES, runs)
 }
 
 /// The pipeline's rows for a condition: one per true emitter.
@@ -782,52 +763,47 @@ type Judged = (f64, bool, bool, bool, f64);
 fn method_row(c: Condition, m: Method, runs: usize) -> Row {
     let label = format!("field/{}", c.name());
     let t = std::time::Instant::now();
-    let outcomes: Vec<Option<Judged>> =
-        crate::montecarlo::pool().install(|| {
-            (0..runs)
-                .into_par_iter()
-                .map(|run| {
-                    let d = simulate(c, run);
-                    let bearings: Vec<Bearing> = d.observations.iter().map(|o| o.bearing).collect();
-                    let mut rng = XorShiftRng::seed_from_u64(run as u64);
-                    let (f, _) = crate::runs::with_estimated_noise(
-                        m,
-                        BENCH_PARTICLES,
-                        0.0,
-                        &bearings,
-                        false,
-                        &mut rng,
-                    )
-                    .ok()?;
-                    let Some(t) = d.emitters.iter().min_by(|a, b| {
-                        let da =
-                            (a.position[0] - f.position[0]).hypot(a.position[1] - f.position[1]);
-                        let db =
-                            (b.position[0] - f.position[0]).hypot(b.position[1] - f.position[1]);
-                        da.total_cmp(&db)
-                    }) else {
-                        // No emitter at all (pure noise): any fix is a wrong one.
-                        return Some((f64::NAN, false, false, true, f64::NAN));
-                    };
-                    let m = mahalanobis(&f.covariance, &f.position, &t.position)
-                        .unwrap_or(f32::INFINITY);
-                    let error =
-                        (f.position[0] - t.position[0]).hypot(f.position[1] - t.position[1]);
-                    let bound =
-                        bias::crlb(&t.position, &truth_geometry(&d, t), BiasPrior::default())
-                            .map(|b| b.rmse as f64)
-                            .unwrap_or(f64::INFINITY);
-                    Some((
-                        error as f64,
-                        m * m <= f.ellipse_scale,
-                        error <= f.cep50,
-                        // Beyond the 99.73 % region of a chi-square(2) ellipse: m^2 > 11.83.
-                        m * m > 11.829,
-                        bound,
-                    ))
-                })
-                .collect()
-        });
+    let outcomes: Vec<Option<Judged>> = crate::montecarlo::pool().install(|| {
+        (0..runs)
+            .into_par_iter()
+            .map(|run| {
+                let d = simulate(c, run);
+                let bearings: Vec<Bearing> = d.observations.iter().map(|o| o.bearing).collect();
+                let mut rng = XorShiftRng::seed_from_u64(run as u64);
+                let (f, _) = crate::runs::with_estimated_noise(
+                    m,
+                    BENCH_PARTICLES,
+                    0.0,
+                    &bearings,
+                    false,
+                    &mut rng,
+                )
+                .ok()?;
+                let Some(t) = d.emitters.iter().min_by(|a, b| {
+                    let da = (a.position[0] - f.position[0]).hypot(a.position[1] - f.position[1]);
+                    let db = (b.position[0] - f.position[0]).hypot(b.position[1] - f.position[1]);
+                    da.total_cmp(&db)
+                }) else {
+                    // No emitter at all (pure noise): any fix is a wrong one.
+                    return Some((f64::NAN, false, false, true, f64::NAN));
+                };
+                let m =
+                    mahalanobis(&f.covariance, &f.position, &t.position).unwrap_or(f32::INFINITY);
+                let error = (f.position[0] - t.position[0]).hypot(f.position[1] - t.position[1]);
+                let bound = bias::crlb(&t.position, &truth_geometry(&d, t), BiasPrior::default())
+                    .map(|b| b.rmse as f64)
+                    .unwrap_or(f64::INFINITY);
+                Some((
+                    error as f64,
+                    m * m <= f.ellipse_scale,
+                    error <= f.cep50,
+                    // Beyond the 99.73 % region of a chi-square(2) ellipse: m^2 > 11.83.
+                    m * m > 11.829,
+                    bound,
+                ))
+            })
+            .collect()
+    });
     let mut r = row(&label, m, runs);
     r.time_s = t.elapsed().as_secs_f64() / runs.max(1) as f64;
     let ok: Vec<_> = outcomes.iter().flatten().collect();

@@ -19,7 +19,6 @@ use foxhunt_core::fix::consistency::check_cloud;
 use foxhunt_core::fix::crlb::crlb;
 use foxhunt_core::fix::ellipse::{Ellipse, cep50};
 use foxhunt_core::fix::locate::{ChannelOutcome, LocateConfig, NoEmitter, NoiseModel, Source};
-use foxhunt_core::model::bearing::{predicted, wrap};
 use foxhunt_core::{Bearing, Error, Method};
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
@@ -378,31 +377,6 @@ fn no_emitter(why: NoEmitter, n: u32, bearings: &[Bearing]) -> String {
         ),
         NoEmitter::Geometry(e) => format!("no consistent emitter: {}", explain(e, bearings)),
     }
-}
-
-/// Bearing noise from the residuals at `p`: a MAD scale (1.4826 x median |r|) finds the
-/// inliers (within 3 of it), whose RMS over n - 2 degrees of freedom, corrected for the
-/// truncation (a Gaussian cut at 3 sigma keeps 0.9733 of its variance), is the estimate: about
-/// 9 % standard error at 60 bearings against the MAD's 15 %. At least 0.05 degrees.
-pub fn estimate_sigma(bearings: &[Bearing], p: &[f32; 2]) -> f32 {
-    let floor = 0.05f32.to_radians();
-    let mut r: Vec<f32> = bearings
-        .iter()
-        .map(|b| wrap(b.theta - predicted(p, &b.vehicle)).abs())
-        .filter(|r| r.is_finite())
-        .collect();
-    if r.len() < 3 {
-        return 1.0f32.to_radians();
-    }
-    let mid = r.len() / 2;
-    let (_, median, _) = r.select_nth_unstable_by(mid, f32::total_cmp);
-    let mad = (1.4826 * *median).max(floor);
-    let inliers: Vec<f32> = r.into_iter().filter(|x| *x <= 3.0 * mad).collect();
-    if inliers.len() < 3 {
-        return mad;
-    }
-    let ss: f64 = inliers.iter().map(|x| f64::from(x * x)).sum();
-    ((ss / (inliers.len() - 2) as f64 / 0.9733).sqrt() as f32).max(floor)
 }
 
 /// The geodetic position of local metres `p` in `frame` (the origin when out of range).

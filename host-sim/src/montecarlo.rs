@@ -205,26 +205,9 @@ enum Error {
 fn measure(s: &Scenario, m: Method, n: usize, bound: Option<f64>, p: &Progress) -> Row {
     let label = s.label(n);
     p.set_label(&format!("{label} {}", m.name()));
-    let mut row = Row {
-        scenario: label,
-        method: m.name().to_string(),
-        particles: m.uses_particles().then_some(n),
-        runs: s.runs,
-        rmse: None,
-        rel_x: None,
-        rel_y: None,
-        crlb: bound,
-        ratio: None,
-        time_s: 0.0,
-        evaluations: 0.0,
-        failures: 0,
-        coverage: None,
-        cep50_share: None,
-        found: None,
-        beyond_3_sigma: None,
-        note: None,
-        paper: s.paper(m, n).map(str::to_string),
-    };
+    let mut row = Row::new(label, m, n, s.runs);
+    row.crlb = bound;
+    row.paper = s.paper(m, n).map(str::to_string);
     if let Some(why) = not_run(m, n) {
         row.note = Some(why);
         for _ in 0..s.runs {

@@ -56,6 +56,36 @@ pub struct Row {
 }
 
 impl Row {
+    /// A row of `method` at `particles` (shown only for particle methods) over `runs`, with
+    /// nothing measured yet.
+    pub fn new(
+        scenario: String,
+        method: foxhunt_core::Method,
+        particles: usize,
+        runs: usize,
+    ) -> Self {
+        Self {
+            scenario,
+            method: method.name().to_string(),
+            particles: method.uses_particles().then_some(particles),
+            runs,
+            rmse: None,
+            rel_x: None,
+            rel_y: None,
+            crlb: None,
+            ratio: None,
+            time_s: 0.0,
+            evaluations: 0.0,
+            failures: 0,
+            coverage: None,
+            cep50_share: None,
+            found: None,
+            beyond_3_sigma: None,
+            note: None,
+            paper: None,
+        }
+    }
+
     /// The row's note, or the failures counted in words.
     fn remark(&self) -> String {
         match (&self.note, self.failures) {
