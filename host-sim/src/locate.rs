@@ -458,16 +458,26 @@ fn located_by_pipeline(
     frame: &LocalFrame,
     rejected: &mut BTreeMap<&'static str, u32>,
 ) -> Result<Parts, String> {
-    let mut obs = d.observations.clone();
-    if let Some(s) = o.sigma_deg {
-        for x in obs.iter_mut() {
-            x.bearing.sigma = s.to_radians();
-        }
-    }
-    let bearings: Vec<Bearing> = obs.iter().map(|x| x.bearing).collect();
+    // A copy only when the user's noise replaces the bearings' own: a long capture's
+    // observations are most of the memory.
+    let obs: std::borrow::Cow<'_, [_]> = match o.sigma_deg {
+        None => std::borrow::Cow::Borrowed(&d.observations),
+        Some(s) => std::borrow::Cow::Owned(
+            d.observations
+                .iter()
+                .map(|x| {
+                    let mut x = *x;
+                    x.bearing.sigma = s.to_radians();
+                    x
+                })
+                .collect(),
+        ),
+    };
+    // The bearings alone, for the words of an error.
+    let bearings = || -> Vec<Bearing> { obs.iter().map(|x| x.bearing).collect() };
     let r: Pipeline = crate::montecarlo::pool()
         .install(|| pipeline(&obs, &o.config(), o.seed))
-        .map_err(|e| explain(e, &bearings))?;
+        .map_err(|e| explain(e, &bearings()))?;
     let rj = &r.rejected;
     for (k, v) in [
         ("outlier", rj.outliers),
@@ -486,6 +496,7 @@ fn located_by_pipeline(
             ChannelOutcome::Emitter(_) => "emitter".to_string(),
             ChannelOutcome::NoConsistentEmitter(why) => {
                 // A vehicle that never moved, or bearings that never cross, say so plainly.
+                let bearings = bearings();
                 let geometry = match foxhunt_core::fix::ple::ple(&bearings) {
                     Err(e @ (Error::StationaryVehicle | Error::ParallelBearings)) => {
                         Some(explain(e, &bearings))
