@@ -53,15 +53,19 @@ enum Command {
     ///   foxhunt frames drive.nmea | grep pfoxb
     #[command(verbatim_doc_comment)]
     Frames(cmd::frames::Args),
-    /// Write a capture as the radios would send it (GGA + RMC + PFOXB for a drive; for
+    /// Write a capture as the radios would send it (a drive in a DF unit's format; for
     /// rssi-sim and rssi-lab, AF_INCOMING_MSG frames and an anchors file).
     ///
-    /// The route's first point lies at --origin (default 47.0,8.0) and is the capture's local
-    /// origin. The GPS reports each route point at a whole second, the DF unit half a second
-    /// later; a drive past midnight rolls the date.
+    /// Drive formats (--format): pfoxb (GGA + RMC + $PFOXB true bearings, the default),
+    /// agrelo (GGA + RMC + HDT + %BBB/Q relative bearings), kraken-csv and kraken-xml
+    /// (KrakenSDR records with their own position and heading, no NMEA). The route's first
+    /// point lies at --origin (default 47.0,8.0) and is the capture's local origin. The GPS
+    /// reports each route point at a whole second, the PFOXB unit half a second later; a drive
+    /// past midnight rolls the date.
     ///
     /// Examples:
     ///   foxhunt simulate --scenario aoa-drive --out drive.nmea
+    ///   foxhunt simulate --scenario aoa-drive --format kraken-csv --out mydata.csv
     ///   foxhunt simulate --scenario aoa-drive --bias-deg 4 --wild 0.1 --out biased.nmea
     ///   foxhunt simulate --scenario-file my.toml --origin 53.35,-6.26 --out my.nmea
     ///   foxhunt simulate --scenario rssi-sim --out lab.znp --anchors-out lab.toml
