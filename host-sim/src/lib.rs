@@ -6,8 +6,10 @@
 pub mod cmd;
 pub mod field;
 pub mod frames;
+pub mod gpsd;
 pub mod indoor;
 pub mod io;
+pub mod kraken_http;
 pub mod live;
 pub mod locate;
 pub mod maps;

@@ -266,6 +266,13 @@ impl Decoder {
         self.decoded.stream = *s;
         self.decoded.bridge = *b;
     }
+
+    /// Take one NMEA sentence body (no `$`, checksum or line end) as if it had come on the
+    /// line: how gpsd's positions and headings reach the bridge, between the line's bytes.
+    pub fn push_sentence(&mut self, body: &str) {
+        let (d, keep) = (&mut self.decoded, self.keep_track);
+        push(&mut self.rx.bridge, &Frame::Nmea(body), d, keep);
+    }
 }
 
 fn absorb(d: &mut Decoded, e: Event, keep_track: bool) {
