@@ -17,11 +17,13 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Locate the emitter of a drive (NMEA GGA/RMC + $PFOXB bearings).
+    /// Locate the emitter of a drive (NMEA GPS and heading sentences with $PFOXB, Agrelo or
+    /// KrakenSDR bearings).
     ///
     /// With no CAPTURE, locates the bundled sample drive (made by `foxhunt simulate
     /// --scenario aoa-drive`). `-` reads standard input live: a fix line per update as the
-    /// bytes arrive, as with --baud. Maps are written only where asked (--maps PREFIX, or
+    /// bytes arrive, as with --baud. --gpsd takes positions and heading from a running gpsd
+    /// beside such a live line; --kraken polls a KrakenSDR's web page instead of a line. Maps are written only where asked (--maps PREFIX, or
     /// --geojson/--kml/--svg), never onto an input. Exit status: 0 with a fix, 1 when the
     /// capture gives none (the message says why), 2 on a usage error.
     ///
@@ -32,6 +34,8 @@ enum Command {
     ///   foxhunt locate drive.nmea --method sir-robust --geojson fix.geojson
     ///   cat /dev/ttyUSB0 | foxhunt locate - --sigma-deg 2
     ///   foxhunt locate /dev/ttyUSB0 --baud 4800 --quiet-exit 30
+    ///   foxhunt locate /dev/ttyUSB0 --baud 4800 --gpsd       # positions, heading from gpsd
+    ///   foxhunt locate --kraken http://192.168.1.20:8081     # a KrakenSDR on the network
     #[command(verbatim_doc_comment)]
     Locate(cmd::locate::Args),
     /// Track a ZigBee node indoors from a coordinator's capture (AF_INCOMING_MSG frames).
