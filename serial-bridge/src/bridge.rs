@@ -638,7 +638,7 @@ impl<const A: usize> Bridge<A> {
             }
         }
         self.turn_source = source;
-        if self.turns.is_full() {
+        if self.turns.is_full() && !self.turns.is_empty() {
             self.turns.remove(0);
         }
         let _ = self.turns.push(Stamped { deg, time_ms });
@@ -843,7 +843,9 @@ impl<const A: usize> Bridge<A> {
             if thin == 0 {
                 self.dropped = true;
             }
-            self.fixes.remove(thin);
+            if thin < self.fixes.len() {
+                self.fixes.remove(thin);
+            }
         }
         // Room was made above, so this cannot fail.
         let _ = self.fixes.push(fix);
