@@ -133,6 +133,13 @@ impl Decoder {
         self.decoded
     }
 
+    /// Take one NMEA sentence body (no `$`, checksum or line end) as if it had come on the
+    /// line: how gpsd's positions and headings reach the bridge, between the line's bytes.
+    pub fn push_sentence(&mut self, body: &str) {
+        let (d, keep) = (&mut self.decoded, self.keep_track);
+        push(&mut self.rx.bridge, &Frame::Nmea(body), d, keep);
+    }
+
     /// Bring the frame and counters up to date (before a fix is computed mid-stream).
     pub fn snapshot(&mut self) {
         self.decoded.frame = self.rx.bridge.local_frame().copied();

@@ -251,6 +251,8 @@ fn rejections(d: &Decoded) -> BTreeMap<&'static str, u32> {
         ("no_bearing", b.no_bearing),
         ("no_fix", b.no_fix),
         ("stale_fix", b.stale_fix),
+        ("late", b.late),
+        ("turning", b.turning),
         ("outlier", 0),
         ("repeated", 0),
         ("time_backwards", 0),
@@ -301,6 +303,11 @@ fn no_bearing(d: &Decoded) -> String {
     reason(
         b.stale_fix,
         "with no GPS fix within the allowed gap of their time",
+    );
+    reason(b.late, "older than the GPS fixes kept");
+    reason(
+        b.turning,
+        "taken while the vehicle turned faster than the yaw-rate gate",
     );
     format!(
         "no usable bearing: of {} bearing records, {}",

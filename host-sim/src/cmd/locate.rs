@@ -4,7 +4,9 @@
 use super::method;
 use crate::calibration::Calibration;
 use crate::capture::{Decoded, Decoder};
+use crate::gpsd::GpsdAddress;
 use crate::io::{Out, Outcome, Outputs, Source, Stop, note, stream};
+use crate::kraken_http::KrakenUrl;
 use crate::live::{LiveOptions, LiveSource};
 use crate::locate::{LocateOptions, Located, PARTICLES, locate};
 use crate::maps;
@@ -74,6 +76,21 @@ pub struct Args {
     /// Print `stats: bearings N, seconds S, peak_bytes B` on stderr at the end.
     #[arg(long)]
     pub stats: bool,
+    /// Live: positions (TPV) and heading (ATT) from a running gpsd, while the bearings come
+    /// from the serial device (--baud) or standard input (-): `--gpsd` for localhost:2947,
+    /// or `--gpsd=HOST[:PORT]`.
+    #[arg(
+        long,
+        value_name = "HOST[:PORT]",
+        num_args = 0..=1,
+        require_equals = true,
+        default_missing_value = ""
+    )]
+    pub gpsd: Option<String>,
+    /// Live: poll a KrakenSDR about twice a second, `http://HOST:8081` (its DOA_value.html,
+    /// else doa.xml) or the URL of either page; no CAPTURE.
+    #[arg(long, value_name = "URL")]
+    pub kraken: Option<String>,
 }
 
 /// Where the maps go: (path, named on the command line).
@@ -97,9 +114,34 @@ enum Input {
     Sample,
     Files(Vec<Source>),
     Live(LiveSource),
+    /// A live line of bearings with gpsd beside it.
+    Gpsd(LiveSource, GpsdAddress),
+    /// A KrakenSDR's web page (and perhaps gpsd).
+    Kraken(KrakenUrl, Option<GpsdAddress>),
 }
 
 fn input(a: &Args) -> Result<Input, String> {
+    let gpsd = a.gpsd.as_deref().map(GpsdAddress::parse).transpose()?;
+    if let Some(url) = &a.kraken {
+        if !a.captures.is_empty() || a.baud.is_some() {
+            return Err("--kraken reads the unit's web page: give no CAPTURE and no --baud".into());
+        }
+        return Ok(Input::Kraken(KrakenUrl::parse(url)?, gpsd));
+    }
+    if let Some(g) = gpsd {
+        return match line_input(a)? {
+            Input::Live(source) => Ok(Input::Gpsd(source, g)),
+            _ => Err(
+                "--gpsd gives positions beside a live line of bearings: a serial device \
+                      with --baud, or - for standard input"
+                    .into(),
+            ),
+        };
+    }
+    line_input(a)
+}
+
+fn line_input(a: &Args) -> Result<Input, String> {
     match (a.baud, a.captures.as_slice()) {
         (Some(baud), [path]) => Ok(Input::Live(LiveSource::Serial {
             path: path.to_string_lossy().into_owned(),
@@ -159,10 +201,11 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
     options.check()?;
     let quiet = quiet_exit(a)?;
     let input = input(a)?;
-    if calibrating && matches!(input, Input::Live(_)) {
+    let live = matches!(input, Input::Live(_) | Input::Gpsd(..) | Input::Kraken(..));
+    if calibrating && live {
         return Err("--calibrate reads a recorded drive, not a live line".into());
     }
-    if quiet.is_some() && !matches!(input, Input::Live(_)) {
+    if quiet.is_some() && !live {
         return Err("--quiet-exit applies to a live line (--baud, or -)".into());
     }
     // Refuse every output that would destroy an input before reading anything.
@@ -190,9 +233,16 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
             stream(&sources, |b| dec.feed(b))?;
             dec.finish()
         }
-        Input::Live(source) => {
+        Input::Live(_) | Input::Gpsd(..) | Input::Kraken(..) => {
+            let (source, gpsd) = match input {
+                Input::Gpsd(source, g) => (source, Some(g)),
+                Input::Kraken(url, g) => (LiveSource::Kraken(url), g),
+                Input::Live(source) => (source, None),
+                Input::Sample | Input::Files(_) => (LiveSource::Stdin, None),
+            };
             let o = LiveOptions {
                 source,
+                gpsd,
                 quiet_exit: quiet,
                 locate: options,
                 json: a.json,

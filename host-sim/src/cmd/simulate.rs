@@ -3,7 +3,7 @@
 use crate::indoor::simulate_capture;
 use crate::io::{Outcome, Outputs, note};
 use crate::scenario::{NAMES, Scenario, ScenarioModel};
-use crate::simulate::{CaptureOptions, drive_capture};
+use crate::simulate::{CaptureFormat, CaptureOptions, drive_capture};
 use foxhunt_bridge::nmea::{Date, LatLon, UtcTime};
 use std::path::PathBuf;
 
@@ -51,6 +51,18 @@ pub struct Args {
     /// Drives: share of bytes dropped after writing.
     #[arg(long)]
     pub drop: Option<f32>,
+    /// Drives: the DF unit's record format: pfoxb (GGA + RMC + $PFOXB, the default), agrelo
+    /// (GGA + RMC + HDT + %BBB/Q relative bearings), kraken-csv or kraken-xml (KrakenSDR
+    /// records with their own position and heading).
+    #[arg(long)]
+    pub format: Option<String>,
+}
+
+fn format(text: &str) -> Result<CaptureFormat, String> {
+    CaptureFormat::from_name(text).ok_or_else(|| {
+        let names: Vec<&str> = CaptureFormat::ALL.iter().map(|f| f.name()).collect();
+        format!("--format `{text}` is not one of {}", names.join(", "))
+    })
 }
 
 fn start(text: &str) -> Result<UtcTime, String> {
@@ -133,6 +145,7 @@ pub fn run(a: &Args) -> Outcome {
                 ("origin", a.origin.is_some()),
                 ("start", a.start.is_some()),
                 ("date", a.date.is_some()),
+                ("format", a.format.is_some()),
             ];
             if let Some((name, _)) = drive_only.iter().find(|(_, given)| *given) {
                 return Err(format!(
@@ -180,12 +193,16 @@ pub fn run(a: &Args) -> Outcome {
             if let Some(text) = &a.date {
                 o.date = date(text)?;
             }
+            if let Some(text) = &a.format {
+                o.format = format(text)?;
+            }
             let bytes = drive_capture(&scenario, &o)?;
             outputs.write(&a.out, &bytes, true)?;
             note(&format!(
-                "{} bytes, {} bearings; the route's first point at {:.6},{:.6}",
+                "{} bytes, {} {} bearings; the route's first point at {:.6},{:.6}",
                 bytes.len(),
                 d.route.len(),
+                o.format.name(),
                 o.origin.lat,
                 o.origin.lon
             ));
