@@ -347,6 +347,20 @@ fn pure_noise_is_no_consistent_emitter() {
     let sim = foxhunt(&["simulate", "--out", c, "--wild", "1.0"]);
     assert!(sim.status.success(), "{}", stderr(&sim));
     refused(&foxhunt(&["locate", c]), &["no consistent emitter"]);
+    // The field condition of the same name, and the multipath one with its ghost.
+    let sim = foxhunt(&["simulate", "--condition", "pure-noise", "--out", c]);
+    assert!(sim.status.success(), "{}", stderr(&sim));
+    refused(&foxhunt(&["locate", c]), &["no consistent emitter"]);
+    let sim = foxhunt(&["simulate", "--condition", "multipath", "--out", c]);
+    assert!(sim.status.success(), "{}", stderr(&sim));
+    let out = foxhunt(&["locate", c, "--json"]);
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(r["emitters"].as_array().map(Vec::len), Some(1), "{r}");
+    assert!(r["other_sources"][0]["why"].is_string(), "{r}");
+    refused(
+        &foxhunt(&["simulate", "--condition", "nowhere", "--out", c]),
+        &["unknown field condition", "multipath"],
+    );
 }
 
 #[test]

@@ -16,6 +16,11 @@ pub struct Args {
     /// A scenario file (TOML).
     #[arg(long)]
     pub scenario_file: Option<PathBuf>,
+    /// A field condition instead (see `bench --scenario field`): bias-2deg, multipath,
+    /// two-emitters, correlated-5hz, pure-noise, few-bearings, ...; GGA fixes and $PFOXB
+    /// bearings carrying their own position and frequency.
+    #[arg(long, conflicts_with_all = ["scenario_file", "format", "wild", "bias_deg"])]
+    pub condition: Option<String>,
     /// Where to write the capture.
     #[arg(long)]
     pub out: PathBuf,
@@ -122,6 +127,9 @@ fn origin(text: &str) -> Result<LatLon, String> {
 
 /// Run `foxhunt simulate`.
 pub fn run(a: &Args) -> Outcome {
+    if let Some(name) = &a.condition {
+        return field(a, name);
+    }
     let scenario = match &a.scenario_file {
         Some(path) => Scenario::load(path)?,
         None => Scenario::named(&a.scenario).ok_or_else(|| {
@@ -208,5 +216,40 @@ pub fn run(a: &Args) -> Outcome {
             ));
         }
     }
+    Ok(())
+}
+
+/// `simulate --condition NAME`: one run of a field condition as a capture.
+fn field(a: &Args, name: &str) -> Outcome {
+    let c = crate::field::condition(name).ok_or_else(|| {
+        let names: Vec<&str> = crate::field::Condition::ALL
+            .iter()
+            .map(|c| c.name())
+            .collect();
+        format!(
+            "unknown field condition `{name}`; known: {}",
+            names.join(", ")
+        )
+    })?;
+    let origin = match &a.origin {
+        Some(text) => origin(text)?,
+        None => crate::simulate::DEFAULT_ORIGIN,
+    };
+    let outputs = Outputs::new(std::iter::empty(), a.force);
+    let (bytes, truths) = crate::field::capture(c, a.run, origin)?;
+    outputs.write(&a.out, &bytes, true)?;
+    let at: Vec<String> = truths
+        .iter()
+        .map(|t| format!("({:.0}, {:.0}) m", t.position[0], t.position[1]))
+        .collect();
+    note(&format!(
+        "{} bytes; emitters at {} from the route's first point",
+        bytes.len(),
+        if at.is_empty() {
+            "none".into()
+        } else {
+            at.join(", ")
+        }
+    ));
     Ok(())
 }
