@@ -6,6 +6,7 @@
 pub mod cmd;
 pub mod field;
 pub mod frames;
+pub mod guidance;
 pub mod indoor;
 pub mod io;
 pub mod live;
@@ -14,6 +15,7 @@ pub mod maps;
 pub mod montecarlo;
 pub mod perf;
 pub mod report;
+pub mod roads;
 pub mod runs;
 pub mod scenario;
 pub mod simulate;

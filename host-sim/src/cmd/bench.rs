@@ -97,6 +97,16 @@ fn header(s: &Scenario) -> String {
 
 /// Run `foxhunt bench`.
 pub fn run(a: &Args, out: &mut Out) -> Outcome {
+    if a.scenario_file.is_none() && a.scenario.starts_with("guidance") {
+        return crate::guidance::bench::bench(
+            &a.scenario,
+            a.runs,
+            a.json,
+            a.markdown,
+            a.quiet,
+            out,
+        );
+    }
     let list = scenarios(a)?;
     if !(a.progress_secs >= 0.0 && a.progress_secs.is_finite()) {
         return Err(format!(
