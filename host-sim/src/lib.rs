@@ -18,5 +18,6 @@ pub mod report;
 pub mod roads;
 pub mod runs;
 pub mod scenario;
+pub mod serve;
 pub mod simulate;
 pub mod tracking;

@@ -155,6 +155,17 @@ pub struct Advice {
     pub on_roads: bool,
 }
 
+/// A model angle (radians counter-clockwise from east) as an azimuth in [0, 360) degrees
+/// clockwise from north, rounded to 0.1 degree (so -0.01 degrees is 0, not 360).
+pub fn azimuth_deg(theta: f32) -> f32 {
+    let a = ((90.0 - theta.to_degrees()) * 10.0).round() / 10.0;
+    a.rem_euclid(360.0) % 360.0
+}
+
+fn whole_degrees(azimuth: f32) -> i32 {
+    (azimuth.round() as i32).rem_euclid(360)
+}
+
 /// The circular mean of the last `n` bearings' angles.
 pub fn averaged_bearing(bearings: &[Bearing], n: usize) -> Option<f32> {
     let tail = &bearings[bearings.len().saturating_sub(n)..];
@@ -368,7 +379,7 @@ impl Advice {
             })
             .unwrap_or_else(|| vec!["fix"]);
         AdviceReport {
-            heading_deg: (90.0 - self.heading.to_degrees()).rem_euclid(360.0),
+            heading_deg: azimuth_deg(self.heading),
             waypoint: self.waypoint,
             turn: self.turn,
             reason: self.reason.name(),
@@ -391,7 +402,7 @@ impl Advice {
         }
         let mv = match self.turn {
             Some(t) => format!(
-                "at the next junction {} ({:+.0} deg), then head {:.0} deg",
+                "at the next junction {} ({:+.0} deg), then head {} deg",
                 match t.kind {
                     TurnKind::Straight => "go straight",
                     TurnKind::Left => "turn left",
@@ -399,9 +410,9 @@ impl Advice {
                     TurnKind::UTurn => "turn back",
                 },
                 t.angle_deg,
-                r.heading_deg
+                whole_degrees(r.heading_deg)
             ),
-            None => format!("head {:.0} deg", r.heading_deg),
+            None => format!("head {} deg", whole_degrees(r.heading_deg)),
         };
         format!(
             "{mv}: {} (missing: {})",
@@ -443,6 +454,8 @@ mod tests {
         // Not straight on: across the line of bearing.
         assert!(a.heading.cos().abs() > 0.3, "{}", a.heading.to_degrees());
         assert!(a.report().missing == vec!["fix"] && !a.line().is_empty());
+        assert_eq!(azimuth_deg(PI / 2.0 + 1e-4), 0.0);
+        assert_eq!(azimuth_deg(0.0), 90.0);
         assert!(
             advise(
                 &Situation { bearings: &[], ..s },
