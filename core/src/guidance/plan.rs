@@ -222,11 +222,16 @@ impl<R: Reach> Search<'_, R> {
                     .sum::<f32>()
                     / n
             }
-            // Reaching beats not reaching (scores above 1e6 against below 0); sooner is better.
-            Objective::Goal { .. } => match reached_s {
-                Some(t) => 1e6 - t,
-                None => -libm::logf(cep50_m.max(1e-3)),
-            },
+            // Reaching beats not reaching (scores near 1e6 against below 100); sooner is
+            // better. Short of the target, the smaller final CEP50 wins; between sequences that
+            // reach it at the same sample, too (its weight keeps it under a second).
+            Objective::Goal { .. } => {
+                let info = -libm::logf(cep50_m.max(1e-3));
+                match reached_s {
+                    Some(t) => 1e6 - t + 0.05 * info,
+                    None => info,
+                }
+            }
         };
         Outcome {
             score,
@@ -253,6 +258,7 @@ impl<R: Reach> Search<'_, R> {
             }
             let left = self.options.horizon_s - elapsed;
             let cut = leg.seconds > left;
+            let whole = leg;
             let leg = if cut {
                 leg.part(left / leg.seconds)
             } else {
@@ -276,9 +282,10 @@ impl<R: Reach> Search<'_, R> {
             if depth == 0 {
                 let better = self.best.as_ref().is_none_or(|c| o.score > c.score);
                 if better && o.score.is_finite() {
+                    // The whole first move: the state is at its end, wherever the horizon cut.
                     self.best = Some(Choice {
                         state: next,
-                        leg,
+                        leg: whole,
                         score: o.score,
                         reached_s: o.reached_s,
                         cep50_m: o.cep50_m,

@@ -8,14 +8,16 @@
 //! - `greedy-d`, `greedy-a`: the free heading (16 directions, 300 m) with the largest one-step
 //!   D- or A-optimal gain;
 //! - `lookahead`: the core planner's earliest-to-target sequence over a horizon (60 s of free
-//!   headings; on roads 150 s of reachable road segments).
+//!   headings; on roads 150 s, at most 8 segments, of reachable road segments), planned to
+//!   [`PLAN_TARGET_SHARE`] of the goal.
 //!
 //! On a road network every policy but `lookahead` picks the road out of the junction nearest
 //! its free heading: the free-heading greedy policies "forced onto roads". `lookahead` scores
 //! the reachable road segments themselves.
 
+use super::bench::GOAL_M;
 use super::reach::{OnRoad, Roads};
-use super::{Situation, averaged_bearing, median_sigma, situation_beliefs};
+use super::{PLAN_TARGET_SHARE, Situation, averaged_bearing, median_sigma, situation_beliefs};
 use crate::roads::RoadGraph;
 use foxhunt_core::guidance::plan::{FreeHeadings, Leg, Objective, PlanOptions, Pose, plan};
 use foxhunt_core::model::bearing::wrap;
@@ -158,7 +160,9 @@ fn free_heading(p: Policy, d: &Decision<'_>) -> Option<f32> {
         Policy::Lookahead => {
             let (b, n) = situation_beliefs(s).ok()?;
             let options = PlanOptions {
-                objective: Objective::Goal { target_m: 100.0 },
+                objective: Objective::Goal {
+                    target_m: PLAN_TARGET_SHARE * GOAL_M,
+                },
                 depth: 3,
                 horizon_s: 3.0 * OPEN_LEG_M / OPEN_SPEED,
                 rate_hz: 1.0,
@@ -199,7 +203,9 @@ pub fn decide(p: Policy, d: &Decision<'_>) -> Option<Move> {
                     let sigma = median_sigma(d.situation.bearings)?;
                     let (b, n) = situation_beliefs(&d.situation).ok()?;
                     let options = PlanOptions {
-                        objective: Objective::Goal { target_m: 100.0 },
+                        objective: Objective::Goal {
+                            target_m: PLAN_TARGET_SHARE * GOAL_M,
+                        },
                         depth: 8,
                         horizon_s: 150.0,
                         rate_hz: 1.0,
