@@ -61,6 +61,7 @@ pub use model::biased::BiasedEmitter;
 pub use model::rssi::{PathLoss, RssiMeasurement, RssiTracker};
 pub use model::ungm::{Ungm, UngmObservation};
 pub mod fix;
+pub mod guidance;
 
 pub use fix::Fix;
 pub mod filter;

@@ -96,6 +96,18 @@ enum Command {
     /// Example: foxhunt perf --runs 20 --scale
     #[command(verbatim_doc_comment)]
     Perf(cmd::perf::Args),
+    /// A live map in the browser: route, bearings, every emitter and other source with its
+    /// ellipse, the suggested move and the CEP50 history, pushed as the input is decoded.
+    ///
+    /// Replays capture files (paced) or reads standard input (`-`) as it arrives. Roads from an
+    /// OpenStreetMap extract (--roads, .osm.pbf or OSM XML) are the basemap, so it works
+    /// offline, and make the advice a road turn; online tiles are optional (--tiles).
+    ///
+    /// Examples:
+    ///   foxhunt serve serial-bridge/captures/aoa-drive.nmea      # then open http://127.0.0.1:8080/
+    ///   cat /dev/ttyUSB0 | foxhunt serve - --roads area.osm.pbf
+    #[command(verbatim_doc_comment)]
+    Serve(cmd::serve::Args),
 }
 
 fn main() -> ExitCode {
@@ -108,6 +120,7 @@ fn main() -> ExitCode {
         Command::Simulate(a) => cmd::simulate::run(a),
         Command::Bench(a) => cmd::bench::run(a, &mut out),
         Command::Perf(a) => cmd::perf::run(a, &mut out),
+        Command::Serve(a) => cmd::serve::run(a),
     }
     .and_then(|()| out.flush());
     match result {

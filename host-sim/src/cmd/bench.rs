@@ -145,6 +145,16 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
         let rows = crate::field::bench(&conditions, a.runs.unwrap_or(100));
         return print(a, &rows, out);
     }
+    if a.scenario_file.is_none() && a.scenario.starts_with("guidance") {
+        return crate::guidance::bench::bench(
+            &a.scenario,
+            a.runs,
+            a.json,
+            a.markdown,
+            a.quiet,
+            out,
+        );
+    }
     let list = scenarios(a)?;
     if !(a.progress_secs >= 0.0 && a.progress_secs.is_finite()) {
         return Err(format!(
