@@ -57,6 +57,8 @@ pub enum Method {
     Ml,
     /// Huber maximum likelihood.
     MlHuber,
+    /// The field pipeline: robust, bias-aware, consistency-checked ML per channel.
+    MlRobust,
 }
 
 /// What a filter is built on.
@@ -70,6 +72,9 @@ pub enum Base {
     Ekf,
     /// A batch fix over all bearings at once (no particles, no steps).
     Batch,
+    /// The field pipeline ([`crate::fix::locate`]): emitters per channel, other sources and
+    /// consistency, from bearings with their times; it needs working storage lent to it.
+    Pipeline,
 }
 
 /// The swarm move between prediction and weighting.
@@ -167,7 +172,7 @@ const fn spec(
 }
 
 /// Every estimator, in table order ([`Method::spec`] indexes it by the enum's order).
-const SPECS: [Spec; 16] = {
+const SPECS: [Spec; 17] = {
     use Base as B;
     use Loss as L;
     use SwarmMove as S;
@@ -316,12 +321,21 @@ const SPECS: [Spec; 16] = {
             TUNED,
             false,
         ),
+        spec(
+            "ml-robust",
+            "the field pipeline: RANSAC start, Tukey then trimmed ML over position and the DF unit's offset, noise estimated, consistency checked, F-scaled ellipses, one emitter per channel and other sources",
+            B::Pipeline,
+            S::None,
+            L::Huber,
+            TUNED,
+            false,
+        ),
     ]
 };
 
 impl Method {
     /// Every method, in table order.
-    pub const ALL: [Method; 16] = [
+    pub const ALL: [Method; 17] = [
         Method::SirSeed,
         Method::Sir,
         Method::SirRobust,
@@ -338,6 +352,7 @@ impl Method {
         Method::Wiv,
         Method::Ml,
         Method::MlHuber,
+        Method::MlRobust,
     ];
 
     /// What the method is made of.
@@ -368,7 +383,7 @@ impl Method {
 
     /// Whether it steps through the bearings one at a time (particle filters and the EKF).
     pub const fn is_sequential(self) -> bool {
-        !matches!(self.spec().base, Base::Batch)
+        matches!(self.spec().base, Base::Sir | Base::Gpf | Base::Ekf)
     }
 }
 
@@ -439,7 +454,13 @@ where
             Gaussian,
             Gsa::default(),
         )),
-        Method::Ekf | Method::Ple | Method::BcPle | Method::Wiv | Method::Ml | Method::MlHuber => {
+        Method::Ekf
+        | Method::Ple
+        | Method::BcPle
+        | Method::Wiv
+        | Method::Ml
+        | Method::MlHuber
+        | Method::MlRobust => {
             return Err(Error::Unsupported);
         }
     })
@@ -467,7 +488,9 @@ where
     }
 }
 
-/// A batch method's fix over all `bearings`; sequential methods: [`Error::Unsupported`].
+/// A batch method's fix over all `bearings`; sequential methods and the pipeline (which needs
+/// working storage and reports several sources: [`crate::fix::locate::locate`]):
+/// [`Error::Unsupported`].
 pub fn batch_fix(method: Method, bearings: &[Bearing]) -> Result<Fix, Error> {
     match method {
         Method::Ple => ple::ple(bearings),

@@ -7,6 +7,33 @@
 //! No entry point panics on any input. The entry points that return a `Result` never return NaN
 //! either: bad input gives an [`Error`] instead. Plain numeric helpers (a likelihood's `ln`, a
 //! `wrap` of an angle) pass non-finite input through; their callers check first.
+//!
+//! Every estimator has one name in [`estimator`] (the registry that builds it); batch fixes
+//! live in [`fix`], the recursive filters in [`filter`], the bounds beside them.
+//!
+//! ```
+//! use foxhunt_core::fix::{crlb::crlb, ellipse::Ellipse, ml::{MlOptions, ml}};
+//! use foxhunt_core::model::bearing::{Bearing, predicted};
+//! use foxhunt_core::Gaussian;
+//!
+//! // A vehicle drives east then north past an emitter 1.2 km east, 800 m north; its DF unit
+//! // reports each bearing 1 degree off, alternately left and right.
+//! let emitter = [1200.0f32, 800.0];
+//! let sigma = 1.0f32.to_radians();
+//! let bearings: Vec<Bearing> = (0..60)
+//!     .map(|k| {
+//!         let v = if k < 30 { [10.0 * k as f32, 0.0] } else { [290.0, 10.0 * (k - 29) as f32] };
+//!         let noise = if k % 2 == 0 { sigma } else { -sigma };
+//!         Bearing { vehicle: v, theta: predicted(&emitter, &v) + noise, sigma }
+//!     })
+//!     .collect();
+//! let fix = ml(&bearings, None, &Gaussian, MlOptions::default())?;
+//! let bound = crlb(&fix.position, &bearings)?;
+//! let ellipse = Ellipse::from_covariance(&fix.covariance, 0.95)?;
+//! assert!(ellipse.contains(&fix.position, &emitter));
+//! assert!(bound.rmse > 10.0 && bound.rmse < 200.0);
+//! # Ok::<(), foxhunt_core::Error>(())
+//! ```
 #![no_std]
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
@@ -34,6 +61,7 @@ pub use model::biased::BiasedEmitter;
 pub use model::rssi::{PathLoss, RssiMeasurement, RssiTracker};
 pub use model::ungm::{Ungm, UngmObservation};
 pub mod fix;
+pub mod guidance;
 
 pub use fix::Fix;
 pub mod filter;

@@ -18,16 +18,15 @@
 //!   vehicle plus noise, turned into the local frame of the drive's start by the meridian
 //!   convergence (what the bridge does; `uncorrected` leaves it out, as it did before).
 
+use crate::report::Row;
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;
-use foxhunt_core::Error;
 use foxhunt_core::fix::bias::{self, BiasPrior};
 use foxhunt_core::fix::ellipse::mahalanobis;
-use foxhunt_core::fix::locate::{
-    Buffers, ChannelOutcome, Item, LocateConfig, Observation, Report, Source, locate,
-};
+use foxhunt_core::fix::locate::{ChannelOutcome, LocateConfig, Observation, Report, Source};
 use foxhunt_core::model::bearing::{Bearing, predicted, wrap};
 use foxhunt_core::random;
+use foxhunt_core::{Error, Method};
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 use rayon::prelude::*;
@@ -35,10 +34,10 @@ use std::f32::consts::PI;
 
 const DEG: f32 = PI / 180.0;
 
-/// Channels and other sources a field report holds at most.
-pub const CHANNELS: usize = 8;
+/// Channels a field report holds at most (the host pipeline's).
+pub const CHANNELS: usize = 16;
 /// Other sources a field report holds at most.
-pub const OTHERS: usize = 8;
+pub const OTHERS: usize = 16;
 
 /// A simulated field condition.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -444,6 +443,8 @@ pub struct RunOutcome {
     pub ghost_reported: bool,
     /// The emitter's reported offset, radians.
     pub bias: f32,
+    /// The truth lies within the reported CEP50.
+    pub within_cep50: bool,
 }
 
 /// The observations' geometry at the truth with the true noise: the bound's input.
@@ -465,14 +466,7 @@ pub fn run_locate(
     config: &LocateConfig,
     seed: u64,
 ) -> Result<Report<CHANNELS, OTHERS>, Error> {
-    let n = d.observations.len();
-    let mut items = vec![Item::EMPTY; n];
-    let mut scratch = vec![Item::EMPTY; n];
-    let mut order = vec![0u32; n];
-    let mut tags = vec![0u8; n];
-    let mut rng = XorShiftRng::seed_from_u64(seed);
-    let work = Buffers::new(&mut items, &mut scratch, &mut order, &mut tags);
-    locate::<CHANNELS, OTHERS, _>(&d.observations, config, work, &mut rng)
+    crate::runs::pipeline(&d.observations, config, seed)
 }
 
 /// The emitter reported for the channel of truth `t`.
@@ -538,6 +532,7 @@ pub fn judge(
                         bound,
                         ghost_reported,
                         bias: s.bias,
+                        within_cep50: error <= s.cep50,
                     }
                 }
                 None => RunOutcome {
@@ -548,6 +543,7 @@ pub fn judge(
                     bound,
                     ghost_reported,
                     bias: f32::NAN,
+                    within_cep50: false,
                 },
             }
         })
@@ -584,6 +580,8 @@ pub struct EmitterSummary {
     pub bound: f64,
     /// Mean reported offset, degrees.
     pub mean_bias_deg: f64,
+    /// Of the found runs, those with the truth within the reported CEP50.
+    pub within_cep50: usize,
 }
 
 impl EmitterSummary {
@@ -618,6 +616,7 @@ pub fn measure(condition: Condition, runs: usize, config: &LocateConfig) -> Summ
                 rmse: 0.0,
                 bound: 0.0,
                 mean_bias_deg: 0.0,
+                within_cep50: 0,
             };
             let mut sq = 0.0f64;
             let mut bound_sq = 0.0f64;
@@ -630,6 +629,7 @@ pub fn measure(condition: Condition, runs: usize, config: &LocateConfig) -> Summ
                     s.beyond_3_sigma += (o.tail < THREE_SIGMA_TAIL) as usize;
                     sq += (o.error as f64).powi(2);
                     s.mean_bias_deg += (o.bias / DEG) as f64;
+                    s.within_cep50 += o.within_cep50 as usize;
                 }
             }
             s.rmse = (sq / s.found.max(1) as f64).sqrt();
@@ -677,4 +677,264 @@ impl std::fmt::Display for Summary {
         }
         Ok(())
     }
+}
+
+/// The estimators the field bench compares: the pipeline, and for context the plain fixes and
+/// filters a user could ask `locate` for (run as `locate` runs them: noise estimated from the
+/// residuals, no offset, one emitter from all bearings).
+pub const BENCH_METHODS: [Method; 6] = [
+    Method::MlRobust,
+    Method::Ml,
+    Method::MlHuber,
+    Method::SirRobust,
+    Method::Gpf,
+    Method::Ekf,
+];
+
+/// Particles of the particle methods in the field bench (what `locate` uses).
+const BENCH_PARTICLES: usize = 1000;
+
+/// A field-bench row with nothing measured yet.
+fn row(label: &str, method: Method, runs: usize) -> Row {
+    Row::new(label.to_string(), method, BENCH_PARTICLES, runs)
+}
+
+/// The pipeline's rows for a condition: one per true emitter.
+fn pipeline_rows(c: Condition, runs: usize) -> Vec<Row> {
+    let t = std::time::Instant::now();
+    let config = LocateConfig::default();
+    let s = measure(c, runs, &config);
+    let seconds = t.elapsed().as_secs_f64() / runs.max(1) as f64;
+    let label = format!("field/{}", c.name());
+    let mut note = Vec::new();
+    if c == Condition::Multipath {
+        note.push(format!(
+            "ghost reported as another source in {} of {runs}",
+            s.ghost_reported
+        ));
+    }
+    if s.per_emitter.is_empty() {
+        let mut r = row(&label, Method::MlRobust, runs);
+        r.found = Some((runs - s.no_emitter) as f64 / runs.max(1) as f64);
+        r.time_s = seconds;
+        r.note = Some(format!(
+            "no consistent emitter in {} of {runs} runs (there is none)",
+            s.no_emitter
+        ));
+        return vec![r];
+    }
+    let several = s.per_emitter.len() > 1;
+    s.per_emitter
+        .iter()
+        .enumerate()
+        .map(|(i, e)| {
+            let label = if several {
+                format!("{label}#{}", i + 1)
+            } else {
+                label.clone()
+            };
+            let mut r = row(&label, Method::MlRobust, runs);
+            let found = e.found.max(1) as f64;
+            r.found = Some(e.found as f64 / runs.max(1) as f64);
+            r.time_s = seconds;
+            if e.found > 0 {
+                r.rmse = Some(e.rmse);
+                r.coverage = Some(e.covered as f64 / found);
+                r.cep50_share = Some(e.within_cep50 as f64 / found);
+                r.beyond_3_sigma = Some(e.beyond_3_sigma);
+            }
+            r.crlb = Some(e.bound).filter(|b| b.is_finite());
+            r.ratio = r.rmse.zip(r.crlb).map(|(e, b)| e / b);
+            r.failures = runs - e.found;
+            let mut n = note.clone();
+            n.push(format!("mean offset {:.2} deg", e.mean_bias_deg));
+            r.note = Some(n.join("; "));
+            r
+        })
+        .collect()
+}
+
+/// One plain-method run judged: error (m; NaN with no truth), inside the 95 % ellipse, within
+/// CEP50, beyond 3 sigma, the bias-aware bound (m).
+type Judged = (f64, bool, bool, bool, f64);
+
+/// A plain method's row for a condition: one fix from all bearings, judged against the
+/// nearest true emitter.
+fn method_row(c: Condition, m: Method, runs: usize) -> Row {
+    let label = format!("field/{}", c.name());
+    let t = std::time::Instant::now();
+    let outcomes: Vec<Option<Judged>> = crate::montecarlo::pool().install(|| {
+        (0..runs)
+            .into_par_iter()
+            .map(|run| {
+                let d = simulate(c, run);
+                let bearings: Vec<Bearing> = d.observations.iter().map(|o| o.bearing).collect();
+                let mut rng = XorShiftRng::seed_from_u64(run as u64);
+                let (f, _) = crate::runs::with_estimated_noise(
+                    m,
+                    BENCH_PARTICLES,
+                    0.0,
+                    &bearings,
+                    false,
+                    &mut rng,
+                )
+                .ok()?;
+                let Some(t) = d.emitters.iter().min_by(|a, b| {
+                    let da = (a.position[0] - f.position[0]).hypot(a.position[1] - f.position[1]);
+                    let db = (b.position[0] - f.position[0]).hypot(b.position[1] - f.position[1]);
+                    da.total_cmp(&db)
+                }) else {
+                    // No emitter at all (pure noise): any fix is a wrong one.
+                    return Some((f64::NAN, false, false, true, f64::NAN));
+                };
+                let m =
+                    mahalanobis(&f.covariance, &f.position, &t.position).unwrap_or(f32::INFINITY);
+                let error = (f.position[0] - t.position[0]).hypot(f.position[1] - t.position[1]);
+                let bound = bias::crlb(&t.position, &truth_geometry(&d, t), BiasPrior::default())
+                    .map(|b| b.rmse as f64)
+                    .unwrap_or(f64::INFINITY);
+                Some((
+                    error as f64,
+                    m * m <= f.ellipse_scale,
+                    error <= f.cep50,
+                    // Beyond the 99.73 % region of a chi-square(2) ellipse: m^2 > 11.83.
+                    m * m > 11.829,
+                    bound,
+                ))
+            })
+            .collect()
+    });
+    let mut r = row(&label, m, runs);
+    r.time_s = t.elapsed().as_secs_f64() / runs.max(1) as f64;
+    let ok: Vec<_> = outcomes.iter().flatten().collect();
+    r.failures = runs - ok.len();
+    r.found = Some(ok.len() as f64 / runs.max(1) as f64);
+    let judged: Vec<_> = ok.iter().filter(|o| o.0.is_finite()).collect();
+    if judged.is_empty() {
+        if !ok.is_empty() {
+            r.note = Some(format!(
+                "a fix in {} of {runs} runs where there is no emitter: the method cannot say so",
+                ok.len()
+            ));
+        }
+        return r;
+    }
+    let k = judged.len() as f64;
+    r.rmse = Some((judged.iter().map(|o| o.0 * o.0).sum::<f64>() / k).sqrt());
+    r.coverage = Some(judged.iter().filter(|o| o.1).count() as f64 / k);
+    r.cep50_share = Some(judged.iter().filter(|o| o.2).count() as f64 / k);
+    r.beyond_3_sigma = Some(judged.iter().filter(|o| o.3).count());
+    let bound = (judged.iter().map(|o| o.4 * o.4).sum::<f64>() / k).sqrt();
+    r.crlb = Some(bound).filter(|b| b.is_finite());
+    r.ratio = r.rmse.zip(r.crlb).map(|(e, b)| e / b);
+    if c == Condition::TwoEmitters {
+        r.note = Some("one fix for two emitters, judged against the nearer".into());
+    }
+    r
+}
+
+/// The field bench: every condition of `conditions`, the pipeline and the plain methods, over
+/// `runs` seeded runs each.
+pub fn bench(conditions: &[Condition], runs: usize) -> Vec<Row> {
+    let mut rows = Vec::new();
+    for &c in conditions {
+        rows.extend(pipeline_rows(c, runs));
+        for &m in BENCH_METHODS.iter().skip(1) {
+            rows.push(method_row(c, m, runs));
+        }
+    }
+    rows
+}
+
+/// A condition by name (`Condition::name`).
+pub fn condition(name: &str) -> Option<Condition> {
+    Condition::ALL.into_iter().find(|c| c.name() == name)
+}
+
+/// A field condition's run written as the bytes a DF unit and its GPS would send: per bearing a
+/// GGA fix at the vehicle and a `$PFOXB` carrying its own position, time and frequency
+/// (433.920 MHz where the condition has none), the route's first point at `origin`. The truths
+/// come back in the capture's local frame (origin: that first point). The long drives are
+/// simulated on the ellipsoid with the convergence already turned out and are not written; on
+/// the others (a few km) the meridians' convergence between the vehicle and the origin is
+/// under 0.05 degrees and is left in.
+pub fn capture(
+    condition: Condition,
+    run: usize,
+    origin: LatLon,
+) -> Result<(Vec<u8>, Vec<Truth>), String> {
+    use foxhunt_bridge::nmea::{Gga, Pfoxb, Reference, UtcTime, write_sentence};
+    use foxhunt_core::model::bearing::theta_to_azimuth;
+    if matches!(
+        condition,
+        Condition::Long47 | Condition::Long70 | Condition::Long70Uncorrected
+    ) {
+        return Err(format!(
+            "`{}` is simulated on the ellipsoid and is not written as a capture",
+            condition.name()
+        ));
+    }
+    let d = simulate(condition, run);
+    let start = d
+        .observations
+        .first()
+        .map(|o| o.bearing.vehicle)
+        .ok_or("the condition made no bearings")?;
+    let frame = LocalFrame::new(origin, 0.0).map_err(|_| "origin out of range".to_string())?;
+    let geo = |p: [f32; 2]| {
+        frame
+            .to_geodetic([f64::from(p[0] - start[0]), f64::from(p[1] - start[1])])
+            .map_err(|_| "a route point is out of range".to_string())
+    };
+    // 10:00:00 UTC, the bearings' own times after it.
+    let time = |t: f32| UtcTime {
+        ms_of_day: 36_000_000 + (f64::from(t) * 1000.0).round() as u32,
+    };
+    let mut out = String::new();
+    let mut line = String::new();
+    for o in &d.observations {
+        let position = geo(o.bearing.vehicle)?;
+        let fix = Gga {
+            talker: *b"GP",
+            time: time(o.time_s),
+            position,
+            quality: Some(1),
+            satellites: Some(9),
+            hdop: Some(0.9),
+            altitude_m: Some(0.0),
+        };
+        let bearing = Pfoxb {
+            time: time(o.time_s),
+            azimuth_deg: f64::from(theta_to_azimuth(o.bearing.theta).to_degrees()) % 360.0,
+            reference: Reference::True,
+            quality: 80.0,
+            freq_mhz: f64::from(o.freq_mhz.unwrap_or(433.92)),
+            position: Some(position),
+        };
+        for body in [
+            {
+                line.clear();
+                fix.emit(&mut line).map_err(|_| "a GGA did not format")?;
+                line.clone()
+            },
+            {
+                line.clear();
+                bearing
+                    .emit(&mut line)
+                    .map_err(|_| "a PFOXB did not format")?;
+                line.clone()
+            },
+        ] {
+            write_sentence(&mut out, &body).map_err(|_| "a sentence did not format")?;
+        }
+    }
+    let truths = d
+        .emitters
+        .iter()
+        .map(|t| Truth {
+            position: [t.position[0] - start[0], t.position[1] - start[1]],
+            freq_mhz: t.freq_mhz,
+        })
+        .collect();
+    Ok((out.into_bytes(), truths))
 }

@@ -8,9 +8,17 @@
 //! gets one per batch, so a replayed hour of bearings costs a few solves, not one per bearing.
 //! When no byte comes for 100 ms the demultiplexer is told the line is idle (a frame waiting
 //! on look-ahead is delivered), and `--quiet-exit` counts from the last byte.
+//!
+//! The bearings' line may be a KrakenSDR's web page ([`crate::kraken_http`]: its new whole
+//! records are the line's bytes), and positions and headings may come from gpsd beside it
+//! ([`crate::gpsd`]: its reports become sentences pushed into the same bridge between the
+//! line's chunks). Either way only new bearings make an update line.
 
-use crate::io::{Out, Stop};
-use crate::locate::{Decoded, Decoder, LocateOptions, locate};
+use crate::capture::{Decoded, Decoder};
+use crate::gpsd::{GpsdAddress, Report, Watch};
+use crate::io::{Out, Stop, note};
+use crate::kraken_http::KrakenUrl;
+use crate::locate::{LocateOptions, locate};
 use foxhunt_bridge::BridgeConfig;
 use std::io::{ErrorKind, Read};
 use std::sync::mpsc;
@@ -28,6 +36,8 @@ pub enum LiveSource {
     },
     /// Standard input.
     Stdin,
+    /// A KrakenSDR's web server, polled.
+    Kraken(KrakenUrl),
 }
 
 /// How to read a live line.
@@ -35,6 +45,8 @@ pub enum LiveSource {
 pub struct LiveOptions {
     /// The line.
     pub source: LiveSource,
+    /// A gpsd giving positions and headings beside the line.
+    pub gpsd: Option<GpsdAddress>,
     /// Stop after this long without a byte (`None`: read until the line closes).
     pub quiet_exit: Option<Duration>,
     /// How fixes are computed.
@@ -48,6 +60,8 @@ pub struct LiveOptions {
 /// A read's outcome, sent from the reader thread.
 enum Chunk {
     Bytes(Vec<u8>),
+    /// Sentence bodies from gpsd.
+    Sentences(Vec<String>),
     End,
     Failed(String),
 }
@@ -55,9 +69,62 @@ enum Chunk {
 /// How long a read waits before the line counts as idle.
 const IDLE: Duration = Duration::from_millis(100);
 
-/// Start the thread that reads the line.
-fn reader(source: &LiveSource) -> Result<mpsc::Receiver<Chunk>, String> {
+/// Start the thread that polls a KrakenSDR: each poll's new records are a chunk.
+fn kraken(url: &KrakenUrl, tx: mpsc::SyncSender<Chunk>) -> Result<(), String> {
+    let url = url.clone();
+    std::thread::Builder::new()
+        .name("foxhunt-kraken".into())
+        .spawn(move || {
+            crate::kraken_http::poll(
+                &url,
+                |p| p.records.is_empty() || tx.send(Chunk::Bytes(p.records)).is_ok(),
+                note,
+            )
+        })
+        .map(|_| ())
+        .map_err(|e| format!("cannot start the KrakenSDR poller: {e}"))
+}
+
+/// Connect to gpsd (an error now is the command's error) and start the thread that reads it.
+fn gpsd(addr: &GpsdAddress, tx: mpsc::SyncSender<Chunk>) -> Result<(), String> {
+    let watch = Watch::connect(addr)?;
+    let name = addr.to_string();
+    std::thread::Builder::new()
+        .name("foxhunt-gpsd".into())
+        .spawn(move || {
+            let (mut malformed, mut open) = (0u32, true);
+            let r = watch.run(|r| match r {
+                Report::Sentences(v) => {
+                    open = tx.send(Chunk::Sentences(v)).is_ok();
+                    open
+                }
+                Report::Malformed => {
+                    malformed += 1;
+                    true
+                }
+                Report::NoFix | Report::Other => true,
+            });
+            if open {
+                let why = r.err().unwrap_or_else(|| "closed the connection".into());
+                note(&format!(
+                    "gpsd at {name}: {why}; no more positions from it ({malformed} malformed \
+                     reports skipped)"
+                ));
+            }
+        })
+        .map(|_| ())
+        .map_err(|e| format!("cannot start the gpsd reader: {e}"))
+}
+
+/// Start the threads that read the line (and gpsd).
+fn reader(
+    source: &LiveSource,
+    gpsd_at: Option<&GpsdAddress>,
+) -> Result<mpsc::Receiver<Chunk>, String> {
     let (tx, rx) = mpsc::sync_channel::<Chunk>(16);
+    if let Some(addr) = gpsd_at {
+        gpsd(addr, tx.clone())?;
+    }
     let (mut port, name): (Box<dyn Read + Send>, String) = match source {
         LiveSource::Serial { path, baud } => (
             serialport::new(path, *baud)
@@ -67,6 +134,10 @@ fn reader(source: &LiveSource) -> Result<mpsc::Receiver<Chunk>, String> {
             path.clone(),
         ),
         LiveSource::Stdin => (Box::new(std::io::stdin()), "standard input".into()),
+        LiveSource::Kraken(url) => {
+            kraken(url, tx)?;
+            return Ok(rx);
+        }
     };
     std::thread::Builder::new()
         .name("foxhunt-line".into())
@@ -100,7 +171,7 @@ fn reader(source: &LiveSource) -> Result<mpsc::Receiver<Chunk>, String> {
 /// decoded, for the final report.
 pub fn run(o: &LiveOptions, out: &mut Out) -> Result<Decoded, Stop> {
     o.locate.check()?;
-    let rx = reader(&o.source)?;
+    let rx = reader(&o.source, o.gpsd.as_ref())?;
     let mut dec = Decoder::new(BridgeConfig::default(), o.keep_track);
     let mut last_byte = Instant::now();
     let mut reported = 0usize;
@@ -113,6 +184,11 @@ pub fn run(o: &LiveOptions, out: &mut Out) -> Result<Decoded, Stop> {
                 Ok(Chunk::Bytes(b)) => {
                     last_byte = Instant::now();
                     dec.feed(&b);
+                }
+                Ok(Chunk::Sentences(v)) => {
+                    for s in &v {
+                        dec.push_sentence(s);
+                    }
                 }
                 Ok(Chunk::End) | Err(mpsc::RecvTimeoutError::Disconnected) => {
                     ended = true;
@@ -135,7 +211,7 @@ pub fn run(o: &LiveOptions, out: &mut Out) -> Result<Decoded, Stop> {
             // Bearings still waiting for a later fix are placed with the fixes there are.
             dec.end();
         }
-        let n = dec.decoded.bearings.len();
+        let n = dec.decoded.observations.len();
         if n > reported {
             reported = n;
             dec.snapshot();

@@ -1,20 +1,24 @@
-//! `foxhunt locate`: the emitter's position from a drive's bytes.
+//! `foxhunt locate`: every emitter of a drive, with honest uncertainty.
 //!
-//! The bytes go through the serial bridge (the same code as the firmware) into bearings in
-//! local metres, streamed in chunks so memory is bounded by the bearings kept (16 bytes each),
-//! never by the capture; a fix method of the core's registry turns them into a position with
-//! its covariance, the 95 % ellipse and CEP50; the CRLB of the drive's geometry says how good
-//! any unbiased fix could be. Bearing noise is estimated from the fix's residuals unless the
-//! user gives it, so the ellipse is honest about the DF unit actually used.
+//! The default estimator, `ml-robust`, is the core's field pipeline
+//! ([`foxhunt_core::fix::locate`]): bearings grouped into channels by frequency; in each, the
+//! point most bearings agree on (a robust search, then a redescending and trimmed ML over the
+//! position and the DF unit's mounting offset), its consistency checked (pure noise is "no
+//! consistent emitter", not a fix), its ellipse scaled for an estimated noise and correlated
+//! bearings; bearings that agree on another point (a reflection, a second transmitter) come
+//! out as other sources. Any other estimator of the registry can be asked for by name: it
+//! gives one emitter from all bearings, with the bearing noise estimated from its residuals
+//! unless given, and no offset.
 
-use crate::runs::locate_bearings;
-use foxhunt_bridge::bridge::{BridgeConfig, BridgeCounters, Event, Receiver, VehicleFix};
+use crate::capture::Decoded;
+use crate::runs::{Pipeline, locate_bearings, pipeline, with_estimated_noise};
 use foxhunt_bridge::geo::LocalFrame;
-use foxhunt_bridge::stream::StreamCounters;
-use foxhunt_bridge::{Frame, nmea::LatLon};
+use foxhunt_bridge::nmea::LatLon;
+use foxhunt_core::fix::bias::{BiasPrior, MAX_SOURCES};
+use foxhunt_core::fix::consistency::check_cloud;
 use foxhunt_core::fix::crlb::crlb;
 use foxhunt_core::fix::ellipse::{Ellipse, cep50};
-use foxhunt_core::model::bearing::{predicted, wrap};
+use foxhunt_core::fix::locate::{ChannelOutcome, LocateConfig, NoEmitter, NoiseModel, Source};
 use foxhunt_core::{Bearing, Error, Method};
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
@@ -38,17 +42,24 @@ pub struct LocateOptions {
     pub particles: usize,
     /// The DF unit's bearing noise, degrees, or `None` to estimate it.
     pub sigma_deg: Option<f32>,
-    /// Seed of the particle methods.
+    /// Seed of the particle methods and of the robust search.
     pub seed: u64,
+    /// The DF unit's offset, as a calibration measured it (`None`: unknown, estimated with
+    /// the default prior).
+    pub offset: Option<BiasPrior>,
+    /// Bearings within this many MHz share a channel.
+    pub channel_width_mhz: f32,
 }
 
 impl Default for LocateOptions {
     fn default() -> Self {
         Self {
-            method: Method::MlHuber,
+            method: Method::MlRobust,
             particles: PARTICLES,
             sigma_deg: None,
             seed: 1,
+            offset: None,
+            channel_width_mhz: LocateConfig::default().channel_width_mhz,
         }
     }
 }
@@ -71,12 +82,33 @@ impl LocateOptions {
                 foxhunt_core::PARTICLE_COUNTS
             ));
         }
+        if !(self.channel_width_mhz >= 0.0 && self.channel_width_mhz.is_finite()) {
+            return Err(format!(
+                "--channel-width-mhz must be a finite number >= 0, not {}",
+                self.channel_width_mhz
+            ));
+        }
         Ok(())
+    }
+
+    /// The pipeline's settings for these options.
+    pub fn config(&self) -> LocateConfig {
+        let mut c = LocateConfig {
+            channel_width_mhz: self.channel_width_mhz,
+            ..LocateConfig::default()
+        };
+        if self.sigma_deg.is_some() {
+            c.noise = NoiseModel::Known;
+        }
+        if let Some(p) = self.offset {
+            c.priors = [p; MAX_SOURCES];
+        }
+        c
     }
 }
 
-/// The 95 % ellipse in the report: semi-axes.
-#[derive(Debug, Clone, Serialize)]
+/// An ellipse in a report: semi-axes and the major axis' direction.
+#[derive(Debug, Clone, Copy, Serialize)]
 pub struct EllipseReport {
     /// Semi-major axis, metres.
     pub major_m: f32,
@@ -88,6 +120,17 @@ pub struct EllipseReport {
     pub confidence: f32,
 }
 
+impl From<&Ellipse> for EllipseReport {
+    fn from(e: &Ellipse) -> Self {
+        Self {
+            major_m: e.major,
+            minor_m: e.minor,
+            orientation_deg: (90.0 - e.orientation.to_degrees()).rem_euclid(180.0),
+            confidence: e.confidence,
+        }
+    }
+}
+
 /// A latitude and longitude in a report.
 #[derive(Debug, Clone, Copy, Serialize)]
 pub struct LatLonReport {
@@ -97,48 +140,87 @@ pub struct LatLonReport {
     pub lon: f64,
 }
 
-/// What `locate` found (the `--json` object; field names are stable).
+/// A located source: an emitter, or another point some bearings agree on (field names are
+/// stable).
 #[derive(Debug, Clone, Serialize)]
-pub struct LocateReport {
-    /// Emitter latitude, degrees.
+pub struct SourceReport {
+    /// The channel's frequency, MHz (null for bearings without one).
+    pub freq_mhz: Option<f32>,
+    /// Latitude, degrees.
     pub lat: f64,
-    /// Emitter longitude, degrees.
+    /// Longitude, degrees.
     pub lon: f64,
-    /// Emitter east of the local origin (the first valid vehicle fix), metres.
+    /// East of the local origin, metres.
     pub east_m: f32,
-    /// Emitter north of the local origin, metres.
+    /// North of the local origin, metres.
     pub north_m: f32,
-    /// The local origin.
-    pub origin: LatLonReport,
-    /// The 95 % confidence ellipse.
+    /// The confidence ellipse.
     pub ellipse: EllipseReport,
     /// Circular error probable (50 %), metres.
     pub cep50_m: f32,
-    /// sqrt(trace) of the CRLB of the drive's geometry at the fix, metres.
+    /// The bound at the fix, metres: the bias-aware CRLB (offset estimated) for `ml-robust`,
+    /// the plain CRLB of the geometry otherwise.
     pub crlb_m: f32,
-    /// The method used (the registry's name).
-    pub method: &'static str,
+    /// The DF unit's mounting offset estimated with the fix, degrees (null: not estimated).
+    pub bias_deg: Option<f32>,
+    /// Its standard deviation, degrees.
+    pub bias_sd_deg: Option<f32>,
     /// Bearing noise used, degrees.
     pub sigma_deg: f32,
-    /// Whether `sigma_deg` was estimated (not given).
+    /// Whether `sigma_deg` was estimated from the residuals.
     pub sigma_estimated: bool,
     /// Bearings used.
     pub used: u32,
-    /// Measurements and frames rejected, by reason.
-    pub rejected: BTreeMap<&'static str, u32>,
+    /// Their effective number (correlated bearings count less; null: not estimated).
+    pub effective: Option<f32>,
+    /// Whether the residuals agree with the noise model (null: the method does not check).
+    pub consistent: Option<bool>,
+    /// Seconds of the first and last bearing used, from the first bearing of the capture.
+    pub time_span_s: Option<[f32; 2]>,
+    /// Why an other source is not the emitter (other sources only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub why: Option<&'static str>,
 }
 
-/// A position with covariance, and the particle cloud if the method has one.
-#[derive(Debug, Clone)]
-pub struct Solution {
-    /// Position, local metres.
+/// One channel and what it came to.
+#[derive(Debug, Clone, Serialize)]
+pub struct ChannelSummary {
+    /// Frequency, MHz (null for bearings without one).
+    pub freq_mhz: Option<f32>,
+    /// Bearings in the channel.
+    pub bearings: u32,
+    /// `emitter`, or why there is none.
+    pub outcome: String,
+}
+
+/// What `locate` found (the `--json` object; field names are stable).
+#[derive(Debug, Clone, Serialize)]
+pub struct LocateReport {
+    /// The estimator (the registry's name).
+    pub method: &'static str,
+    /// One emitter per channel that has one.
+    pub emitters: Vec<SourceReport>,
+    /// Other points bearings agree on (reflections, second transmitters on a channel).
+    pub other_sources: Vec<SourceReport>,
+    /// Every channel and its outcome.
+    pub channels: Vec<ChannelSummary>,
+    /// Bearings decoded.
+    pub used: u32,
+    /// Measurements and frames rejected, by reason.
+    pub rejected: BTreeMap<&'static str, u32>,
+    /// The local frame's origin (the first vehicle fix).
+    pub origin: LatLonReport,
+}
+
+/// A source as the maps draw it, in local metres.
+#[derive(Debug, Clone, Copy)]
+pub struct Drawn {
+    /// Position.
     pub position: [f32; 2],
-    /// Covariance, m^2.
-    pub covariance: [[f32; 2]; 2],
-    /// Bearings a robust loss treated as outliers (beyond 3 sigma).
-    pub outliers: u32,
-    /// The method's particles (empty for batch fixes and the EKF).
-    pub cloud: Vec<[f32; 2]>,
+    /// Its ellipse.
+    pub ellipse: Ellipse,
+    /// An other source, not an emitter.
+    pub other: bool,
 }
 
 /// A fix: the report and what the maps draw.
@@ -146,167 +228,14 @@ pub struct Solution {
 pub struct Located {
     /// The report.
     pub report: LocateReport,
-    /// The solution behind it.
-    pub solution: Solution,
-}
-
-/// Sentences and records of one kind seen in a capture, and how many the bridge refused as
-/// malformed.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct KindTally {
-    /// Seen.
-    pub seen: u32,
-    /// Refused with a bad or out-of-range field.
-    pub malformed: u32,
-    /// Saying the receiver has no fix (GPS only).
-    pub no_fix: u32,
-}
-
-/// Everything decoded from a capture.
-#[derive(Debug, Clone, Default)]
-pub struct Decoded {
-    /// Bearings in the local frame.
-    pub bearings: Vec<Bearing>,
-    /// The vehicle's fixes, kept only when a map asks for them.
-    pub track: Vec<VehicleFix>,
-    /// Vehicle fixes seen.
-    pub fixes: u64,
-    /// The local frame, if any fix arrived.
-    pub frame: Option<LocalFrame>,
-    /// Stream counters.
-    pub stream: StreamCounters,
-    /// Bridge counters.
-    pub bridge: BridgeCounters,
-    /// GPS position sentences seen.
-    pub gps: KindTally,
-    /// Bearing records seen.
-    pub bearing_records: KindTally,
-}
-
-/// Whether a frame carries a GPS position, a bearing, or something else.
-enum Kind {
-    Gps,
-    Bearing,
-    Other,
-}
-
-fn kind(f: &Frame<'_>) -> Kind {
-    match f {
-        Frame::Nmea(text) => match text.get(2..5) {
-            _ if text.starts_with('P') => {
-                if text.starts_with("PFOXB") {
-                    Kind::Bearing
-                } else {
-                    Kind::Other
-                }
-            }
-            Some("GGA" | "RMC" | "GLL" | "GNS") => Kind::Gps,
-            _ => Kind::Other,
-        },
-        Frame::Agrelo(_) | Frame::KrakenCsv(_) | Frame::KrakenXml(_) => Kind::Bearing,
-        Frame::Mt(_) => Kind::Other,
-    }
-}
-
-/// The bridge fed byte by byte or chunk by chunk, keeping what a fix needs.
-pub struct Decoder {
-    rx: Receiver<0>,
-    /// What has been decoded so far.
-    pub decoded: Decoded,
-    keep_track: bool,
-}
-
-impl Decoder {
-    /// A decoder; `keep_track` keeps every vehicle fix (for maps).
-    pub fn new(config: BridgeConfig, keep_track: bool) -> Self {
-        Self {
-            rx: Receiver::new(config, []),
-            decoded: Decoded::default(),
-            keep_track,
-        }
-    }
-
-    /// Feed bytes as they arrive.
-    pub fn feed(&mut self, bytes: &[u8]) {
-        let (demux, bridge) = (&mut self.rx.demux, &mut self.rx.bridge);
-        let (d, keep) = (&mut self.decoded, self.keep_track);
-        demux.feed(bytes, &mut |f| push(bridge, &f, d, keep));
-    }
-
-    /// The line went quiet: settle frames waiting on look-ahead.
-    pub fn idle(&mut self) {
-        self.rx.demux.idle();
-        let (d, keep) = (&mut self.decoded, self.keep_track);
-        while let Some(f) = self.rx.demux.next_frame() {
-            push(&mut self.rx.bridge, &f, d, keep);
-        }
-        self.snapshot();
-    }
-
-    /// End of the stream: frames still buffered are delivered and bearings waiting for a
-    /// later fix are placed with the fixes there are. Idempotent.
-    pub fn end(&mut self) {
-        let (demux, bridge) = (&mut self.rx.demux, &mut self.rx.bridge);
-        let (d, keep) = (&mut self.decoded, self.keep_track);
-        demux.finish_into(&mut |f| push(bridge, &f, d, keep));
-        bridge.finish(&mut |e| absorb(d, e, keep));
-        self.snapshot();
-    }
-
-    /// End of the stream: everything decoded.
-    pub fn finish(mut self) -> Decoded {
-        self.end();
-        self.decoded
-    }
-
-    /// Bring the frame and counters up to date (before a fix is computed mid-stream).
-    pub fn snapshot(&mut self) {
-        self.decoded.frame = self.rx.bridge.local_frame().copied();
-        let (s, b) = self.rx.counters();
-        self.decoded.stream = *s;
-        self.decoded.bridge = *b;
-    }
-}
-
-fn absorb(d: &mut Decoded, e: Event, keep_track: bool) {
-    match e {
-        Event::Bearing(b) => d.bearings.push(b.bearing),
-        Event::Fix(f) => {
-            d.fixes += 1;
-            if keep_track {
-                d.track.push(f);
-            }
-        }
-        Event::Rssi(_) => {}
-    }
-}
-
-/// One frame into the bridge, its refusals attributed to its kind.
-fn push(bridge: &mut foxhunt_bridge::Bridge<0>, f: &Frame<'_>, d: &mut Decoded, keep_track: bool) {
-    let before = *bridge.counters();
-    bridge.push(f, &mut |e| absorb(d, e, keep_track));
-    let after = bridge.counters();
-    let malformed =
-        (after.bad_field - before.bad_field) + (after.bad_position - before.bad_position);
-    let tally = match kind(f) {
-        Kind::Gps => &mut d.gps,
-        Kind::Bearing => &mut d.bearing_records,
-        Kind::Other => return,
-    };
-    tally.seen += 1;
-    tally.malformed += malformed;
-    tally.no_fix += after.no_fix_sentences - before.no_fix_sentences;
-}
-
-/// Decode whole captures (bytes as a UART delivered them).
-pub fn decode(bytes: &[u8], config: BridgeConfig, keep_track: bool) -> Decoded {
-    let mut dec = Decoder::new(config, keep_track);
-    dec.feed(bytes);
-    dec.finish()
+    /// Every source, emitters first.
+    pub drawn: Vec<Drawn>,
+    /// The method's particles (empty for batch fixes, the EKF and the pipeline).
+    pub cloud: Vec<[f32; 2]>,
 }
 
 /// Rejections by reason, every reason listed (zero included) so scripts can rely on the keys.
-pub fn rejections(d: &Decoded, outliers: u32) -> BTreeMap<&'static str, u32> {
+fn rejections(d: &Decoded) -> BTreeMap<&'static str, u32> {
     let (s, b) = (&d.stream, &d.bridge);
     BTreeMap::from([
         ("bad_checksum", s.bad_checksum + s.bad_fcs),
@@ -322,7 +251,12 @@ pub fn rejections(d: &Decoded, outliers: u32) -> BTreeMap<&'static str, u32> {
         ("no_bearing", b.no_bearing),
         ("no_fix", b.no_fix),
         ("stale_fix", b.stale_fix),
-        ("outlier", outliers),
+        ("late", b.late),
+        ("turning", b.turning),
+        ("outlier", 0),
+        ("repeated", 0),
+        ("time_backwards", 0),
+        ("no_consistent_emitter", 0),
     ])
 }
 
@@ -370,6 +304,11 @@ fn no_bearing(d: &Decoded) -> String {
         b.stale_fix,
         "with no GPS fix within the allowed gap of their time",
     );
+    reason(b.late, "older than the GPS fixes kept");
+    reason(
+        b.turning,
+        "taken while the vehicle turned faster than the yaw-rate gate",
+    );
     format!(
         "no usable bearing: of {} bearing records, {}",
         r.seen,
@@ -379,37 +318,6 @@ fn no_bearing(d: &Decoded) -> String {
             why.join(", ")
         }
     )
-}
-
-/// Why the bearings give no fix, in words a user can act on.
-pub fn explain(e: Error, d: &Decoded) -> String {
-    match e {
-        Error::TooFewMeasurements if d.bearings.len() == 1 => {
-            "only one usable bearing: a fix needs at least two bearings from different places"
-                .into()
-        }
-        Error::TooFewMeasurements => "too few usable bearings for a fix".into(),
-        Error::ParallelBearings => "all bearings are parallel: they never cross, so the range is \
-             unknown; drive across the line of bearing"
-            .into(),
-        Error::StationaryVehicle => {
-            "the vehicle never moved: bearings from one place give a direction, not a position"
-                .into()
-        }
-        _ if points_away(&d.bearings) => "the bearings point away from where their lines cross \
-             (they meet behind the vehicle): is the DF unit's angle convention reversed (180 \
-             degrees) or mirrored?"
-            .into(),
-        Error::ShallowCrossing => {
-            "the bearings cross too shallowly for a fix; drive further across the line of bearing"
-                .into()
-        }
-        Error::DegenerateGeometry => "the bearings do not pin down a point (their information is \
-             singular); drive across the line of bearing"
-            .into(),
-        Error::BehindVehicle => "the bearings meet behind the vehicle: no emitter there".into(),
-        e => format!("no fix: {e}"),
-    }
 }
 
 /// Whether nearly all of at least five bearings point away from where their lines cross (the
@@ -426,140 +334,396 @@ fn points_away(bearings: &[Bearing]) -> bool {
     bearings.len() >= 5 && 10 * away >= 9 * bearings.len()
 }
 
-fn with_sigma(bearings: &[Bearing], sigma: f32) -> Vec<Bearing> {
-    bearings.iter().map(|b| Bearing { sigma, ..*b }).collect()
+/// Why the bearings give no fix, in words a user can act on.
+pub fn explain(e: Error, bearings: &[Bearing]) -> String {
+    match e {
+        Error::TooFewMeasurements if bearings.len() == 1 => {
+            "only one usable bearing: a fix needs at least two bearings from different places"
+                .into()
+        }
+        Error::TooFewMeasurements => "too few usable bearings for a fix".into(),
+        Error::ParallelBearings => "all bearings are parallel: they never cross, so the range is \
+             unknown; drive across the line of bearing"
+            .into(),
+        Error::StationaryVehicle => {
+            "the vehicle never moved: bearings from one place give a direction, not a position"
+                .into()
+        }
+        _ if points_away(bearings) => "the bearings point away from where their lines cross \
+             (they meet behind the vehicle): is the DF unit's angle convention reversed (180 \
+             degrees) or mirrored?"
+            .into(),
+        Error::ShallowCrossing => {
+            "the bearings cross too shallowly for a fix; drive further across the line of bearing"
+                .into()
+        }
+        Error::DegenerateGeometry => "the bearings do not pin down a point (their information is \
+             singular); drive across the line of bearing"
+            .into(),
+        Error::BehindVehicle => "the bearings meet behind the vehicle: no emitter there".into(),
+        e => format!("no fix: {e}"),
+    }
 }
 
-/// Bearing noise from the residuals at `p`: a MAD scale (1.4826 x median |r|) finds the
-/// inliers (within 3 of it), whose RMS over n - 2 degrees of freedom, corrected for the
-/// truncation (a Gaussian cut at 3 sigma keeps 0.9733 of its variance), is the estimate: about
-/// 9 % standard error at 60 bearings against the MAD's 15 %. At least 0.05 degrees.
-pub fn estimate_sigma(bearings: &[Bearing], p: &[f32; 2]) -> f32 {
-    let floor = 0.05f32.to_radians();
-    let mut r: Vec<f32> = bearings
-        .iter()
-        .map(|b| wrap(b.theta - predicted(p, &b.vehicle)).abs())
-        .filter(|r| r.is_finite())
-        .collect();
-    if r.len() < 3 {
-        return 1.0f32.to_radians();
+/// Why a channel of `n` bearings has no consistent emitter, in words.
+fn no_emitter(why: NoEmitter, n: u32, bearings: &[Bearing]) -> String {
+    match why {
+        NoEmitter::TooFew if n <= 1 => {
+            explain(Error::TooFewMeasurements, bearings.get(..1).unwrap_or(&[]))
+        }
+        NoEmitter::NoConsensus => "no consistent emitter: no point has more bearings agreeing \
+             than chance would give (noise, or bearings of nothing)"
+            .into(),
+        NoEmitter::TooNoisy => {
+            "no consistent emitter: the bearings scatter by more than 10 degrees about any point"
+                .into()
+        }
+        NoEmitter::TooFew => format!(
+            "no consistent emitter: {n} bearings are too few to estimate their noise and check \
+             the fit (at least 5 that cross well)"
+        ),
+        NoEmitter::Geometry(e) => format!("no consistent emitter: {}", explain(e, bearings)),
     }
-    let mid = r.len() / 2;
-    let (_, median, _) = r.select_nth_unstable_by(mid, f32::total_cmp);
-    let mad = (1.4826 * *median).max(floor);
-    let inliers: Vec<f32> = r.into_iter().filter(|x| *x <= 3.0 * mad).collect();
-    if inliers.len() < 3 {
-        return mad;
-    }
-    let ss: f64 = inliers.iter().map(|x| f64::from(x * x)).sum();
-    ((ss / (inliers.len() - 2) as f64 / 0.9733).sqrt() as f32).max(floor)
 }
 
-/// Locate the emitter of a decoded capture.
+/// The geodetic position of local metres `p` in `frame` (the origin when out of range).
+pub fn geodetic(frame: &LocalFrame, p: [f32; 2]) -> LatLon {
+    frame
+        .to_geodetic([f64::from(p[0]), f64::from(p[1])])
+        .unwrap_or(frame.origin)
+}
+
+/// Locate every emitter of a decoded capture.
 pub fn locate(d: &Decoded, o: &LocateOptions) -> Result<Located, String> {
     o.check()?;
     let Some(frame) = d.frame else {
         return Err(no_vehicle_position(d));
     };
-    if d.bearings.is_empty() {
+    if d.observations.is_empty() {
         return Err(no_bearing(d));
     }
-    let (sigma, estimated) = match o.sigma_deg {
-        Some(s) => (s.to_radians(), false),
-        None => {
-            // Two passes of the robust ML: the first with a nominal 1 degree, the second with
-            // the noise its residuals show.
-            let first = with_sigma(&d.bearings, 1.0f32.to_radians());
-            let f = foxhunt_core::estimator::batch_fix(Method::MlHuber, &first)
-                .map_err(|e| explain(e, d))?;
-            (estimate_sigma(&first, &f.position), true)
-        }
+    let mut rejected = rejections(d);
+    let (emitters, other_sources, channels, drawn, cloud) = if o.method == Method::MlRobust {
+        located_by_pipeline(d, o, &frame, &mut rejected)?
+    } else {
+        located_by(d, o, &frame, &mut rejected)?
     };
-    let bearings = with_sigma(&d.bearings, sigma);
-    let mut rng = XorShiftRng::seed_from_u64(o.seed);
-    let s = crate::montecarlo::pool()
-        .install(|| {
-            locate_bearings(
-                o.method,
-                o.particles,
-                SEEDS_JITTER_M2,
-                &bearings,
-                true,
-                &mut rng,
-            )
-        })
-        .map_err(|e| explain(e, d))?;
-    let e = Ellipse::from_covariance(&s.covariance, 0.95).map_err(|e| explain(e, d))?;
-    let cep = cep50(&s.covariance).map_err(|e| explain(e, d))?;
-    let bound = crlb(&s.position, &bearings).map_err(|e| explain(e, d))?;
-    let geo = frame
-        .to_geodetic([f64::from(s.position[0]), f64::from(s.position[1])])
-        .map_err(|_| "the fix lies outside the valid latitude/longitude range".to_string())?;
-    let orientation = (90.0 - e.orientation.to_degrees()).rem_euclid(180.0);
-    let report = LocateReport {
-        lat: geo.lat,
-        lon: geo.lon,
+    Ok(Located {
+        report: LocateReport {
+            method: o.method.name(),
+            emitters,
+            other_sources,
+            channels,
+            used: d.observations.len() as u32,
+            rejected,
+            origin: LatLonReport {
+                lat: frame.origin.lat,
+                lon: frame.origin.lon,
+            },
+        },
+        drawn,
+        cloud,
+    })
+}
+
+/// What one locate path gives: emitters, other sources, channels, drawn sources, particles.
+type Parts = (
+    Vec<SourceReport>,
+    Vec<SourceReport>,
+    Vec<ChannelSummary>,
+    Vec<Drawn>,
+    Vec<[f32; 2]>,
+);
+
+/// A pipeline source as the report has it.
+fn source_report(s: &Source, frame: &LocalFrame, why: Option<&'static str>) -> SourceReport {
+    let g = geodetic(frame, s.position);
+    SourceReport {
+        freq_mhz: s.freq_mhz,
+        lat: g.lat,
+        lon: g.lon,
         east_m: s.position[0],
         north_m: s.position[1],
-        origin: LatLonReport {
-            lat: frame.origin.lat,
-            lon: frame.origin.lon,
-        },
-        ellipse: EllipseReport {
-            major_m: e.major,
-            minor_m: e.minor,
-            orientation_deg: orientation,
-            confidence: e.confidence,
-        },
+        ellipse: EllipseReport::from(&s.ellipse),
+        cep50_m: s.cep50,
+        crlb_m: s.crlb,
+        bias_deg: Some(s.bias.to_degrees()),
+        bias_sd_deg: Some(s.bias_sd.to_degrees()),
+        sigma_deg: s.sigma.to_degrees(),
+        sigma_estimated: s.sigma_estimated,
+        used: s.used,
+        effective: Some(s.effective),
+        consistent: Some(s.consistent),
+        time_span_s: Some(s.time_span),
+        why,
+    }
+}
+
+fn located_by_pipeline(
+    d: &Decoded,
+    o: &LocateOptions,
+    frame: &LocalFrame,
+    rejected: &mut BTreeMap<&'static str, u32>,
+) -> Result<Parts, String> {
+    // A copy only when the user's noise replaces the bearings' own: a long capture's
+    // observations are most of the memory.
+    let obs: std::borrow::Cow<'_, [_]> = match o.sigma_deg {
+        None => std::borrow::Cow::Borrowed(&d.observations),
+        Some(s) => std::borrow::Cow::Owned(
+            d.observations
+                .iter()
+                .map(|x| {
+                    let mut x = *x;
+                    x.bearing.sigma = s.to_radians();
+                    x
+                })
+                .collect(),
+        ),
+    };
+    // The bearings alone, for the words of an error.
+    let bearings = || -> Vec<Bearing> { obs.iter().map(|x| x.bearing).collect() };
+    let r: Pipeline = crate::montecarlo::pool()
+        .install(|| pipeline(&obs, &o.config(), o.seed))
+        .map_err(|e| explain(e, &bearings()))?;
+    let rj = &r.rejected;
+    for (k, v) in [
+        ("outlier", rj.outliers),
+        ("repeated", rj.repeated),
+        ("time_backwards", rj.time_backwards),
+        ("no_consistent_emitter", rj.no_emitter),
+    ] {
+        rejected.insert(k, v);
+    }
+    let malformed = rejected.get("malformed").copied().unwrap_or(0);
+    rejected.insert("malformed", malformed + rj.invalid);
+    let mut channels = Vec::new();
+    let mut why_none = None;
+    for c in r.channels() {
+        let outcome = match c.outcome {
+            ChannelOutcome::Emitter(_) => "emitter".to_string(),
+            ChannelOutcome::NoConsistentEmitter(why) => {
+                // A vehicle that never moved, or bearings that never cross, say so plainly.
+                let bearings = bearings();
+                let geometry = match foxhunt_core::fix::ple::ple(&bearings) {
+                    Err(e @ (Error::StationaryVehicle | Error::ParallelBearings)) => {
+                        Some(explain(e, &bearings))
+                    }
+                    _ => None,
+                };
+                let text = geometry.unwrap_or_else(|| no_emitter(why, c.bearings, &bearings));
+                why_none.get_or_insert(text.clone());
+                text
+            }
+        };
+        channels.push(ChannelSummary {
+            freq_mhz: c.freq_mhz,
+            bearings: c.bearings,
+            outcome,
+        });
+    }
+    if r.emitters().is_empty() {
+        return Err(why_none.unwrap_or_else(|| "no consistent emitter".into()));
+    }
+    const WEAKER: &str = "fewer bearings agree on it than on its channel's emitter: a \
+                          reflection, or a second transmitter on the channel";
+    let emitters = r
+        .emitters()
+        .iter()
+        .map(|s| source_report(s, frame, None))
+        .collect();
+    let others = r
+        .others()
+        .iter()
+        .map(|s| source_report(&s.source, frame, Some(WEAKER)))
+        .collect();
+    let drawn = r
+        .emitters()
+        .iter()
+        .map(|s| (s, false))
+        .chain(r.others().iter().map(|s| (&s.source, true)))
+        .map(|(s, other)| Drawn {
+            position: s.position,
+            ellipse: s.ellipse,
+            other,
+        })
+        .collect();
+    Ok((emitters, others, channels, drawn, Vec::new()))
+}
+
+fn located_by(
+    d: &Decoded,
+    o: &LocateOptions,
+    frame: &LocalFrame,
+    rejected: &mut BTreeMap<&'static str, u32>,
+) -> Result<Parts, String> {
+    let mut rng = XorShiftRng::seed_from_u64(o.seed);
+    let (s, sigma, estimated) = match o.sigma_deg {
+        Some(deg) => {
+            let bearings = d.bearings_with_sigma(deg.to_radians());
+            let fix = crate::montecarlo::pool().install(|| {
+                locate_bearings(
+                    o.method,
+                    o.particles,
+                    SEEDS_JITTER_M2,
+                    &bearings,
+                    true,
+                    &mut rng,
+                )
+            });
+            (fix, deg.to_radians(), false)
+        }
+        None => {
+            let bearings = d.bearings_with_sigma(1.0f32.to_radians());
+            let r = crate::montecarlo::pool().install(|| {
+                with_estimated_noise(
+                    o.method,
+                    o.particles,
+                    SEEDS_JITTER_M2,
+                    &bearings,
+                    true,
+                    &mut rng,
+                )
+            });
+            match r {
+                Ok((fix, sigma)) => (Ok(fix), sigma, true),
+                Err(e) => (Err(e), 1.0f32.to_radians(), true),
+            }
+        }
+    };
+    let bearings = d.bearings_with_sigma(sigma);
+    let s = s.map_err(|e| explain(e, &bearings))?;
+    let ellipse =
+        Ellipse::from_covariance(&s.covariance, 0.95).map_err(|e| explain(e, &bearings))?;
+    let cep = cep50(&s.covariance).map_err(|e| explain(e, &bearings))?;
+    let bound = crlb(&s.position, &bearings).map_err(|e| explain(e, &bearings))?;
+    rejected.insert("outlier", s.outliers);
+    // A particle cloud far tighter than the bearings allow is no estimate of the uncertainty.
+    let consistent = (!s.cloud.is_empty())
+        .then(|| check_cloud_points(&s.cloud, &bearings))
+        .flatten();
+    let g = geodetic(frame, s.position);
+    let freq = d.observations.first().and_then(|x| x.freq_mhz);
+    let report = SourceReport {
+        freq_mhz: freq,
+        lat: g.lat,
+        lon: g.lon,
+        east_m: s.position[0],
+        north_m: s.position[1],
+        ellipse: EllipseReport::from(&ellipse),
         cep50_m: cep,
         crlb_m: bound.rmse,
-        method: o.method.name(),
+        bias_deg: None,
+        bias_sd_deg: None,
         sigma_deg: sigma.to_degrees(),
         sigma_estimated: estimated,
         used: bearings.len() as u32,
-        rejected: rejections(d, s.outliers),
+        effective: None,
+        consistent,
+        time_span_s: None,
+        why: None,
     };
-    Ok(Located {
-        report,
-        solution: Solution {
-            position: s.position,
-            covariance: s.covariance,
-            outliers: s.outliers,
-            cloud: s.cloud,
-        },
+    let channel = ChannelSummary {
+        freq_mhz: freq,
+        bearings: bearings.len() as u32,
+        outcome: "emitter".into(),
+    };
+    let drawn = vec![Drawn {
+        position: s.position,
+        ellipse,
+        other: false,
+    }];
+    Ok((vec![report], Vec::new(), vec![channel], drawn, s.cloud))
+}
+
+/// Whether a particle cloud is as wide as the bearings allow (`Some(false)`: collapsed).
+fn check_cloud_points(cloud: &[[f32; 2]], bearings: &[Bearing]) -> Option<bool> {
+    foxhunt_core::with_particles!(cloud.len(), N => {
+        let mut set = Box::new(foxhunt_core::ParticleSet::<N, 2>::new());
+        for (s, p) in set.states.iter_mut().zip(cloud) {
+            *s = *p;
+        }
+        check_cloud(&set, bearings).map(|c| !c.collapsed)
     })
+    .ok()
+}
+
+impl SourceReport {
+    fn lines(&self, label: &str, out: &mut String) {
+        let freq = self
+            .freq_mhz
+            .map(|f| format!(" ({f:.3} MHz)"))
+            .unwrap_or_default();
+        let _ = writeln!(
+            out,
+            "{label}{freq}  {:.6}, {:.6}  ({:.1} m east, {:.1} m north)",
+            self.lat, self.lon, self.east_m, self.north_m
+        );
+        let _ = writeln!(
+            out,
+            "  {:.0} % ellipse semi-axes {:.1} m and {:.1} m, major axis {:.0} deg from north; CEP50 {:.1} m; bound {:.1} m",
+            100.0 * self.ellipse.confidence,
+            self.ellipse.major_m,
+            self.ellipse.minor_m,
+            self.ellipse.orientation_deg,
+            self.cep50_m,
+            self.crlb_m
+        );
+        let offset = match (self.bias_deg, self.bias_sd_deg) {
+            (Some(b), Some(sd)) => format!("offset {b:.2} +- {sd:.2} deg; "),
+            _ => String::new(),
+        };
+        let effective = self
+            .effective
+            .map(|e| format!(" ({e:.1} effective)"))
+            .unwrap_or_default();
+        let consistent = match self.consistent {
+            Some(true) => "; residuals consistent",
+            Some(false) => "; NOT consistent: the uncertainty is understated",
+            None => "",
+        };
+        let _ = writeln!(
+            out,
+            "  {offset}noise {:.2} deg ({}); {} bearings{effective}{consistent}",
+            self.sigma_deg,
+            if self.sigma_estimated {
+                "estimated"
+            } else {
+                "given"
+            },
+            self.used,
+        );
+        if let Some(why) = self.why {
+            let _ = writeln!(out, "  {why}");
+        }
+    }
 }
 
 impl LocateReport {
     /// The report as the terminal shows it.
     pub fn text(&self) -> String {
         let mut out = String::new();
-        let _ = writeln!(
-            out,
-            "emitter      {:.6}, {:.6}  ({:.1} m east, {:.1} m north of {:.6}, {:.6})",
-            self.lat, self.lon, self.east_m, self.north_m, self.origin.lat, self.origin.lon
-        );
-        let _ = writeln!(
-            out,
-            "95 % ellipse semi-axes {:.1} m and {:.1} m, major axis {:.0} deg from north; CEP50 {:.1} m",
-            self.ellipse.major_m, self.ellipse.minor_m, self.ellipse.orientation_deg, self.cep50_m
-        );
-        let _ = writeln!(
-            out,
-            "CRLB         {:.1} m for this drive's geometry (best any unbiased fix can do)",
-            self.crlb_m
-        );
-        let _ = writeln!(
-            out,
-            "method       {}, bearing noise {:.2} deg ({})",
-            self.method,
-            self.sigma_deg,
-            if self.sigma_estimated {
-                "estimated from the residuals"
+        for (i, e) in self.emitters.iter().enumerate() {
+            let label = if self.emitters.len() > 1 {
+                format!("emitter {}", i + 1)
             } else {
-                "given"
-            }
-        );
+                "emitter".to_string()
+            };
+            e.lines(&label, &mut out);
+        }
+        for o in &self.other_sources {
+            o.lines("other source", &mut out);
+        }
+        for c in self.channels.iter().filter(|c| c.outcome != "emitter") {
+            let freq = c
+                .freq_mhz
+                .map(|f| format!("{f:.3} MHz"))
+                .unwrap_or_else(|| "bearings without a frequency".into());
+            let _ = writeln!(
+                out,
+                "channel {freq} ({} bearings): {}",
+                c.bearings, c.outcome
+            );
+        }
         let rejected: Vec<String> = self
             .rejected
             .iter()
@@ -568,8 +732,11 @@ impl LocateReport {
             .collect();
         let _ = writeln!(
             out,
-            "bearings     {} used; rejected: {}",
+            "method {}; {} bearings; origin {:.6}, {:.6}; rejected: {}",
+            self.method,
             self.used,
+            self.origin.lat,
+            self.origin.lon,
             if rejected.is_empty() {
                 "none".to_string()
             } else {
@@ -581,16 +748,16 @@ impl LocateReport {
 
     /// One line for a live update.
     pub fn update_line(&self) -> String {
-        format!(
-            "{} bearings: {:.6}, {:.6}  CEP50 {:.1} m, CRLB {:.1} m",
-            self.used, self.lat, self.lon, self.cep50_m, self.crlb_m
-        )
+        let fixes: Vec<String> = self
+            .emitters
+            .iter()
+            .map(|e| {
+                format!(
+                    "{:.6}, {:.6} CEP50 {:.1} m (bound {:.1} m)",
+                    e.lat, e.lon, e.cep50_m, e.crlb_m
+                )
+            })
+            .collect();
+        format!("{} bearings: {}", self.used, fixes.join("; "))
     }
-}
-
-/// The geodetic position of local metres `p` in `frame` (the origin when out of range).
-pub fn geodetic(frame: &LocalFrame, p: [f32; 2]) -> LatLon {
-    frame
-        .to_geodetic([f64::from(p[0]), f64::from(p[1])])
-        .unwrap_or(frame.origin)
 }

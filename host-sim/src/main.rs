@@ -17,11 +17,13 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Locate the emitter of a drive (NMEA GGA/RMC + $PFOXB bearings).
+    /// Locate the emitter of a drive (NMEA GPS and heading sentences with $PFOXB, Agrelo or
+    /// KrakenSDR bearings).
     ///
     /// With no CAPTURE, locates the bundled sample drive (made by `foxhunt simulate
     /// --scenario aoa-drive`). `-` reads standard input live: a fix line per update as the
-    /// bytes arrive, as with --baud. Maps are written only where asked (--maps PREFIX, or
+    /// bytes arrive, as with --baud. --gpsd takes positions and heading from a running gpsd
+    /// beside such a live line; --kraken polls a KrakenSDR's web page instead of a line. Maps are written only where asked (--maps PREFIX, or
     /// --geojson/--kml/--svg), never onto an input. Exit status: 0 with a fix, 1 when the
     /// capture gives none (the message says why), 2 on a usage error.
     ///
@@ -32,6 +34,8 @@ enum Command {
     ///   foxhunt locate drive.nmea --method sir-robust --geojson fix.geojson
     ///   cat /dev/ttyUSB0 | foxhunt locate - --sigma-deg 2
     ///   foxhunt locate /dev/ttyUSB0 --baud 4800 --quiet-exit 30
+    ///   foxhunt locate /dev/ttyUSB0 --baud 4800 --gpsd       # positions, heading from gpsd
+    ///   foxhunt locate --kraken http://192.168.1.20:8081     # a KrakenSDR on the network
     #[command(verbatim_doc_comment)]
     Locate(cmd::locate::Args),
     /// Track a ZigBee node indoors from a coordinator's capture (AF_INCOMING_MSG frames).
@@ -53,15 +57,19 @@ enum Command {
     ///   foxhunt frames drive.nmea | grep pfoxb
     #[command(verbatim_doc_comment)]
     Frames(cmd::frames::Args),
-    /// Write a capture as the radios would send it (GGA + RMC + PFOXB for a drive; for
+    /// Write a capture as the radios would send it (a drive in a DF unit's format; for
     /// rssi-sim and rssi-lab, AF_INCOMING_MSG frames and an anchors file).
     ///
-    /// The route's first point lies at --origin (default 47.0,8.0) and is the capture's local
-    /// origin. The GPS reports each route point at a whole second, the DF unit half a second
-    /// later; a drive past midnight rolls the date.
+    /// Drive formats (--format): pfoxb (GGA + RMC + $PFOXB true bearings, the default),
+    /// agrelo (GGA + RMC + HDT + %BBB/Q relative bearings), kraken-csv and kraken-xml
+    /// (KrakenSDR records with their own position and heading, no NMEA). The route's first
+    /// point lies at --origin (default 47.0,8.0) and is the capture's local origin. The GPS
+    /// reports each route point at a whole second, the PFOXB unit half a second later; a drive
+    /// past midnight rolls the date.
     ///
     /// Examples:
     ///   foxhunt simulate --scenario aoa-drive --out drive.nmea
+    ///   foxhunt simulate --scenario aoa-drive --format kraken-csv --out mydata.csv
     ///   foxhunt simulate --scenario aoa-drive --bias-deg 4 --wild 0.1 --out biased.nmea
     ///   foxhunt simulate --scenario-file my.toml --origin 53.35,-6.26 --out my.nmea
     ///   foxhunt simulate --scenario rssi-sim --out lab.znp --anchors-out lab.toml
@@ -88,6 +96,18 @@ enum Command {
     /// Example: foxhunt perf --runs 20 --scale
     #[command(verbatim_doc_comment)]
     Perf(cmd::perf::Args),
+    /// A live map in the browser: route, bearings, every emitter and other source with its
+    /// ellipse, the suggested move and the CEP50 history, pushed as the input is decoded.
+    ///
+    /// Replays capture files (paced) or reads standard input (`-`) as it arrives. Roads from an
+    /// OpenStreetMap extract (--roads, .osm.pbf or OSM XML) are the basemap, so it works
+    /// offline, and make the advice a road turn; online tiles are optional (--tiles).
+    ///
+    /// Examples:
+    ///   foxhunt serve serial-bridge/captures/aoa-drive.nmea      # then open http://127.0.0.1:8080/
+    ///   cat /dev/ttyUSB0 | foxhunt serve - --roads area.osm.pbf
+    #[command(verbatim_doc_comment)]
+    Serve(cmd::serve::Args),
 }
 
 fn main() -> ExitCode {
@@ -100,6 +120,7 @@ fn main() -> ExitCode {
         Command::Simulate(a) => cmd::simulate::run(a),
         Command::Bench(a) => cmd::bench::run(a, &mut out),
         Command::Perf(a) => cmd::perf::run(a, &mut out),
+        Command::Serve(a) => cmd::serve::run(a),
     }
     .and_then(|()| out.flush());
     match result {

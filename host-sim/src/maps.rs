@@ -4,8 +4,9 @@
 //! All are written by hand: a few fixed elements of numbers and fixed words (no user text to
 //! escape), which a dependency would not make shorter.
 
+use crate::capture::Decoded;
 use crate::indoor::{AnchorsFile, Track};
-use crate::locate::{Decoded, Located, geodetic};
+use crate::locate::{Drawn, Located, SourceReport, geodetic};
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_core::fix::ellipse::Ellipse;
 use serde_json::{Value, json};
@@ -14,12 +15,12 @@ use std::fmt::Write;
 /// Vertices of the ellipse ring (the first repeated at the end to close it).
 const RING_VERTICES: usize = 72;
 
-/// Points of the 95 % ellipse in local metres, closed (first point repeated); empty when the
-/// covariance has no ellipse.
-pub fn ellipse_ring(position: [f32; 2], covariance: &[[f32; 2]; 2]) -> Vec<[f32; 2]> {
-    let Ok(e) = Ellipse::from_covariance(covariance, 0.95) else {
+/// Points of an ellipse about `position` in local metres, closed (first point repeated);
+/// empty when its axes are not finite.
+pub fn ellipse_ring(position: [f32; 2], e: &Ellipse) -> Vec<[f32; 2]> {
+    if !(e.major.is_finite() && e.minor.is_finite() && e.orientation.is_finite()) {
         return Vec::new();
-    };
+    }
     let (c, si) = (e.orientation.cos(), e.orientation.sin());
     let mut ring: Vec<[f32; 2]> = (0..RING_VERTICES)
         .map(|k| {
@@ -32,13 +33,15 @@ pub fn ellipse_ring(position: [f32; 2], covariance: &[[f32; 2]; 2]) -> Vec<[f32;
     ring
 }
 
-/// How far bearing rays are drawn: past the emitter, 1.3 times the farthest vehicle position's
-/// distance from it.
+/// How far bearing rays are drawn: past every source, 1.3 times the farthest vehicle
+/// position's distance from one.
 pub fn ray_length(l: &Located, d: &Decoded) -> f32 {
-    let p = l.solution.position;
-    d.bearings
+    l.drawn
         .iter()
-        .map(|b| (b.vehicle[0] - p[0]).hypot(b.vehicle[1] - p[1]))
+        .flat_map(|s| {
+            d.bearings()
+                .map(|b| (b.vehicle[0] - s.position[0]).hypot(b.vehicle[1] - s.position[1]))
+        })
         .fold(1.0f32, f32::max)
         * 1.3
 }
@@ -46,8 +49,7 @@ pub fn ray_length(l: &Located, d: &Decoded) -> f32 {
 /// The far end of each bearing's ray, in local metres.
 fn rays(l: &Located, d: &Decoded) -> Vec<([f32; 2], [f32; 2])> {
     let reach = ray_length(l, d);
-    d.bearings
-        .iter()
+    d.bearings()
         .map(|b| {
             let end = [
                 b.vehicle[0] + reach * b.theta.cos(),
@@ -176,26 +178,38 @@ fn polygon_geometry(ring: &[[f64; 2]]) -> Value {
     json!({"type": "MultiPolygon", "coordinates": [[west], [east]]})
 }
 
-/// The emitter, its 95 % ellipse, the track and the bearing rays as GeoJSON (RFC 7946:
-/// longitude first, polygons closed, nothing crossing the antimeridian).
+/// The report's sources with what the maps draw of them: (report, drawing, is an emitter).
+fn sources(l: &Located) -> impl Iterator<Item = (&SourceReport, &Drawn)> {
+    l.report
+        .emitters
+        .iter()
+        .chain(l.report.other_sources.iter())
+        .zip(l.drawn.iter())
+}
+
+/// Every emitter and other source with its ellipse, the track and the bearing rays as GeoJSON
+/// (RFC 7946: longitude first, polygons closed, nothing crossing the antimeridian).
 pub fn geojson(l: &Located, d: &Decoded) -> Value {
     let Some(frame) = d.frame else {
         return json!({"type": "FeatureCollection", "features": []});
     };
-    let r = &l.report;
-    let mut features = vec![json!({"type": "Feature",
-        "properties": {"kind": "emitter", "method": r.method, "cep50_m": r.cep50_m,
-            "crlb_m": r.crlb_m, "semi_major_m": r.ellipse.major_m,
-            "semi_minor_m": r.ellipse.minor_m},
-        "geometry": {"type": "Point", "coordinates": [r.lon, r.lat]}})];
-    let ring: Vec<[f64; 2]> = ellipse_ring(l.solution.position, &l.solution.covariance)
-        .into_iter()
-        .map(|p| lonlat(&frame, p))
-        .collect();
-    if !ring.is_empty() {
+    let mut features = Vec::new();
+    for (r, s) in sources(l) {
+        let kind = if s.other { "other_source" } else { "emitter" };
         features.push(json!({"type": "Feature",
-            "properties": {"kind": "ellipse", "confidence": 0.95},
-            "geometry": polygon_geometry(&ring)}));
+            "properties": {"kind": kind, "method": l.report.method, "freq_mhz": r.freq_mhz,
+                "cep50_m": r.cep50_m, "crlb_m": r.crlb_m, "semi_major_m": r.ellipse.major_m,
+                "semi_minor_m": r.ellipse.minor_m, "bias_deg": r.bias_deg, "used": r.used},
+            "geometry": {"type": "Point", "coordinates": [r.lon, r.lat]}}));
+        let ring: Vec<[f64; 2]> = ellipse_ring(s.position, &s.ellipse)
+            .into_iter()
+            .map(|p| lonlat(&frame, p))
+            .collect();
+        if !ring.is_empty() {
+            features.push(json!({"type": "Feature",
+                "properties": {"kind": "ellipse", "of": kind, "confidence": s.ellipse.confidence},
+                "geometry": polygon_geometry(&ring)}));
+        }
     }
     let track: Vec<[f64; 2]> = d
         .track
@@ -213,36 +227,41 @@ pub fn geojson(l: &Located, d: &Decoded) -> Value {
     json!({"type": "FeatureCollection", "features": features})
 }
 
-/// KML: the emitter, the ellipse, the vehicle track and the bearing rays.
+/// KML: every emitter and other source with its ellipse, the vehicle track and the bearings.
 pub fn kml(l: &Located, d: &Decoded) -> String {
     let Some(frame) = d.frame else {
         return String::new();
     };
-    let r = &l.report;
     let coords = |p: [f64; 2]| format!("{:.8},{:.8},0", p[0], p[1]);
     let mut out = String::from(
         "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<kml xmlns=\"http://www.opengis.net/kml/2.2\">\n<Document>\n<name>foxhunt fix</name>\n",
     );
-    let _ = writeln!(
-        out,
-        "<Placemark><name>emitter</name><description>method {}; 95 % ellipse semi-axes {:.1} m x {:.1} m; CEP50 {:.1} m; CRLB {:.1} m</description><Point><coordinates>{}</coordinates></Point></Placemark>",
-        r.method,
-        r.ellipse.major_m,
-        r.ellipse.minor_m,
-        r.cep50_m,
-        r.crlb_m,
-        coords([r.lon, r.lat])
-    );
-    let ring: Vec<String> = ellipse_ring(l.solution.position, &l.solution.covariance)
-        .into_iter()
-        .map(|p| coords(lonlat(&frame, p)))
-        .collect();
-    if !ring.is_empty() {
+    for (r, s) in sources(l) {
+        let name = if s.other { "other source" } else { "emitter" };
         let _ = writeln!(
             out,
-            "<Placemark><name>95 % ellipse</name><Polygon><outerBoundaryIs><LinearRing><coordinates>{}</coordinates></LinearRing></outerBoundaryIs></Polygon></Placemark>",
-            ring.join(" ")
+            "<Placemark><name>{name}</name><description>method {}; {:.0} % ellipse semi-axes {:.1} m x {:.1} m; CEP50 {:.1} m; bound {:.1} m; {} bearings</description><Point><coordinates>{}</coordinates></Point></Placemark>",
+            l.report.method,
+            100.0 * r.ellipse.confidence,
+            r.ellipse.major_m,
+            r.ellipse.minor_m,
+            r.cep50_m,
+            r.crlb_m,
+            r.used,
+            coords([r.lon, r.lat])
         );
+        let ring: Vec<String> = ellipse_ring(s.position, &s.ellipse)
+            .into_iter()
+            .map(|p| coords(lonlat(&frame, p)))
+            .collect();
+        if !ring.is_empty() {
+            let _ = writeln!(
+                out,
+                "<Placemark><name>{name}: {:.0} % ellipse</name><Polygon><outerBoundaryIs><LinearRing><coordinates>{}</coordinates></LinearRing></outerBoundaryIs></Polygon></Placemark>",
+                100.0 * s.ellipse.confidence,
+                ring.join(" ")
+            );
+        }
     }
     let track: Vec<String> = d
         .track
@@ -403,16 +422,23 @@ const TRACK_COLOUR: &str = "#1f4e9c";
 const RAY_COLOUR: &str = "#e08a3c";
 const FIX_COLOUR: &str = "#c0392b";
 
-/// SVG of a fix: bearing rays, the track, the method's particles (if it has any), the 95 %
-/// ellipse, the emitter, a legend, a north arrow and a scale bar; north up, 800 x 800 pixels.
+/// Where other sources are drawn: the emitters' colour would read as one more emitter.
+const OTHER_COLOUR: &str = "#7d3c98";
+
+/// SVG of a fix: bearing rays, the track, the method's particles (if it has any), every
+/// emitter and other source with its ellipse, a legend, a north arrow and a scale bar; north
+/// up, 800 x 800 pixels.
 pub fn svg(l: &Located, d: &Decoded) -> String {
-    let s = &l.solution;
-    let ring = ellipse_ring(s.position, &s.covariance);
+    let rings: Vec<(Vec<[f32; 2]>, &Drawn, &SourceReport)> = sources(l)
+        .map(|(r, s)| (ellipse_ring(s.position, &s.ellipse), s, r))
+        .collect();
     let track: Vec<[f32; 2]> = d.track.iter().map(|f| f.local).collect();
     let mut pts: Vec<[f32; 2]> = track.clone();
-    pts.extend(d.bearings.iter().map(|b| b.vehicle));
-    pts.push(s.position);
-    pts.extend(ring.iter().copied());
+    pts.extend(d.bearings().map(|b| b.vehicle));
+    for (ring, s, _) in &rings {
+        pts.push(s.position);
+        pts.extend(ring.iter().copied());
+    }
     let v = View::fit(&pts, 800.0, 40.0, 10.0, 1.15);
     let mut out = svg_open(v.size);
     let _ = writeln!(
@@ -434,33 +460,37 @@ pub fn svg(l: &Located, d: &Decoded) -> String {
             v.path(&track)
         );
     }
-    if !s.cloud.is_empty() {
+    if !l.cloud.is_empty() {
         out.push_str("<g fill=\"#6a6a6a\" fill-opacity=\"0.5\">\n");
-        for p in &s.cloud {
+        for p in &l.cloud {
             let (x, y) = v.px(*p);
             let _ = writeln!(out, "<circle cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"1.2\"/>");
         }
         out.push_str("</g>\n");
     }
-    if !ring.is_empty() {
+    for (ring, s, r) in &rings {
+        let colour = if s.other { OTHER_COLOUR } else { FIX_COLOUR };
+        if !ring.is_empty() {
+            let _ = writeln!(
+                out,
+                "<path d=\"{} Z\" fill=\"{colour}\" fill-opacity=\"0.15\" stroke=\"{colour}\" stroke-width=\"1.5\"/>",
+                v.path(ring)
+            );
+        }
+        let (ex, ey) = v.px(s.position);
         let _ = writeln!(
             out,
-            "<path d=\"{} Z\" fill=\"{FIX_COLOUR}\" fill-opacity=\"0.15\" stroke=\"{FIX_COLOUR}\" stroke-width=\"1.5\"/>",
-            v.path(&ring)
+            "<circle cx=\"{ex:.1}\" cy=\"{ey:.1}\" r=\"5\" fill=\"{colour}\"/>"
+        );
+        let what = if s.other { "other source " } else { "" };
+        v.label(
+            ex + 8.0,
+            ey - 8.0,
+            &format!("{what}{:.6}, {:.6}", r.lat, r.lon),
+            &mut out,
         );
     }
-    let (ex, ey) = v.px(s.position);
-    let _ = writeln!(
-        out,
-        "<circle cx=\"{ex:.1}\" cy=\"{ey:.1}\" r=\"5\" fill=\"{FIX_COLOUR}\"/>"
-    );
     let r = &l.report;
-    v.label(
-        ex + 8.0,
-        ey - 8.0,
-        &format!("{:.6}, {:.6}", r.lat, r.lon),
-        &mut out,
-    );
     let mut entries = vec![
         (
             format!(
@@ -470,26 +500,34 @@ pub fn svg(l: &Located, d: &Decoded) -> String {
         ),
         (
             format!("<line x1=\"0\" y1=\"0\" x2=\"24\" y2=\"0\" stroke=\"{RAY_COLOUR}\"/>"),
-            format!("bearings ({})", d.bearings.len()),
-        ),
-        (
-            format!("<circle cx=\"12\" cy=\"0\" r=\"5\" fill=\"{FIX_COLOUR}\"/>"),
-            format!("fix ({}), CEP50 {:.0} m", r.method, r.cep50_m),
-        ),
-        (
-            format!(
-                "<ellipse cx=\"12\" cy=\"0\" rx=\"11\" ry=\"6\" fill=\"{FIX_COLOUR}\" fill-opacity=\"0.15\" stroke=\"{FIX_COLOUR}\"/>"
-            ),
-            format!(
-                "95 % ellipse, semi-axes {:.0} x {:.0} m",
-                r.ellipse.major_m, r.ellipse.minor_m
-            ),
+            format!("bearings ({})", d.observations.len()),
         ),
     ];
-    if !s.cloud.is_empty() {
+    if let Some(e) = r.emitters.first() {
+        entries.push((
+            format!("<circle cx=\"12\" cy=\"0\" r=\"5\" fill=\"{FIX_COLOUR}\"/>"),
+            format!("fix ({}), CEP50 {:.0} m", r.method, e.cep50_m),
+        ));
+        entries.push((
+            format!("<ellipse cx=\"12\" cy=\"0\" rx=\"11\" ry=\"6\" fill=\"{FIX_COLOUR}\" fill-opacity=\"0.15\" stroke=\"{FIX_COLOUR}\"/>"),
+            format!(
+                "{:.0} % ellipse, semi-axes {:.0} x {:.0} m",
+                100.0 * e.ellipse.confidence,
+                e.ellipse.major_m,
+                e.ellipse.minor_m
+            ),
+        ));
+    }
+    if !r.other_sources.is_empty() {
+        entries.push((
+            format!("<circle cx=\"12\" cy=\"0\" r=\"5\" fill=\"{OTHER_COLOUR}\"/>"),
+            format!("other sources ({})", r.other_sources.len()),
+        ));
+    }
+    if !l.cloud.is_empty() {
         entries.push((
             "<circle cx=\"12\" cy=\"0\" r=\"2\" fill=\"#6a6a6a\"/>".to_string(),
-            format!("particles ({})", s.cloud.len()),
+            format!("particles ({})", l.cloud.len()),
         ));
     }
     let entries: Vec<(&str, String)> = entries

@@ -5,6 +5,7 @@ use crate::report::Row;
 use crate::runs::{bearing_run_timed, tracking_run};
 use crate::scenario::{Scenario, ScenarioModel};
 use foxhunt_core::fix::crlb::crlb;
+use foxhunt_core::fix::ellipse::mahalanobis;
 use foxhunt_core::{Method, PARTICLE_COUNTS};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
@@ -193,8 +194,9 @@ struct Outcome {
 
 /// What a run's error is.
 enum Error {
-    /// Static emitter: estimate minus truth.
-    Fix([f64; 2]),
+    /// Static emitter: estimate minus truth, whether the reported 95 % ellipse holds the
+    /// truth, and whether the truth is within the reported CEP50.
+    Fix([f64; 2], bool, bool),
     /// Tracking: error summed over the steps.
     Track(f64),
 }
@@ -203,22 +205,9 @@ enum Error {
 fn measure(s: &Scenario, m: Method, n: usize, bound: Option<f64>, p: &Progress) -> Row {
     let label = s.label(n);
     p.set_label(&format!("{label} {}", m.name()));
-    let mut row = Row {
-        scenario: label,
-        method: m.name().to_string(),
-        particles: m.uses_particles().then_some(n),
-        runs: s.runs,
-        rmse: None,
-        rel_x: None,
-        rel_y: None,
-        crlb: bound,
-        ratio: None,
-        time_s: 0.0,
-        evaluations: 0.0,
-        failures: 0,
-        note: None,
-        paper: s.paper(m, n).map(str::to_string),
-    };
+    let mut row = Row::new(label, m, n, s.runs);
+    row.crlb = bound;
+    row.paper = s.paper(m, n).map(str::to_string);
     if let Some(why) = not_run(m, n) {
         row.note = Some(why);
         for _ in 0..s.runs {
@@ -247,10 +236,16 @@ fn one(s: &Scenario, m: Method, n: usize, run: usize) -> Outcome {
             let finite = |f: &crate::runs::BearingFix| f.position.iter().all(|v| v.is_finite());
             match r {
                 Ok(f) if finite(&f) => Outcome {
-                    error: Some(Error::Fix([
-                        f64::from(f.position[0] - d.emitter[0]),
-                        f64::from(f.position[1] - d.emitter[1]),
-                    ])),
+                    error: Some(Error::Fix(
+                        [
+                            f64::from(f.position[0] - d.emitter[0]),
+                            f64::from(f.position[1] - d.emitter[1]),
+                        ],
+                        mahalanobis(&f.covariance, &f.position, &d.emitter)
+                            .is_some_and(|m| m * m <= f.ellipse_scale),
+                        (f.position[0] - d.emitter[0]).hypot(f.position[1] - d.emitter[1])
+                            <= f.cep50,
+                    )),
                     seconds,
                     evaluations: f.evaluations,
                 },
@@ -289,17 +284,21 @@ fn summarise(s: &Scenario, row: &mut Row, outcomes: &[Outcome]) {
     match &s.model {
         ScenarioModel::Bearing(d) => {
             let (ex, ey) = (f64::from(d.emitter[0]), f64::from(d.emitter[1]));
-            let (mut sq, mut rx, mut ry) = (0.0, 0.0, 0.0);
+            let (mut sq, mut rx, mut ry, mut covered, mut cep) = (0.0, 0.0, 0.0, 0, 0);
             for e in &ok {
-                if let Error::Fix([dx, dy]) = e {
+                if let Error::Fix([dx, dy], inside, within) = e {
                     sq += dx * dx + dy * dy;
                     rx += dx.abs() / ex.abs().max(1e-9);
                     ry += dy.abs() / ey.abs().max(1e-9);
+                    covered += *inside as usize;
+                    cep += *within as usize;
                 }
             }
             row.rmse = Some((sq / k).sqrt());
             row.rel_x = Some(100.0 * rx / k);
             row.rel_y = Some(100.0 * ry / k);
+            row.coverage = Some(covered as f64 / k);
+            row.cep50_share = Some(cep as f64 / k);
         }
         _ => {
             let sum: f64 = ok

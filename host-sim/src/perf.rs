@@ -409,10 +409,9 @@ pub struct ScaleRow {
     pub peak_bytes: u64,
 }
 
-/// Write `path` with `copies` concatenated drives of `seconds` each at `rate` bearings a second
-/// (the bundled drive's geometry, bearings `1 / rate` seconds apart), unless it already has
-/// the right size.
-fn scale_capture(path: &Path, seconds: usize, rate: usize, copies: usize) -> Result<u64, String> {
+/// Write `path` with an L-shaped drive of `seconds` at 10 m/s and `rate` bearings a second,
+/// unless it already holds that drive; its size.
+fn scale_capture(path: &Path, seconds: usize, rate: usize) -> Result<u64, String> {
     use crate::simulate::{CaptureOptions, drive_capture};
     let mut s = crate::scenario::Scenario::named("aoa-drive").ok_or("aoa-drive is built in")?;
     let crate::scenario::ScenarioModel::Bearing(d) = &mut s.model else {
@@ -434,17 +433,15 @@ fn scale_capture(path: &Path, seconds: usize, rate: usize, copies: usize) -> Res
         ..CaptureOptions::default()
     };
     let one = drive_capture(&s, &options)?;
-    let size = (one.len() * copies) as u64;
+    let size = one.len() as u64;
     if std::fs::metadata(path).is_ok_and(|m| m.len() == size) {
         return Ok(size);
     }
     let mut f = std::io::BufWriter::new(
         std::fs::File::create(path).map_err(|e| format!("cannot write {}: {e}", path.display()))?,
     );
-    for _ in 0..copies {
-        std::io::Write::write_all(&mut f, &one)
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-    }
+    std::io::Write::write_all(&mut f, &one)
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     std::io::Write::flush(&mut f).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     Ok(size)
 }
@@ -480,22 +477,22 @@ fn time_locate(path: &Path) -> Result<(u64, f64, u64), String> {
     ))
 }
 
-/// `locate` on large captures: a 1-hour drive at 20 bearings a second, and a capture of about
-/// 200 MB (that drive repeated). The captures are written once under `target/`.
+/// `locate` on large captures: a 1-hour drive at 20 bearings a second, and one of 14.5 hours
+/// (about 200 MB). The captures are written once under `target/`.
 pub fn scale() -> Result<Vec<ScaleRow>, String> {
     let dir = target_dir().join("scale");
     std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     let mut rows = Vec::new();
-    for (what, file, copies) in [
-        ("1-hour drive, 20 bearings/s", "hour-20hz.nmea", 1),
+    for (what, file, seconds) in [
+        ("1-hour drive, 20 bearings/s", "hour-20hz.nmea", 3600),
         (
-            "the same drive 24 times (about 200 MB)",
-            "hour-20hz-x24.nmea",
-            24,
+            "14.5-hour drive, 20 bearings/s (about 200 MB)",
+            "long-20hz.nmea",
+            52_200,
         ),
     ] {
         let path = dir.join(file);
-        let bytes = scale_capture(&path, 3600, 20, copies)?;
+        let bytes = scale_capture(&path, seconds, 20)?;
         let (bearings, seconds, peak_bytes) = time_locate(&path)?;
         rows.push(ScaleRow {
             what: what.to_string(),

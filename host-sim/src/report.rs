@@ -37,6 +37,18 @@ pub struct Row {
     pub evaluations: f64,
     /// Runs in which the method returned no estimate (counted, excluded from the metrics).
     pub failures: usize,
+    /// Static emitter: share of the runs with an estimate whose reported 95 % ellipse holds
+    /// the truth (0.95 if the ellipse is honest).
+    pub coverage: Option<f64>,
+    /// Static emitter: share of the runs with an estimate within its reported CEP50 of the
+    /// truth (0.5 if honest).
+    pub cep50_share: Option<f64>,
+    /// Field conditions: share of the runs that gave an emitter (for pure noise, the share
+    /// that wrongly did).
+    pub found: Option<f64>,
+    /// Field conditions: runs with the truth beyond the 99.73 % region of the reported
+    /// ellipse (a confident wrong answer).
+    pub beyond_3_sigma: Option<usize>,
     /// Why the row's figures are missing or partial, when they are.
     pub note: Option<String>,
     /// The seed paper's figure for this row, if it printed one.
@@ -44,6 +56,36 @@ pub struct Row {
 }
 
 impl Row {
+    /// A row of `method` at `particles` (shown only for particle methods) over `runs`, with
+    /// nothing measured yet.
+    pub fn new(
+        scenario: String,
+        method: foxhunt_core::Method,
+        particles: usize,
+        runs: usize,
+    ) -> Self {
+        Self {
+            scenario,
+            method: method.name().to_string(),
+            particles: method.uses_particles().then_some(particles),
+            runs,
+            rmse: None,
+            rel_x: None,
+            rel_y: None,
+            crlb: None,
+            ratio: None,
+            time_s: 0.0,
+            evaluations: 0.0,
+            failures: 0,
+            coverage: None,
+            cep50_share: None,
+            found: None,
+            beyond_3_sigma: None,
+            note: None,
+            paper: None,
+        }
+    }
+
     /// The row's note, or the failures counted in words.
     fn remark(&self) -> String {
         match (&self.note, self.failures) {
@@ -61,13 +103,112 @@ fn num(v: Option<f64>, width: usize, digits: usize) -> String {
     }
 }
 
+/// Whether the rows are field-condition rows (they count detections and 3-sigma misses).
+fn field(rows: &[Row]) -> bool {
+    rows.iter().any(|r| r.found.is_some())
+}
+
+/// Field-condition rows for the terminal or Markdown: detection, accuracy against the
+/// bias-aware bound, and how honest the ellipses are.
+fn field_table(rows: &[Row], markdown: bool) -> String {
+    let mut out = String::new();
+    let pct = |v: Option<f64>| {
+        v.map(|v| format!("{:.0} %", 100.0 * v))
+            .unwrap_or_else(|| "-".into())
+    };
+    let num = |v: Option<f64>| v.map(|v| format!("{v:.3}")).unwrap_or_else(|| "-".into());
+    let head = [
+        "condition",
+        "method",
+        "N",
+        "runs",
+        "emitter found",
+        "rmse m",
+        "bound m",
+        "ratio",
+        "95 % ellipse holds",
+        "within CEP50",
+        "beyond 3 sigma",
+        "note",
+    ];
+    let cells = |r: &Row| -> [String; 12] {
+        [
+            r.scenario.trim_start_matches("field/").to_string(),
+            r.method.clone(),
+            count(r.particles),
+            r.runs.to_string(),
+            pct(r.found),
+            num(r.rmse),
+            num(r.crlb),
+            num(r.ratio),
+            pct(r.coverage),
+            pct(r.cep50_share),
+            r.beyond_3_sigma
+                .map(|n| n.to_string())
+                .unwrap_or_else(|| "-".into()),
+            r.remark(),
+        ]
+    };
+    if markdown {
+        let _ = writeln!(out, "| {} |", head.join(" | "));
+        let _ = writeln!(out, "|{}", "---|".repeat(head.len()));
+        for r in rows {
+            let _ = writeln!(out, "| {} |", cells(r).join(" | "));
+        }
+        return out;
+    }
+    let all: Vec<[String; 12]> = rows.iter().map(cells).collect();
+    let width: Vec<usize> = (0..12)
+        .map(|i| {
+            all.iter()
+                .map(|c| c[i].len())
+                .chain([head[i].len()])
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    let line = |c: &[String]| -> String {
+        c.iter()
+            .zip(&width)
+            .enumerate()
+            .map(|(i, (v, w))| {
+                if i < 2 || i == 11 {
+                    format!("{v:<w$}")
+                } else {
+                    format!("{v:>w$}")
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("  ")
+    };
+    let _ = writeln!(out, "{}", line(&head.map(str::to_string)).trim_end());
+    for c in &all {
+        let _ = writeln!(out, "{}", line(c).trim_end());
+    }
+    out
+}
+
 /// A fixed-width table for the terminal.
 pub fn table(rows: &[Row]) -> String {
+    if field(rows) {
+        return field_table(rows, false);
+    }
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "{:<16} {:<16} {:>6} {:>9} {:>7} {:>7} {:>8} {:>6} {:>9} {:>9}  paper / note",
-        "scenario", "method", "N", "rmse", "rel_x%", "rel_y%", "bound", "ratio", "time_s", "evals"
+        "{:<16} {:<18} {:>6} {:>9} {:>7} {:>7} {:>8} {:>6} {:>6} {:>6} {:>9} {:>9}  paper / note",
+        "scenario",
+        "method",
+        "N",
+        "rmse",
+        "rel_x%",
+        "rel_y%",
+        "bound",
+        "ratio",
+        "cover",
+        "cep50",
+        "time_s",
+        "evals"
     );
     for r in rows {
         let note = [r.paper.clone().unwrap_or_default(), r.remark()]
@@ -77,7 +218,7 @@ pub fn table(rows: &[Row]) -> String {
             .join("; ");
         let _ = writeln!(
             out,
-            "{:<16} {:<16} {:>6} {} {} {} {} {} {:>9.2e} {:>9.2e}  {note}",
+            "{:<16} {:<18} {:>6} {} {} {} {} {} {} {} {:>9.2e} {:>9.2e}  {note}",
             r.scenario,
             r.method,
             count(r.particles),
@@ -86,6 +227,8 @@ pub fn table(rows: &[Row]) -> String {
             num(r.rel_y, 7, 3),
             num(r.crlb, 8, 3),
             num(r.ratio, 6, 3),
+            num(r.coverage.map(|c| 100.0 * c), 6, 1),
+            num(r.cep50_share.map(|c| 100.0 * c), 6, 1),
             r.time_s,
             r.evaluations,
         );
@@ -95,10 +238,17 @@ pub fn table(rows: &[Row]) -> String {
 
 /// The same rows as a Markdown table (for the README).
 pub fn markdown(rows: &[Row]) -> String {
+    if field(rows) {
+        return field_table(rows, true);
+    }
     let mut out = String::from(
-        "| scenario | method | N | rmse | rel_x % | rel_y % | bound | ratio | time/run (s) | paper / note |\n|---|---|---|---|---|---|---|---|---|---|\n",
+        "| scenario | method | N | rmse | rel_x % | rel_y % | bound | ratio | 95 % ellipse holds | within CEP50 | time/run (s) | paper / note |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     let cell = |v: Option<f64>| v.map(|v| format!("{v:.3}")).unwrap_or_else(|| "-".into());
+    let pct = |v: Option<f64>| {
+        v.map(|v| format!("{:.0} %", 100.0 * v))
+            .unwrap_or_else(|| "-".into())
+    };
     for r in rows {
         let note = [r.paper.clone().unwrap_or_default(), r.remark()]
             .into_iter()
@@ -107,7 +257,7 @@ pub fn markdown(rows: &[Row]) -> String {
             .join("; ");
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {:.2e} | {note} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.2e} | {note} |",
             r.scenario,
             r.method,
             count(r.particles),
@@ -116,6 +266,8 @@ pub fn markdown(rows: &[Row]) -> String {
             cell(r.rel_y),
             cell(r.crlb),
             cell(r.ratio),
+            pct(r.coverage),
+            pct(r.cep50_share),
             r.time_s,
         );
     }

@@ -133,10 +133,10 @@ const SEED_003: [PaperFigure; 12] = {
 
 /// The methods of a bearing table without a paper of its own: the seeds' SIR and its swarms,
 /// the tuned filters, the EKF and every batch fix.
-const DRIVE_METHODS: [Method; 12] = {
+const DRIVE_METHODS: [Method; 13] = {
     use Method::*;
     [
-        SirSeed, Sir, SirRobust, AfsaPf, FaPfImp, Gpf, Ekf, Ple, BcPle, Wiv, Ml, MlHuber,
+        SirSeed, Sir, SirRobust, AfsaPf, FaPfImp, Gpf, Ekf, Ple, BcPle, Wiv, Ml, MlHuber, MlRobust,
     ]
 };
 
@@ -181,6 +181,7 @@ impl Scenario {
                 drive(AOA_EMITTER, AOA_BEARING_VAR, 1.0, 60, "loop300")?,
                 &[
                     SirSeed, Sir, SirRobust, AfsaPf, Gpf, Ekf, Ple, BcPle, Wiv, Ml, MlHuber,
+                    MlRobust,
                 ],
                 100,
                 &[
@@ -198,7 +199,7 @@ impl Scenario {
             ),
             "aoa-firefly" => bearing(
                 drive([3000.0, 2200.0], 3.8e-4, 5.0, 40, "loop300")?,
-                &[SirSeed, Sir, FaPf, FaPfImp, Gpf, Ekf, Ml],
+                &[SirSeed, Sir, FaPf, FaPfImp, Gpf, Ekf, Ml, MlRobust],
                 80,
                 &[
                     paper(
@@ -215,7 +216,7 @@ impl Scenario {
             ),
             "aoa-pf-vs-kf" => bearing(
                 drive([1400.0, 600.0], 3.8018e-4, 1.0, 60, "loop300")?,
-                &[SirSeed, Sir, Ekf, Ml],
+                &[SirSeed, Sir, Ekf, Ml, MlRobust],
                 500,
                 &[
                     paper(
@@ -237,7 +238,9 @@ impl Scenario {
                 d.wild_fraction = 0.1;
                 bearing(
                     d,
-                    &[SirSeed, Sir, SirRobust, Gpf, Ekf, Ple, Ml, MlHuber],
+                    &[
+                        SirSeed, Sir, SirRobust, Gpf, Ekf, Ple, Ml, MlHuber, MlRobust,
+                    ],
                     100,
                     &[],
                 )

@@ -226,23 +226,141 @@ fn locate_the_bundled_drive_as_json() {
     assert!(out.status.success(), "{}", stderr(&out));
     let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     for key in [
-        "lat", "lon", "east_m", "north_m", "cep50_m", "crlb_m", "method", "used", "rejected",
+        "emitters",
+        "other_sources",
+        "channels",
+        "rejected",
+        "origin",
+        "method",
+        "used",
     ] {
         assert!(r.get(key).is_some(), "missing {key}: {r}");
     }
+    let e = &r["emitters"][0];
+    for key in [
+        "freq_mhz",
+        "lat",
+        "lon",
+        "east_m",
+        "north_m",
+        "cep50_m",
+        "crlb_m",
+        "bias_deg",
+        "bias_sd_deg",
+        "used",
+        "consistent",
+    ] {
+        assert!(e.get(key).is_some(), "missing emitters[0].{key}: {e}");
+    }
     for key in ["major_m", "minor_m", "orientation_deg", "confidence"] {
-        assert!(r["ellipse"].get(key).is_some(), "missing ellipse.{key}");
+        assert!(e["ellipse"].get(key).is_some(), "missing ellipse.{key}");
     }
     // The sample's emitter is at (1200, 800) m from the first fix; its CRLB is about 51 m.
-    let (e, n) = (
-        r["east_m"].as_f64().expect("e"),
-        r["north_m"].as_f64().expect("n"),
+    let (east, north) = (
+        e["east_m"].as_f64().expect("e"),
+        e["north_m"].as_f64().expect("n"),
     );
-    assert!((e - 1200.0).hypot(n - 800.0) < 250.0, "{r}");
-    assert_eq!(r["method"], "ml-huber");
+    assert!((east - 1200.0).hypot(north - 800.0) < 250.0, "{r}");
+    assert_eq!(r["method"], "ml-robust");
+    assert_eq!(e["consistent"], true, "{e}");
     let text = foxhunt(&["locate"]);
     let text = String::from_utf8_lossy(&text.stdout);
-    assert!(text.contains("semi-axes"), "{text}");
+    assert!(
+        text.contains("semi-axes") && text.contains("offset"),
+        "{text}"
+    );
+    // Any registry method by name, with the same report shape.
+    let ml = foxhunt(&["locate", "--json", "--method", "ml"]);
+    assert!(ml.status.success(), "{}", stderr(&ml));
+    let ml: serde_json::Value = serde_json::from_slice(&ml.stdout).expect("JSON");
+    assert_eq!(ml["method"], "ml");
+    assert!(ml["emitters"][0]["bias_deg"].is_null(), "{ml}");
+}
+
+#[test]
+fn a_calibration_drive_measures_the_offset_and_later_runs_use_it() {
+    let dir = scratch("calibration");
+    let cap = dir.join("biased.nmea");
+    let c = cap.to_str().expect("path");
+    let sim = foxhunt(&["simulate", "--out", c, "--bias-deg", "4"]);
+    assert!(sim.status.success(), "{}", stderr(&sim));
+    // aoa-drive's emitter: 1200 m east, 800 m north of the route's first point at 47, 8.
+    let target = {
+        let lat = 47.0 + 800.0 / 111_200.0;
+        let lon = 8.0 + 1200.0 / (111_320.0 * 47f64.to_radians().cos());
+        format!("{lat:.6},{lon:.6}")
+    };
+    let file = dir.join("unit.toml");
+    let f = file.to_str().expect("path");
+    let out = foxhunt(&[
+        "locate",
+        c,
+        "--calibrate",
+        &target,
+        "--calibration",
+        f,
+        "--json",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let cal: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let offset = cal["offset_deg"].as_f64().expect("offset");
+    let sd = cal["offset_sd_deg"].as_f64().expect("sd");
+    // The simulated 4 degrees, within 4 of its sds and a 0.1 degree slack for the approximate
+    // target position (a few metres at 1.4 km).
+    assert!(
+        (offset - 4.0).abs() < 4.0 * sd + 0.1,
+        "offset {offset} +- {sd}"
+    );
+    let fixed = foxhunt(&["locate", c, "--calibration", f, "--json"]);
+    assert!(fixed.status.success(), "{}", stderr(&fixed));
+    let r: serde_json::Value = serde_json::from_slice(&fixed.stdout).expect("JSON");
+    let e = &r["emitters"][0];
+    let err = (e["east_m"].as_f64().expect("e") - 1200.0)
+        .hypot(e["north_m"].as_f64().expect("n") - 800.0);
+    assert!(err < 150.0, "calibrated fix {err} m off: {e}");
+    let b = e["bias_deg"].as_f64().expect("bias");
+    assert!(
+        (b - offset).abs() < 0.5,
+        "the fix's offset {b} is not the calibration's {offset}"
+    );
+    // The calibration file is an input: never written over by a map.
+    refused(
+        &foxhunt(&["locate", c, "--calibration", f, "--svg", f]),
+        &["refusing"],
+    );
+    let broken = scratch_file(
+        &dir,
+        "broken.toml",
+        "offset_deg = nan\noffset_sd_deg = 0.1\nnoise_deg = 1.0\nbearings = 1\nrejected = 0\ntransmitter = [47.0, 8.0]\n",
+    );
+    refused(
+        &foxhunt(&["locate", c, "--calibration", &broken]),
+        &["offset_deg"],
+    );
+}
+
+#[test]
+fn pure_noise_is_no_consistent_emitter() {
+    let dir = scratch("noise");
+    let cap = dir.join("noise.nmea");
+    let c = cap.to_str().expect("path");
+    let sim = foxhunt(&["simulate", "--out", c, "--wild", "1.0"]);
+    assert!(sim.status.success(), "{}", stderr(&sim));
+    refused(&foxhunt(&["locate", c]), &["no consistent emitter"]);
+    // The field condition of the same name, and the multipath one with its ghost.
+    let sim = foxhunt(&["simulate", "--condition", "pure-noise", "--out", c]);
+    assert!(sim.status.success(), "{}", stderr(&sim));
+    refused(&foxhunt(&["locate", c]), &["no consistent emitter"]);
+    let sim = foxhunt(&["simulate", "--condition", "multipath", "--out", c]);
+    assert!(sim.status.success(), "{}", stderr(&sim));
+    let out = foxhunt(&["locate", c, "--json"]);
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(r["emitters"].as_array().map(Vec::len), Some(1), "{r}");
+    assert!(r["other_sources"][0]["why"].is_string(), "{r}");
+    refused(
+        &foxhunt(&["simulate", "--condition", "nowhere", "--out", c]),
+        &["unknown field condition", "multipath"],
+    );
 }
 
 #[test]
@@ -570,7 +688,7 @@ fn standard_input_streams_fixes_as_bytes_arrive() {
         .collect();
     let last = lines.last().expect("a final update");
     assert_eq!(last["used"], 60, "{last}");
-    assert!(last["lat"].is_number(), "{last}");
+    assert!(last["emitters"][0]["lat"].is_number(), "{last}");
 }
 
 #[test]

@@ -61,7 +61,7 @@ awk -v text="$text" -v data="$data" -v bss="$bss" -v stack="$stack" \
   printf "| static RAM (data + bss) | %d B | |\n", data + bss
   printf "| painted stack, high-water mark | %d B | |\n", stack
   printf "| RAM + stack | %d B | 32768 B |\n", data + bss + stack
-  printf "| queue high-water marks, bytes (GPS / DF / ZigBee / output) | %s | 256 / 256 / 256 / 1024 |\n", hw
+  printf "| queue high-water marks, bytes (GPS / DF / ZigBee / output) | %s | capacity 512 / 512 / 256 / 1024 |\n", hw
   printf "| instructions per byte, all in (%d instructions, %d bytes) | %.0f | |\n", whole, bw, whole / bw
   printf "| instructions per byte, GPS only (no bearings) | %.0f | |\n", gps / bg
   printf "| instructions per bearing, all in (record, bridge, fix, sentence) | %.0f (%.2f ms) | |\n", pb, pb / 168e3

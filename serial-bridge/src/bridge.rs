@@ -19,6 +19,18 @@
 //! over ground once the speed has stayed above a gate for a time (KrakenSDR's 2 m/s for 3 s by
 //! default) > none: the bearing is rejected and counted "no heading". The mounting offset of
 //! the DF antenna is added in the same place; each bearing records which source turned it.
+//!
+//! Geometry and time (FIELD.md): a true azimuth is measured from north at the vehicle, which
+//! is not the local frame's north once the vehicle is kilometres from the origin (the
+//! meridians converge by about Δλ·sin φ), so every bearing is carried into the frame exactly
+//! ([`LocalFrame::azimuth_to_local`]) at the vehicle's own latitude and longitude. The fixes
+//! are kept by time span, [`BridgeConfig::fix_span_ms`] behind the newest, in a history of
+//! [`FIX_HISTORY`] fixes, so a DF unit reporting seconds behind a 10 Hz GPS is still placed
+//! where the vehicle was; a bearing older than the fixes kept is counted `late`, never
+//! placed at the wrong spot. A bearing the bridge turned by a heading is rejected (counted
+//! `turning`) while the vehicle turns faster than [`BridgeConfig::yaw_gate_deg_s`]: a
+//! GPS-DF delay δ turns into a bearing error ω·δ at yaw rate ω, and a DF unit averaging over
+//! a turn mixes bearings taken at different headings.
 
 use crate::agrelo::Agrelo;
 use crate::geo::{GeoError, LocalFrame};
@@ -91,6 +103,15 @@ pub struct BridgeConfig {
     pub kraken_min_conf: f32,
     /// Agrelo bearings need this quality digit or more (0 is "unusable").
     pub agrelo_min_quality: u8,
+    /// Fixes are kept this long behind the newest, ms, so a bearing this late is still
+    /// placed (within the [`FIX_HISTORY`] capacity, see [`Bridge`]).
+    pub fix_span_ms: u32,
+    /// Bearings turned by a heading are rejected while the vehicle turns faster than this,
+    /// degrees per second (`None`: no gate). FIELD.md: 2 deg/s cut a 0.5 s latency's 42 m
+    /// shift of the fix to 7.6 m.
+    pub yaw_gate_deg_s: Option<f32>,
+    /// The yaw rate is the heading's change over at least this long, ms.
+    pub yaw_window_ms: u32,
 }
 
 impl Default for BridgeConfig {
@@ -110,6 +131,9 @@ impl Default for BridgeConfig {
             kraken_convention: CsvConvention::Clockwise,
             kraken_min_conf: 10.0,
             agrelo_min_quality: 1,
+            fix_span_ms: 5000,
+            yaw_gate_deg_s: Some(2.0),
+            yaw_window_ms: 1000,
         }
     }
 }
@@ -232,6 +256,11 @@ pub struct BridgeCounters {
     pub no_fix: u32,
     /// Bearings whose nearest fix is further than the allowed gap.
     pub stale_fix: u32,
+    /// Bearings older than the fixes kept (further behind the newest fix than
+    /// [`BridgeConfig::fix_span_ms`], or than the history holds).
+    pub late: u32,
+    /// Bearings turned by a heading while the vehicle turned faster than the yaw gate.
+    pub turning: u32,
     /// Valid MT frames of other commands.
     pub other_mt: u32,
     /// AF_INCOMING_MSG frames too short for their fields.
@@ -275,19 +304,80 @@ struct Stamped {
 
 const DAY_MS_U64: u64 = 86_400_000;
 
-/// Fixes kept for interpolation.
-const HISTORY: usize = 8;
+/// Fixes the bridge holds for placing bearings (48 bytes each): 64 fixes cover the default
+/// 5 s span up to a 12 Hz GPS. A faster receiver fills the history before the span: then the
+/// fix whose removal widens the spacing least is dropped (never the oldest), so the span
+/// holds at a coarser spacing (20 Hz: one fix in 80 ms).
+pub const FIX_HISTORY: usize = 64;
 /// Bearings that may wait for a fix at once.
 const WAITING: usize = 16;
+/// Heading samples kept for the yaw rate (16 bytes each), at most one per
+/// [`TURN_SPACING_MS`]: 6.4 s or more, the fix span and a window.
+pub const TURN_HISTORY: usize = 64;
+/// Heading samples closer than this to the one before are skipped, ms.
+pub const TURN_SPACING_MS: i64 = 100;
+
+/// Degrees to (-180, 180].
+fn wrap_half(x: f32) -> f32 {
+    let mut a = x;
+    for _ in 0..4 {
+        if a > 180.0 {
+            a -= 360.0;
+        } else if a <= -180.0 {
+            a += 360.0;
+        }
+    }
+    a
+}
+
+/// Which heading sources the yaw rate prefers: the heading rule's order.
+fn rank(s: HeadingSource) -> u8 {
+    match s {
+        HeadingSource::TrueBearing | HeadingSource::TrueHeading => 0,
+        HeadingSource::Record => 1,
+        HeadingSource::Magnetic => 2,
+        HeadingSource::Course => 3,
+    }
+}
+
+/// `p` and `q` mixed by `w` (0: `p`), the longitude the short way round.
+fn lerp_position(p: LatLon, q: LatLon, w: f64) -> LatLon {
+    let mut d = q.lon - p.lon;
+    if d > 180.0 {
+        d -= 360.0;
+    } else if d < -180.0 {
+        d += 360.0;
+    }
+    let mut lon = p.lon + w * d;
+    if lon > 180.0 {
+        lon -= 360.0;
+    } else if lon < -180.0 {
+        lon += 360.0;
+    }
+    LatLon {
+        lat: p.lat + w * (q.lat - p.lat),
+        lon,
+    }
+}
 
 /// Frames to measurements, with `A` anchors for RSSI (0 for a bearing-only vehicle).
+///
+/// Fixed memory: [`FIX_HISTORY`] fixes, [`TURN_HISTORY`] heading samples and 16 bearings
+/// waiting for their next fix, about 5 KB in all.
 #[derive(Debug, Clone)]
 pub struct Bridge<const A: usize = 0> {
     config: BridgeConfig,
     anchors: [(u16, [f32; 2]); A],
     frame: Option<LocalFrame>,
     clock: Option<i64>,
-    fixes: Deque<VehicleFix, HISTORY>,
+    /// The fixes of the last `fix_span_ms`, oldest first.
+    fixes: heapless::Vec<VehicleFix, FIX_HISTORY>,
+    /// The first fix's time, and whether fixes have left the history since.
+    first_fix_ms: Option<i64>,
+    dropped: bool,
+    /// Heading samples of one source (the best fresh one), oldest first, for the yaw rate.
+    turns: heapless::Vec<Stamped, TURN_HISTORY>,
+    turn_source: HeadingSource,
     /// Latest course over ground.
     course: Option<Stamped>,
     /// Since when the speed has stayed at or above the gate.
@@ -307,7 +397,11 @@ impl<const A: usize> Bridge<A> {
             anchors,
             frame: None,
             clock: None,
-            fixes: Deque::new(),
+            fixes: heapless::Vec::new(),
+            first_fix_ms: None,
+            dropped: false,
+            turns: heapless::Vec::new(),
+            turn_source: HeadingSource::Course,
             course: None,
             fast_since: None,
             true_heading: None,
@@ -329,7 +423,12 @@ impl<const A: usize> Bridge<A> {
 
     /// The latest vehicle fix.
     pub fn latest_fix(&self) -> Option<&VehicleFix> {
-        self.fixes.back()
+        self.fixes.last()
+    }
+
+    /// The fixes held for placing bearings, oldest first.
+    pub fn fix_history(&self) -> &[VehicleFix] {
+        &self.fixes
     }
 
     /// Place a time of day on the continuous clock: the representative nearest the last time
@@ -498,10 +597,12 @@ impl<const A: usize> Bridge<A> {
 
     fn true_heading(&mut self, deg: f64) {
         self.counters.headings += 1;
+        let time_ms = self.clock.unwrap_or(i64::MIN / 2);
         self.true_heading = Some(Stamped {
             deg: deg as f32,
-            time_ms: self.clock.unwrap_or(i64::MIN / 2),
+            time_ms,
         });
+        self.turn_sample(HeadingSource::TrueHeading, deg as f32, time_ms);
     }
 
     fn magnetic_heading(&mut self, magnetic_deg: f64, true_deg: Option<f32>) {
@@ -511,6 +612,76 @@ impl<const A: usize> Bridge<A> {
             time_ms: self.clock.unwrap_or(i64::MIN / 2),
         };
         self.magnetic = Some((stamped, true_deg));
+        // The rate of a magnetic heading is the rate of the true one.
+        self.turn_sample(HeadingSource::Magnetic, stamped.deg, stamped.time_ms);
+    }
+
+    /// A heading sample for the yaw rate. The samples hold one source at a time, the best
+    /// the heading rule knows: a better source takes over at once, a lesser one only when the
+    /// current one has gone stale (two sources differ by the crab angle, which is no turn).
+    fn turn_sample(&mut self, source: HeadingSource, deg: f32, time_ms: i64) {
+        if self.clock.is_none() && source != HeadingSource::Record {
+            return;
+        }
+        if let Some(last) = self.turns.last() {
+            let age = i64::from(self.config.heading_max_age_ms);
+            let fresh = (time_ms - last.time_ms).abs() <= age;
+            if source != self.turn_source {
+                if fresh && rank(source) > rank(self.turn_source) {
+                    return;
+                }
+                self.turns.clear();
+            } else if time_ms < last.time_ms {
+                self.turns.clear();
+            } else if time_ms - last.time_ms < TURN_SPACING_MS {
+                return;
+            }
+        }
+        self.turn_source = source;
+        if self.turns.is_full() && !self.turns.is_empty() {
+            self.turns.remove(0);
+        }
+        let _ = self.turns.push(Stamped { deg, time_ms });
+    }
+
+    /// The vehicle's yaw rate at `time_ms`, degrees per second, from the heading samples: the
+    /// heading's total change (summed sample to sample, so a fast spin is not aliased) from
+    /// the last sample at least [`BridgeConfig::yaw_window_ms`] before the first sample at or
+    /// after `time_ms` (the newest if none is yet) to that one. `None` when the samples do
+    /// not tell: none fresh at `time_ms`, or none a window before, or a gap between them.
+    pub fn yaw_rate_at(&self, time_ms: i64) -> Option<f32> {
+        let age = i64::from(self.config.heading_max_age_ms);
+        let window = i64::from(self.config.yaw_window_ms).max(1);
+        let last = self.turns.len().checked_sub(1)?;
+        let bi = self
+            .turns
+            .iter()
+            .position(|s| s.time_ms >= time_ms)
+            .unwrap_or(last);
+        let b = self.turns.get(bi)?;
+        if (b.time_ms - time_ms).abs() > age {
+            return None;
+        }
+        let ai = self
+            .turns
+            .get(..bi)?
+            .iter()
+            .rposition(|s| s.time_ms <= b.time_ms - window)?;
+        let a = self.turns.get(ai)?;
+        let span = b.time_ms - a.time_ms;
+        if span > window + age {
+            return None;
+        }
+        let turn: f32 = self
+            .turns
+            .get(ai..=bi)?
+            .windows(2)
+            .map(|w| match w {
+                [p, q] => wrap_half(q.deg - p.deg),
+                _ => 0.0,
+            })
+            .sum();
+        Some(libm::fabsf(turn) * 1000.0 / span as f32)
     }
 
     /// Speed and course at `time_ms`: the speed gate's state and the latest course.
@@ -524,6 +695,10 @@ impl<const A: usize> Bridge<A> {
         }
         if let Some(deg) = course_deg {
             self.course = Some(Stamped { deg, time_ms });
+            // Course over ground is a heading only while moving.
+            if self.fast_since.is_some() {
+                self.turn_sample(HeadingSource::Course, deg, time_ms);
+            }
         }
     }
 
@@ -598,7 +773,7 @@ impl<const A: usize> Bridge<A> {
         };
         let time_ms = self.unwrap_time(time.ms_of_day);
         self.motion(time_ms, speed_mps, course_deg);
-        if let Some(last) = self.fixes.back_mut()
+        if let Some(last) = self.fixes.last_mut()
             && last.time_ms == time_ms
         {
             // The sentences of one epoch: one fix, with the RMC's speed and course.
@@ -606,8 +781,11 @@ impl<const A: usize> Bridge<A> {
             last.course_deg = course_deg.or(last.course_deg);
             return;
         }
-        if self.fixes.is_full() {
-            self.fixes.pop_front();
+        if self.fixes.last().is_some_and(|l| l.time_ms > time_ms) {
+            // Time went backwards (a new capture, a receiver reset): the old fixes say
+            // nothing about the new times.
+            self.fixes.clear();
+            self.dropped = true;
         }
         let fix = VehicleFix {
             time_ms,
@@ -616,8 +794,8 @@ impl<const A: usize> Bridge<A> {
             speed_mps,
             course_deg,
         };
-        // Full was handled above, so this cannot fail.
-        let _ = self.fixes.push_back(fix);
+        self.keep(fix);
+        self.first_fix_ms.get_or_insert(time_ms);
         self.counters.fixes += 1;
         sink(Event::Fix(fix));
         while let Some(p) = self.waiting.front().copied() {
@@ -629,8 +807,55 @@ impl<const A: usize> Bridge<A> {
         }
     }
 
+    /// Add `fix` to the history: fixes more than the span behind it leave (the last one at or
+    /// before the span's start stays, to interpolate there); a full history drops the fix
+    /// whose neighbours are closest in time (never the oldest, so the span holds).
+    fn keep(&mut self, fix: VehicleFix) {
+        let start = fix.time_ms - i64::from(self.config.fix_span_ms);
+        let old = self
+            .fixes
+            .iter()
+            .rposition(|f| f.time_ms <= start)
+            .unwrap_or(0);
+        if old > 0 {
+            self.dropped = true;
+            let kept = self.fixes.len() - old;
+            for i in 0..kept {
+                if let Some(&f) = self.fixes.get(i + old)
+                    && let Some(slot) = self.fixes.get_mut(i)
+                {
+                    *slot = f;
+                }
+            }
+            self.fixes.truncate(kept);
+        }
+        if self.fixes.is_full() {
+            // Among the fixes with a neighbour on each side (the newest has none yet: the new
+            // fix is its later neighbour), the one whose loss leaves the smallest gap.
+            let thin = (1..self.fixes.len())
+                .filter_map(|i| {
+                    let before = self.fixes.get(i - 1)?.time_ms;
+                    let after = self.fixes.get(i + 1).map_or(fix.time_ms, |f| f.time_ms);
+                    Some((after - before, i))
+                })
+                .min()
+                .map_or(0, |(_, i)| i);
+            if thin == 0 {
+                self.dropped = true;
+            }
+            if thin < self.fixes.len() {
+                self.fixes.remove(thin);
+            }
+        }
+        // Room was made above, so this cannot fail.
+        let _ = self.fixes.push(fix);
+    }
+
     /// Every bearing kind ends here: the heading rule, the mounting offset, the placement.
     fn bearing_in(&mut self, b: Incoming, sink: &mut impl FnMut(Event)) {
+        if let Some(h) = b.record_heading {
+            self.turn_sample(HeadingSource::Record, h, b.time_ms);
+        }
         let (azimuth_deg, heading) = if b.relative {
             match self.heading_at(b.time_ms, b.record_heading) {
                 Some((h, source)) => {
@@ -655,12 +880,12 @@ impl<const A: usize> Bridge<A> {
         };
         if let Some(p) = b.position {
             match self.local(p) {
-                Ok(v) => self.emit(&pending, v, sink),
+                Ok(v) => self.emit(&pending, v, p, sink),
                 Err(_) => self.counters.bad_position += 1,
             }
             return;
         }
-        let newest = self.fixes.back().map(|f| f.time_ms);
+        let newest = self.fixes.last().map(|f| f.time_ms);
         if newest.is_some_and(|t| t >= b.time_ms) {
             self.place(&pending, sink);
             return;
@@ -678,32 +903,65 @@ impl<const A: usize> Bridge<A> {
         let gap = i64::from(self.config.max_fix_gap_ms);
         let before = self.fixes.iter().rev().find(|f| f.time_ms <= p.time_ms);
         let after = self.fixes.iter().find(|f| f.time_ms >= p.time_ms);
+        if before.is_none() && self.dropped && self.first_fix_ms.is_some_and(|t| t <= p.time_ms) {
+            // The fixes before it have left the history: placing it at the oldest kept fix
+            // would put it where the vehicle was later.
+            self.counters.late += 1;
+            return;
+        }
         let near = |f: &&VehicleFix| (f.time_ms - p.time_ms).abs() <= gap;
         let position = match (before.filter(near), after.filter(near)) {
             (Some(a), Some(b)) if b.time_ms > a.time_ms => {
-                let w = (p.time_ms - a.time_ms) as f32 / (b.time_ms - a.time_ms) as f32;
-                Some([
-                    a.local[0] + w * (b.local[0] - a.local[0]),
-                    a.local[1] + w * (b.local[1] - a.local[1]),
-                ])
+                let w = (p.time_ms - a.time_ms) as f64 / (b.time_ms - a.time_ms) as f64;
+                let wf = w as f32;
+                Some((
+                    [
+                        a.local[0] + wf * (b.local[0] - a.local[0]),
+                        a.local[1] + wf * (b.local[1] - a.local[1]),
+                    ],
+                    lerp_position(a.position, b.position, w),
+                ))
             }
-            (Some(a), _) => Some(a.local),
-            (None, Some(b)) => Some(b.local),
+            (Some(a), _) => Some((a.local, a.position)),
+            (None, Some(b)) => Some((b.local, b.position)),
             (None, None) => None,
         };
         match position {
-            Some(v) => self.emit(p, v, sink),
+            Some((v, at)) => self.emit(p, v, at, sink),
             None if self.fixes.is_empty() => self.counters.no_fix += 1,
             None => self.counters.stale_fix += 1,
         }
     }
 
-    fn emit(&mut self, p: &Pending, vehicle: [f32; 2], sink: &mut impl FnMut(Event)) {
+    /// Hand on a placed bearing at local `vehicle`, geodetic `at`: the yaw gate, then the
+    /// azimuth carried from north at `at` into the local frame.
+    fn emit(&mut self, p: &Pending, vehicle: [f32; 2], at: LatLon, sink: &mut impl FnMut(Event)) {
+        if p.heading != HeadingSource::TrueBearing
+            && let Some(gate) = self.config.yaw_gate_deg_s
+            && self.yaw_rate_at(p.time_ms).is_some_and(|r| r > gate)
+        {
+            self.counters.turning += 1;
+            return;
+        }
         let scale = match self.config.weighting {
             QualityWeighting::Uniform => 1.0,
             QualityWeighting::ErrorWeight => 1.0 + error_weight(p.quality),
         };
-        let azimuth = (p.azimuth_deg as f32).to_radians();
+        let Some(local_deg) = self
+            .frame
+            .and_then(|f| f.azimuth_to_local(at, p.azimuth_deg).ok())
+        else {
+            self.counters.bad_position += 1;
+            return;
+        };
+        // In (-180, 180] before the cast: f32 keeps 0.03 millidegrees near 360, far more
+        // near 0.
+        let signed = if local_deg > 180.0 {
+            local_deg - 360.0
+        } else {
+            local_deg
+        };
+        let azimuth = signed.to_radians() as f32;
         self.counters.bearings += 1;
         sink(Event::Bearing(BearingMeasurement {
             time_ms: p.time_ms,

@@ -125,6 +125,34 @@ impl LocalFrame {
         Ok([e[0], e[1]])
     }
 
+    /// An azimuth taken at `at` (degrees clockwise from true north there) as an azimuth in
+    /// this frame (clockwise from the frame's north), in [0, 360).
+    ///
+    /// North at the vehicle is not north at the origin: the meridians converge by about
+    /// Δλ·sin φ (0.16 degrees 20 km east at 47 N). The direction is carried exactly instead:
+    /// the horizontal unit vector of the azimuth in the ENU frame at `at`, into ECEF, then
+    /// onto this frame's east and north axes.
+    pub fn azimuth_to_local(&self, at: LatLon, azimuth_deg: f64) -> Result<f64, GeoError> {
+        check(at)?;
+        if !azimuth_deg.is_finite() {
+            return Err(GeoError::OutOfRange);
+        }
+        let (lat, lon, a) = (to_rad(at.lat), to_rad(at.lon), to_rad(azimuth_deg));
+        let (sl, cl, so, co) = (
+            libm::sin(lat),
+            libm::cos(lat),
+            libm::sin(lon),
+            libm::cos(lon),
+        );
+        let (sa, ca) = (libm::sin(a), libm::cos(a));
+        // sin(a) * east + cos(a) * north of the frame at `at`, in ECEF.
+        let d = [-sa * so - ca * sl * co, sa * co - ca * sl * so, ca * cl];
+        let r = &self.rotation;
+        let [e, n] = [0, 1].map(|i| r[i][0] * d[0] + r[i][1] * d[1] + r[i][2] * d[2]);
+        let deg = to_deg(libm::atan2(e, n));
+        Ok(if deg < 0.0 { deg + 360.0 } else { deg })
+    }
+
     /// The point at east `e`, north `n` (on the reference's height).
     pub fn to_geodetic(&self, en: [f64; 2]) -> Result<LatLon, GeoError> {
         if !en[0].is_finite() || !en[1].is_finite() {
@@ -169,6 +197,52 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The azimuth at `p` of the direction to `q`: the chord in `p`'s own tangent plane.
+    fn azimuth_at(p: LatLon, q: LatLon) -> f64 {
+        let t = LocalFrame::new(p, 0.0)
+            .and_then(|f| f.to_local(q))
+            .expect("local");
+        t[0].atan2(t[1]).to_degrees().rem_euclid(360.0)
+    }
+
+    #[test]
+    fn azimuths_are_carried_into_the_frame_through_the_meridians_convergence() {
+        for lat in [0.0, 47.0, 70.0, -60.0] {
+            let origin = LatLon { lat, lon: 10.0 };
+            let f = LocalFrame::new(origin, 0.0).expect("frame");
+            // A vehicle 20 km east and 5 km north of the origin, an emitter 3 km beyond it.
+            let v = f.to_geodetic([20_000.0, 5_000.0]).expect("vehicle");
+            let e_local = [22_000.0, 7_236.0];
+            let e = f.to_geodetic(e_local).expect("emitter");
+            let at_vehicle = azimuth_at(v, e);
+            let turned = f.azimuth_to_local(v, at_vehicle).expect("turned");
+            let truth = (e_local[0] - 20_000.0)
+                .atan2(e_local[1] - 5_000.0)
+                .to_degrees()
+                .rem_euclid(360.0);
+            // North at the vehicle is turned clockwise by about dlon sin(lat) (0.19 deg at
+            // 47 N here); the turned azimuth is exact
+            // to the second-order tilt of the two tangent planes, below 1e-4 degrees here.
+            let expected =
+                (20_000.0 / (6_378_137.0 * lat.to_radians().cos())) * lat.to_radians().sin();
+            let raw = at_vehicle - truth;
+            assert!(
+                (raw - expected.to_degrees()).abs() < 0.02,
+                "{lat}: convergence {raw} against {}",
+                expected.to_degrees()
+            );
+            assert!(
+                (turned - truth).abs() < 1e-4,
+                "{lat}: {turned} against {truth}"
+            );
+        }
+        let f = LocalFrame::new(LatLon { lat: 1.0, lon: 1.0 }, 0.0).expect("frame");
+        assert_eq!(
+            f.azimuth_to_local(LatLon { lat: 1.0, lon: 1.0 }, f64::NAN),
+            Err(GeoError::OutOfRange)
+        );
     }
 
     #[test]

@@ -523,3 +523,47 @@ fn the_long_drives_need_the_convergence_turned_out() {
     let raw = &summary(Condition::Long70Uncorrected).per_emitter[0];
     assert!(raw.rmse > corrected.rmse, "{}", shown());
 }
+
+#[test]
+fn field_drives_written_as_bytes_locate_as_the_bearings_do() {
+    // The multipath and two-emitter drives through the bytes a DF unit and its GPS send:
+    // the command finds what the pipeline finds on the bearings (the ghost as another source,
+    // one emitter per frequency), each emitter inside its own ellipse.
+    use foxhunt_bridge::nmea::LatLon;
+    use foxhunt_sim::capture::decode;
+    use foxhunt_sim::locate::{LocateOptions, locate};
+    let origin = LatLon {
+        lat: 47.0,
+        lon: 8.0,
+    };
+    for (c, emitters, others) in [(Condition::Multipath, 1, 1), (Condition::TwoEmitters, 2, 0)] {
+        let (bytes, truths) = foxhunt_sim::field::capture(c, 0, origin).expect("capture");
+        let d = decode(&bytes, Default::default(), false);
+        let l = locate(&d, &LocateOptions::default()).expect("a fix");
+        let r = &l.report;
+        assert_eq!(r.emitters.len(), emitters, "{}: {:?}", c.name(), r.emitters);
+        assert!(
+            r.other_sources.len() >= others,
+            "{}: {:?}",
+            c.name(),
+            r.other_sources
+        );
+        for t in &truths {
+            // The emitter of the truth's channel (433.920 MHz stands for "no frequency").
+            let f = t.freq_mhz.unwrap_or(433.92);
+            let i = r
+                .emitters
+                .iter()
+                .position(|e| e.freq_mhz.is_some_and(|g| (g - f).abs() < 0.01))
+                .expect("an emitter on the truth's channel");
+            let drawn = &l.drawn[i];
+            assert!(
+                drawn.ellipse.contains(&drawn.position, &t.position),
+                "{}: truth {:?} outside the ellipse of {:?}",
+                c.name(),
+                t.position,
+                drawn
+            );
+        }
+    }
+}

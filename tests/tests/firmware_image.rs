@@ -93,10 +93,10 @@ fn read_image(text: &str) -> Image {
     // Branches of the current function: (target, chain); panic calls: (address, chain, target).
     let mut branches: Vec<(u64, Vec<String>)> = Vec::new();
     let mut calls: Vec<(u64, Vec<String>, String)> = Vec::new();
-    let mut flush = |function: &str,
-                     branches: &mut Vec<(u64, Vec<String>)>,
-                     calls: &mut Vec<(u64, Vec<String>, String)>,
-                     img: &mut Image| {
+    let flush = |function: &str,
+                 branches: &mut Vec<(u64, Vec<String>)>,
+                 calls: &mut Vec<(u64, Vec<String>, String)>,
+                 img: &mut Image| {
         for (at, chain, target) in calls.drain(..) {
             // The compiler merges a function's panics into cold blocks at its end, whose own
             // line is the function's last: charge the branches that jump there instead.
@@ -155,10 +155,10 @@ fn read_image(text: &str) -> Image {
             .find_map(|w| hex(w.trim_end_matches(',')));
         let is_call =
             matches!(op, "bl" | "blx") || (matches!(op, "b.w" | "b") && target != function);
-        if op.starts_with('b') || op.starts_with("cb") {
-            if let Some(t) = target_addr {
-                branches.push((t, chain.clone()));
-            }
+        if (op.starts_with('b') || op.starts_with("cb"))
+            && let Some(t) = target_addr
+        {
+            branches.push((t, chain.clone()));
         }
         if !is_call || target == function {
             continue;

@@ -168,3 +168,32 @@ fn static_memory_budgets() {
     let ungm = size_of::<Sir<Ungm, Gaussian, 50, 1, ImprovedFirefly>>();
     assert!(ungm <= 8 * 1024, "FA-PF-imp UNGM N = 50: {ungm} bytes");
 }
+
+#[test]
+fn every_scenario_gives_finite_rows_at_every_compiled_count() {
+    // One run of every method of every table at every count `bench --particles` accepts: a
+    // row is finite, or says plainly why it was not run (an O(N^2) swarm above 1 000
+    // particles, AFSA above its u16 fish index). Never a null row passed off as a result.
+    // The runs are shortened (12 bearings, 6 tracking steps): what is checked is that every
+    // method is built and answers at every count, not its accuracy.
+    use foxhunt_sim::montecarlo::{Progress, bench};
+    use foxhunt_sim::scenario::ScenarioModel;
+    for n in foxhunt_core::PARTICLE_COUNTS {
+        for mut s in foxhunt_sim::scenario::Scenario::all() {
+            s.runs = 1;
+            s.particles = vec![n];
+            match &mut s.model {
+                ScenarioModel::Bearing(d) => {
+                    let step = d.route.len() / 12;
+                    d.route = d.route.iter().step_by(step.max(1)).copied().collect();
+                }
+                ScenarioModel::Rssi { steps, .. } | ScenarioModel::Ungm { steps } => *steps = 6,
+            }
+            for r in bench(&s, &Progress::new(0, false)) {
+                let finite = r.rmse.is_some_and(f64::is_finite) && r.ratio.is_some_and(|q| q > 0.0);
+                let said = r.note.as_deref().is_some_and(|n| n.starts_with("not run"));
+                assert!(finite || said, "{} {} N = {n}: {r:?}", r.scenario, r.method);
+            }
+        }
+    }
+}

@@ -1,5 +1,6 @@
 //! `foxhunt bench`: Monte Carlo of every method of a scenario's table against its bound.
 
+use crate::field::Condition;
 use crate::io::{Out, Outcome};
 use crate::montecarlo::{Progress, bench, total_runs};
 use crate::report;
@@ -10,7 +11,10 @@ use std::path::PathBuf;
 /// Options of `foxhunt bench`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Canonical scenario name, or `all`.
+    /// Canonical scenario name, `all`, or the field conditions: `field` (every one) or
+    /// `field/NAME` (bias-2deg, bias-4deg, bias-4deg-L600, multipath, two-emitters,
+    /// correlated-5hz, pure-noise, few-bearings, distant-10km, long-20km-47n, long-20km-70n,
+    /// wild-15pct-2deg, aoa-afsa-wild, aoa-afsa, aoa-drive).
     #[arg(long, default_value = "aoa-afsa", conflicts_with = "scenario_file")]
     pub scenario: String,
     /// A scenario file (TOML; see the README).
@@ -95,8 +99,62 @@ fn header(s: &Scenario) -> String {
     )
 }
 
+/// The field conditions `a` asks for, if it asks for them.
+fn field_conditions(a: &Args) -> Result<Option<Vec<Condition>>, String> {
+    if a.scenario_file.is_some() {
+        return Ok(None);
+    }
+    match a.scenario.strip_prefix("field") {
+        Some("") => Ok(Some(Condition::ALL.to_vec())),
+        Some(rest) => {
+            let name = rest.strip_prefix('/').unwrap_or(rest);
+            let c = crate::field::condition(name).ok_or_else(|| {
+                let names: Vec<&str> = Condition::ALL.iter().map(|c| c.name()).collect();
+                format!(
+                    "unknown field condition `{name}`; known: {}",
+                    names.join(", ")
+                )
+            })?;
+            Ok(Some(vec![c]))
+        }
+        None => Ok(None),
+    }
+}
+
+/// Print bench rows as `a` asks.
+fn print(a: &Args, rows: &[crate::report::Row], out: &mut Out) -> Outcome {
+    if a.json {
+        let text = serde_json::to_string_pretty(rows).map_err(|e| e.to_string())?;
+        out.line(&text)
+    } else if a.markdown {
+        out.text(&report::markdown(rows))
+    } else {
+        out.text(&report::table(rows))
+    }
+}
+
 /// Run `foxhunt bench`.
 pub fn run(a: &Args, out: &mut Out) -> Outcome {
+    if let Some(conditions) = field_conditions(a)? {
+        if a.runs == Some(0) {
+            return Err("--runs must be at least 1, not 0".into());
+        }
+        if a.particles.is_some() {
+            return Err("--particles does not apply to the field conditions (N = 1000)".into());
+        }
+        let rows = crate::field::bench(&conditions, a.runs.unwrap_or(100));
+        return print(a, &rows, out);
+    }
+    if a.scenario_file.is_none() && a.scenario.starts_with("guidance") {
+        return crate::guidance::bench::bench(
+            &a.scenario,
+            a.runs,
+            a.json,
+            a.markdown,
+            a.quiet,
+            out,
+        );
+    }
     let list = scenarios(a)?;
     if !(a.progress_secs >= 0.0 && a.progress_secs.is_finite()) {
         return Err(format!(
@@ -109,15 +167,10 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
     let progress = Progress::every(list.iter().map(total_runs).sum(), !a.quiet, every);
     let rows: Vec<_> = list.iter().flat_map(|s| bench(s, &progress)).collect();
     progress.finish();
-    if a.json {
-        let text = serde_json::to_string_pretty(&rows).map_err(|e| e.to_string())?;
-        out.line(&text)
-    } else if a.markdown {
-        out.text(&report::markdown(&rows))
-    } else {
+    if !a.json && !a.markdown {
         for s in &list {
             out.line(&header(s))?;
         }
-        out.text(&report::table(&rows))
     }
+    print(a, &rows, out)
 }

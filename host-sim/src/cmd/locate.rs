@@ -2,9 +2,13 @@
 //! with its maps.
 
 use super::method;
+use crate::calibration::Calibration;
+use crate::capture::{Decoded, Decoder};
+use crate::gpsd::GpsdAddress;
 use crate::io::{Out, Outcome, Outputs, Source, Stop, note, stream};
+use crate::kraken_http::KrakenUrl;
 use crate::live::{LiveOptions, LiveSource};
-use crate::locate::{Decoded, Decoder, LocateOptions, Located, PARTICLES, locate};
+use crate::locate::{LocateOptions, Located, PARTICLES, locate};
 use crate::maps;
 use foxhunt_bridge::BridgeConfig;
 use foxhunt_core::Method;
@@ -21,9 +25,21 @@ pub struct Args {
     /// Capture files (read in order as one stream), `-` for standard input (read live), or
     /// none for the bundled sample drive.
     pub captures: Vec<PathBuf>,
-    /// Fix method, by its registry name (ml-huber, ml, sir, sir-robust, gpf, ekf, afsa-pf, ...).
-    #[arg(long, default_value = "ml-huber", value_parser = method)]
+    /// Fix method, by its registry name: ml-robust (every emitter, offsets and consistency
+    /// checked), or one emitter by ml, ml-huber, sir, sir-robust, gpf, ekf, afsa-pf, ...
+    #[arg(long, default_value = "ml-robust", value_parser = method)]
     pub method: Method,
+    /// Bearings whose frequencies lie within this many MHz share a channel (one emitter
+    /// each).
+    #[arg(long, default_value_t = 0.05)]
+    pub channel_width_mhz: f32,
+    /// Measure the DF unit's mounting offset on a drive past a transmitter at LAT,LON (decimal
+    /// degrees) and save it to --calibration FILE, instead of locating.
+    #[arg(long, allow_hyphen_values = true, requires = "calibration")]
+    pub calibrate: Option<String>,
+    /// A calibration file: with --calibrate where to save it; otherwise the offset to apply.
+    #[arg(long)]
+    pub calibration: Option<PathBuf>,
     /// Particles of sequential methods (a compiled count).
     #[arg(long, default_value_t = PARTICLES)]
     pub particles: usize,
@@ -60,6 +76,21 @@ pub struct Args {
     /// Print `stats: bearings N, seconds S, peak_bytes B` on stderr at the end.
     #[arg(long)]
     pub stats: bool,
+    /// Live: positions (TPV) and heading (ATT) from a running gpsd, while the bearings come
+    /// from the serial device (--baud) or standard input (-): `--gpsd` for localhost:2947,
+    /// or `--gpsd=HOST[:PORT]`.
+    #[arg(
+        long,
+        value_name = "HOST[:PORT]",
+        num_args = 0..=1,
+        require_equals = true,
+        default_missing_value = ""
+    )]
+    pub gpsd: Option<String>,
+    /// Live: poll a KrakenSDR about twice a second, `http://HOST:8081` (its DOA_value.html,
+    /// else doa.xml) or the URL of either page; no CAPTURE.
+    #[arg(long, value_name = "URL")]
+    pub kraken: Option<String>,
 }
 
 /// Where the maps go: (path, named on the command line).
@@ -83,9 +114,34 @@ enum Input {
     Sample,
     Files(Vec<Source>),
     Live(LiveSource),
+    /// A live line of bearings with gpsd beside it.
+    Gpsd(LiveSource, GpsdAddress),
+    /// A KrakenSDR's web page (and perhaps gpsd).
+    Kraken(KrakenUrl, Option<GpsdAddress>),
 }
 
 fn input(a: &Args) -> Result<Input, String> {
+    let gpsd = a.gpsd.as_deref().map(GpsdAddress::parse).transpose()?;
+    if let Some(url) = &a.kraken {
+        if !a.captures.is_empty() || a.baud.is_some() {
+            return Err("--kraken reads the unit's web page: give no CAPTURE and no --baud".into());
+        }
+        return Ok(Input::Kraken(KrakenUrl::parse(url)?, gpsd));
+    }
+    if let Some(g) = gpsd {
+        return match line_input(a)? {
+            Input::Live(source) => Ok(Input::Gpsd(source, g)),
+            _ => Err(
+                "--gpsd gives positions beside a live line of bearings: a serial device \
+                      with --baud, or - for standard input"
+                    .into(),
+            ),
+        };
+    }
+    line_input(a)
+}
+
+fn line_input(a: &Args) -> Result<Input, String> {
     match (a.baud, a.captures.as_slice()) {
         (Some(baud), [path]) => Ok(Input::Live(LiveSource::Serial {
             path: path.to_string_lossy().into_owned(),
@@ -129,24 +185,41 @@ fn peak_bytes() -> u64 {
 /// Run `foxhunt locate`.
 pub fn run(a: &Args, out: &mut Out) -> Outcome {
     let started = Instant::now();
+    let calibrating = a.calibrate.is_some();
+    let offset = match (&a.calibration, calibrating) {
+        (Some(f), false) => Some(Calibration::load(f)?.prior()),
+        _ => None,
+    };
     let options = LocateOptions {
         method: a.method,
         particles: a.particles,
         sigma_deg: a.sigma_deg,
         seed: a.seed,
+        offset,
+        channel_width_mhz: a.channel_width_mhz,
     };
     options.check()?;
     let quiet = quiet_exit(a)?;
     let input = input(a)?;
-    if quiet.is_some() && !matches!(input, Input::Live(_)) {
+    let live = matches!(input, Input::Live(_) | Input::Gpsd(..) | Input::Kraken(..));
+    if calibrating && live {
+        return Err("--calibrate reads a recorded drive, not a live line".into());
+    }
+    if quiet.is_some() && !live {
         return Err("--quiet-exit applies to a live line (--baud, or -)".into());
     }
     // Refuse every output that would destroy an input before reading anything.
-    let inputs: Vec<&Path> = a.captures.iter().map(PathBuf::as_path).collect();
+    let mut inputs: Vec<&Path> = a.captures.iter().map(PathBuf::as_path).collect();
+    if !calibrating {
+        inputs.extend(a.calibration.as_deref());
+    }
     let outputs = Outputs::new(inputs, false);
     let paths = map_paths(a);
     for p in paths.iter().flatten() {
         outputs.check(p, true)?;
+    }
+    if let (Some(f), true) = (&a.calibration, calibrating) {
+        outputs.check(f, true)?;
     }
     let keep_track = paths.iter().any(Option::is_some);
     let decoded = match input {
@@ -160,9 +233,16 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
             stream(&sources, |b| dec.feed(b))?;
             dec.finish()
         }
-        Input::Live(source) => {
+        Input::Live(_) | Input::Gpsd(..) | Input::Kraken(..) => {
+            let (source, gpsd) = match input {
+                Input::Gpsd(source, g) => (source, Some(g)),
+                Input::Kraken(url, g) => (LiveSource::Kraken(url), g),
+                Input::Live(source) => (source, None),
+                Input::Sample | Input::Files(_) => (LiveSource::Stdin, None),
+            };
             let o = LiveOptions {
                 source,
+                gpsd,
                 quiet_exit: quiet,
                 locate: options,
                 json: a.json,
@@ -176,6 +256,17 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
             return finish(a, &d, started);
         }
     };
+    if let (Some(target), Some(file)) = (&a.calibrate, &a.calibration) {
+        let c = Calibration::measure(&decoded, target)?;
+        outputs.write(file, c.to_toml().as_bytes(), true)?;
+        let text = if a.json {
+            serde_json::to_string(&c).map_err(|e| e.to_string())?
+        } else {
+            c.text()
+        };
+        out.line(text.trim_end())?;
+        return finish(a, &decoded, started);
+    }
     let l = locate(&decoded, &options)?;
     write_maps(&l, &decoded, &paths, &outputs)?;
     if a.json {
@@ -211,7 +302,7 @@ fn finish(a: &Args, d: &Decoded, started: Instant) -> Outcome {
     if a.stats {
         note(&format!(
             "stats: bearings {}, seconds {:.3}, peak_bytes {}",
-            d.bearings.len(),
+            d.observations.len(),
             started.elapsed().as_secs_f64(),
             peak_bytes()
         ));

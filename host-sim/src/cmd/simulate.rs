@@ -3,7 +3,7 @@
 use crate::indoor::simulate_capture;
 use crate::io::{Outcome, Outputs, note};
 use crate::scenario::{NAMES, Scenario, ScenarioModel};
-use crate::simulate::{CaptureOptions, drive_capture};
+use crate::simulate::{CaptureFormat, CaptureOptions, drive_capture};
 use foxhunt_bridge::nmea::{Date, LatLon, UtcTime};
 use std::path::PathBuf;
 
@@ -16,6 +16,11 @@ pub struct Args {
     /// A scenario file (TOML).
     #[arg(long)]
     pub scenario_file: Option<PathBuf>,
+    /// A field condition instead (see `bench --scenario field`): bias-2deg, multipath,
+    /// two-emitters, correlated-5hz, pure-noise, few-bearings, ...; GGA fixes and $PFOXB
+    /// bearings carrying their own position and frequency.
+    #[arg(long, conflicts_with_all = ["scenario_file", "format", "wild", "bias_deg"])]
+    pub condition: Option<String>,
     /// Where to write the capture.
     #[arg(long)]
     pub out: PathBuf,
@@ -51,6 +56,18 @@ pub struct Args {
     /// Drives: share of bytes dropped after writing.
     #[arg(long)]
     pub drop: Option<f32>,
+    /// Drives: the DF unit's record format: pfoxb (GGA + RMC + $PFOXB, the default), agrelo
+    /// (GGA + RMC + HDT + %BBB/Q relative bearings), kraken-csv or kraken-xml (KrakenSDR
+    /// records with their own position and heading).
+    #[arg(long)]
+    pub format: Option<String>,
+}
+
+fn format(text: &str) -> Result<CaptureFormat, String> {
+    CaptureFormat::from_name(text).ok_or_else(|| {
+        let names: Vec<&str> = CaptureFormat::ALL.iter().map(|f| f.name()).collect();
+        format!("--format `{text}` is not one of {}", names.join(", "))
+    })
 }
 
 fn start(text: &str) -> Result<UtcTime, String> {
@@ -110,6 +127,9 @@ fn origin(text: &str) -> Result<LatLon, String> {
 
 /// Run `foxhunt simulate`.
 pub fn run(a: &Args) -> Outcome {
+    if let Some(name) = &a.condition {
+        return field(a, name);
+    }
     let scenario = match &a.scenario_file {
         Some(path) => Scenario::load(path)?,
         None => Scenario::named(&a.scenario).ok_or_else(|| {
@@ -133,6 +153,7 @@ pub fn run(a: &Args) -> Outcome {
                 ("origin", a.origin.is_some()),
                 ("start", a.start.is_some()),
                 ("date", a.date.is_some()),
+                ("format", a.format.is_some()),
             ];
             if let Some((name, _)) = drive_only.iter().find(|(_, given)| *given) {
                 return Err(format!(
@@ -180,16 +201,55 @@ pub fn run(a: &Args) -> Outcome {
             if let Some(text) = &a.date {
                 o.date = date(text)?;
             }
+            if let Some(text) = &a.format {
+                o.format = format(text)?;
+            }
             let bytes = drive_capture(&scenario, &o)?;
             outputs.write(&a.out, &bytes, true)?;
             note(&format!(
-                "{} bytes, {} bearings; the route's first point at {:.6},{:.6}",
+                "{} bytes, {} {} bearings; the route's first point at {:.6},{:.6}",
                 bytes.len(),
                 d.route.len(),
+                o.format.name(),
                 o.origin.lat,
                 o.origin.lon
             ));
         }
     }
+    Ok(())
+}
+
+/// `simulate --condition NAME`: one run of a field condition as a capture.
+fn field(a: &Args, name: &str) -> Outcome {
+    let c = crate::field::condition(name).ok_or_else(|| {
+        let names: Vec<&str> = crate::field::Condition::ALL
+            .iter()
+            .map(|c| c.name())
+            .collect();
+        format!(
+            "unknown field condition `{name}`; known: {}",
+            names.join(", ")
+        )
+    })?;
+    let origin = match &a.origin {
+        Some(text) => origin(text)?,
+        None => crate::simulate::DEFAULT_ORIGIN,
+    };
+    let outputs = Outputs::new(std::iter::empty(), a.force);
+    let (bytes, truths) = crate::field::capture(c, a.run, origin)?;
+    outputs.write(&a.out, &bytes, true)?;
+    let at: Vec<String> = truths
+        .iter()
+        .map(|t| format!("({:.0}, {:.0}) m", t.position[0], t.position[1]))
+        .collect();
+    note(&format!(
+        "{} bytes; emitters at {} from the route's first point",
+        bytes.len(),
+        if at.is_empty() {
+            "none".into()
+        } else {
+            at.join(", ")
+        }
+    ));
     Ok(())
 }

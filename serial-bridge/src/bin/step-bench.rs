@@ -6,12 +6,16 @@
 //!
 //! Filters: any sequential method's registry name (sir, gpf, ekf, afsa-pf, fa-pf, fa-pf-imp,
 //! pso-gpf, gsa-gpf, ...) on bearings, or a particle method with `-rssi` (gsa-gpf-rssi: seed
-//! 003's model). On the host this binary is an empty stub.
+//! 003's model). Guidance: `guidance-d` (a greedy D-optimal choice among 16 free headings of
+//! 300 m, one hypothesis) and `guidance-look` (the look-ahead: 9 headings within 90 degrees,
+//! three legs deep, 729 sequences, over three hypotheses), each "step" one whole decision from
+//! the aoa-afsa bearings with an unknown offset. On the host this binary is an empty stub.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(target_os = "none")]
 mod image {
     use cortex_m as _;
+    // The PAC's interrupt vectors: cortex-m-rt links with its `device` feature on.
     use cortex_m_rt::entry;
     use foxhunt_core::canonical::{AOA_EMITTER, AOA_SIGMA, RSSI_SIM, RSSI_SIM_START, loop300};
     use foxhunt_core::estimator::{with_bearing_filter, with_particle_filter};
@@ -23,6 +27,7 @@ mod image {
     use rand_core::SeedableRng;
     use rand_xorshift::XorShiftRng;
     use semihosting::{println, process};
+    use stm32f4 as _;
 
     const N: usize = 100;
 
@@ -91,6 +96,63 @@ mod image {
         with_particle_filter::<N, 4, _, _>(method, model, run)?
     }
 
+    /// `steps` guidance decisions from aoa-afsa's bearings (offset unknown); the sequences
+    /// scored per decision.
+    fn run_guidance(look: bool, steps: usize) -> Result<u32, Error> {
+        use foxhunt_core::fix::bias::BiasPrior;
+        use foxhunt_core::guidance::belief::{Belief, Hypotheses, MAX_POINTS, beliefs};
+        use foxhunt_core::guidance::plan::{FreeHeadings, Objective, PlanOptions, Pose, plan};
+        let mut rng = XorShiftRng::seed_from_u64(1);
+        let z: [Bearing; 60] = core::array::from_fn(|k| {
+            let v = loop300(AOA_EMITTER, k);
+            Bearing {
+                vehicle: v,
+                theta: predicted(&AOA_EMITTER, &v) + AOA_SIGMA * random::normal(&mut rng),
+                sigma: AOA_SIGMA,
+            }
+        });
+        let prior = BiasPrior::default();
+        let vehicle = z[59].vehicle;
+        let h = if look {
+            Hypotheses::spread(AOA_EMITTER, &[[4.0e6, 0.0], [0.0, 1.0e4]], vehicle, 0.15)?
+        } else {
+            Hypotheses::at(AOA_EMITTER)
+        };
+        let mut b = [Belief::from_bearings(AOA_EMITTER, &z, prior, 2.0e4)?; MAX_POINTS];
+        let n = beliefs(&h, &z, prior, 2.0e4, &mut b);
+        let (objective, depth, max_turn) = if look {
+            (
+                Objective::Goal { target_m: 1e-3 },
+                3,
+                core::f32::consts::FRAC_PI_2,
+            )
+        } else {
+            (Objective::DOptimal, 1, core::f32::consts::PI)
+        };
+        let options = PlanOptions {
+            objective,
+            depth,
+            horizon_s: 20.0 * depth as f32,
+            rate_hz: 1.0,
+            sigma: AOA_SIGMA,
+            sample_m: 100.0,
+        };
+        let free = FreeHeadings {
+            max_turn,
+            ..FreeHeadings::default()
+        };
+        let mut sequences = 0;
+        for k in 0..steps {
+            let pose = Pose {
+                position: vehicle,
+                heading: 0.1 * k as f32,
+            };
+            sequences = plan(&b[..n], pose, &free, options)?.sequences;
+        }
+        println!("hypotheses {n}");
+        Ok(sequences)
+    }
+
     #[entry]
     fn main() -> ! {
         let args = semihosting::experimental::env::args::<128>();
@@ -98,6 +160,18 @@ mod image {
         let _program = it.next();
         let filter = it.next().unwrap_or("sir");
         let steps = it.next().and_then(|s| s.parse().ok()).unwrap_or(60usize);
+        if let Some(kind) = filter.strip_prefix("guidance-") {
+            match run_guidance(kind == "look", steps) {
+                Ok(n) => {
+                    println!("{filter} {steps} decisions: {n} sequences each");
+                    process::exit(0)
+                }
+                Err(e) => {
+                    println!("{filter}: {e}");
+                    process::exit(1)
+                }
+            }
+        }
         let (name, rssi) = match filter.strip_suffix("-rssi") {
             Some(base) => (base, true),
             None => (filter, false),

@@ -24,11 +24,23 @@
 //! (default 600).
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
+/// A host tool: built for the MCU (every binary of the crate is, with the image) it only sleeps.
 #[cfg(target_os = "none")]
-#[panic_handler]
-fn panic(_: &core::panic::PanicInfo<'_>) -> ! {
-    loop {
-        core::hint::spin_loop();
+mod image {
+    use stm32f4 as _;
+
+    #[cortex_m_rt::entry]
+    fn main() -> ! {
+        loop {
+            cortex_m::asm::wfi();
+        }
+    }
+
+    #[panic_handler]
+    fn panic(_: &core::panic::PanicInfo<'_>) -> ! {
+        loop {
+            core::hint::spin_loop();
+        }
     }
 }
 

@@ -1,0 +1,538 @@
+//! Scores of candidate moves, and the look-ahead over sequences of them.
+//!
+//! A move is a [`Leg`]: a stretch of driving from one point to the next, with its duration.
+//! Bearings arrive at a fixed rate along it, so a leg adds, at sample points every
+//! [`PlanOptions::sample_m`] metres, the information of the bearings taken there
+//! ([`Belief::observe`], one rank-one update per sample and hypothesis). Where the vehicle can
+//! go next is a [`Reach`]: free headings in open terrain ([`FreeHeadings`]), or the road
+//! graph's turns on the host. [`plan`] walks every sequence of moves within a horizon (depth
+//! first, the beliefs copied per level, nothing allocated) and returns the first move of the
+//! best sequence.
+//!
+//! Objectives ([`Objective`]), each averaged over the hypothesised emitter positions:
+//! - `DOptimal`: ln det P before minus after (the log-volume of the ellipse removed);
+//! - `AOptimal`: the relative drop of trace P;
+//! - `Goal`: the earliest time at which the predicted CEP50 falls below a target radius, and
+//!   where no sequence reaches it, the smallest predicted CEP50 at the horizon. With depth 1
+//!   it is greedy; with a horizon of minutes it is the look-ahead.
+//!
+//! Cost: (candidate sequences) x (samples per leg) x (hypotheses) updates of 3 x 3 (about 60
+//! flops each), plus the objective (a 2 x 2 eigen-decomposition) per leaf.
+
+use super::belief::{Belief, MAX_POINTS};
+use crate::error::{Error, check_finite};
+use core::f32::consts::{PI, TAU};
+
+/// Depth of a look-ahead at most (legs in one sequence).
+pub const MAX_DEPTH: usize = 8;
+/// Sample points of one leg at most.
+pub const MAX_SAMPLES: usize = 16;
+
+/// A stretch of driving.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Leg {
+    /// Where it starts, metres.
+    pub from: [f32; 2],
+    /// Where it ends, metres.
+    pub to: [f32; 2],
+    /// How long it takes, seconds (> 0).
+    pub seconds: f32,
+}
+
+impl Leg {
+    /// Its length, metres.
+    pub fn length(&self) -> f32 {
+        libm::hypotf(self.to[0] - self.from[0], self.to[1] - self.from[1])
+    }
+
+    /// Its direction, radians counter-clockwise from east.
+    pub fn heading(&self) -> f32 {
+        libm::atan2f(self.to[1] - self.from[1], self.to[0] - self.from[0])
+    }
+
+    /// The first `share` (0..1) of it.
+    fn part(&self, share: f32) -> Leg {
+        Leg {
+            from: self.from,
+            to: [
+                self.from[0] + share * (self.to[0] - self.from[0]),
+                self.from[1] + share * (self.to[1] - self.from[1]),
+            ],
+            seconds: share * self.seconds,
+        }
+    }
+}
+
+/// Where the vehicle can go from a state (a position and heading, a road node and the edge it
+/// came by...).
+pub trait Reach {
+    /// What the planner needs to know to continue from the end of a move.
+    type State: Copy;
+    /// Call `each` with every move from `state`: the state at its end and the leg.
+    fn moves(&self, state: &Self::State, each: &mut dyn FnMut(Self::State, Leg));
+}
+
+/// What a plan maximises.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Objective {
+    /// ln det of the position covariance removed (greedy D-optimal).
+    DOptimal,
+    /// Share of the trace of the position covariance removed (greedy A-optimal).
+    AOptimal,
+    /// Reach a predicted CEP50 below `target_m` soonest (the geometric mean over the
+    /// hypotheses), else the smallest predicted CEP50 at the end of the sequence.
+    Goal {
+        /// Target CEP50, metres.
+        target_m: f32,
+    },
+}
+
+/// Settings of [`plan`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlanOptions {
+    /// What to maximise.
+    pub objective: Objective,
+    /// Legs per sequence at most (1 = greedy; at most [`MAX_DEPTH`]).
+    pub depth: usize,
+    /// Seconds of driving looked ahead at most (the last leg is cut there).
+    pub horizon_s: f32,
+    /// Bearings per second.
+    pub rate_hz: f32,
+    /// Bearing noise, radians.
+    pub sigma: f32,
+    /// Distance between sample points of a leg, metres.
+    pub sample_m: f32,
+}
+
+impl PlanOptions {
+    /// `Ok` when usable.
+    pub fn check(&self) -> Result<(), Error> {
+        check_finite(&[self.horizon_s, self.rate_hz, self.sigma, self.sample_m])?;
+        if let Objective::Goal { target_m } = self.objective
+            && !(target_m > 0.0 && target_m.is_finite())
+        {
+            return Err(Error::OutOfRange);
+        }
+        if (1..=MAX_DEPTH).contains(&self.depth)
+            && self.horizon_s > 0.0
+            && self.rate_hz > 0.0
+            && self.sigma > 0.0
+            && self.sample_m > 0.0
+        {
+            Ok(())
+        } else {
+            Err(Error::OutOfRange)
+        }
+    }
+}
+
+/// The chosen first move.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Choice<S> {
+    /// The state after the first move.
+    pub state: S,
+    /// The first move.
+    pub leg: Leg,
+    /// Its sequence's score (larger is better; comparable only within one plan).
+    pub score: f32,
+    /// Goal only: seconds from now at which the best sequence reaches the target, if it does.
+    pub reached_s: Option<f32>,
+    /// The predicted CEP50 at the end of the best sequence, metres (geometric mean over the
+    /// hypotheses).
+    pub cep50_m: f32,
+    /// Candidate sequences scored.
+    pub sequences: u32,
+}
+
+/// Scores of one sequence, before they are ranked.
+#[derive(Debug, Clone, Copy)]
+struct Outcome {
+    score: f32,
+    reached_s: Option<f32>,
+    cep50_m: f32,
+}
+
+/// The geometric mean of the hypotheses' predicted CEP50.
+fn mean_cep(beliefs: &[Belief]) -> f32 {
+    let n = beliefs.len().max(1) as f32;
+    libm::expf(
+        beliefs
+            .iter()
+            .map(|b| libm::logf(b.cep50().max(1e-3)))
+            .sum::<f32>()
+            / n,
+    )
+}
+
+struct Search<'a, R: Reach> {
+    reach: &'a R,
+    options: PlanOptions,
+    start: &'a [Belief],
+    best: Option<Choice<R::State>>,
+    sequences: u32,
+}
+
+impl<R: Reach> Search<'_, R> {
+    /// Add a leg's bearings to the beliefs; the time within the leg at which the target was
+    /// first met, if it was.
+    fn drive(&self, beliefs: &mut [Belief], leg: &Leg) -> Option<f32> {
+        let n = libm::ceilf(leg.length() / self.options.sample_m).clamp(1.0, MAX_SAMPLES as f32);
+        let count = leg.seconds * self.options.rate_hz / n;
+        let target = match self.options.objective {
+            Objective::Goal { target_m } => Some(target_m),
+            _ => None,
+        };
+        let mut met = None;
+        for i in 0..n as usize {
+            let t = (i as f32 + 0.5) / n;
+            let at = [
+                leg.from[0] + t * (leg.to[0] - leg.from[0]),
+                leg.from[1] + t * (leg.to[1] - leg.from[1]),
+            ];
+            for b in beliefs.iter_mut() {
+                b.observe(at, self.options.sigma, count);
+            }
+            if let Some(tm) = target
+                && met.is_none()
+                && mean_cep(beliefs) < tm
+            {
+                met = Some((i as f32 + 1.0) / n * leg.seconds);
+            }
+        }
+        met
+    }
+
+    fn outcome(&self, beliefs: &[Belief], reached_s: Option<f32>) -> Outcome {
+        let n = beliefs.len().max(1) as f32;
+        let cep50_m = mean_cep(beliefs);
+        let score = match self.options.objective {
+            Objective::DOptimal => {
+                self.start
+                    .iter()
+                    .zip(beliefs)
+                    .map(|(a, b)| a.log_det() - b.log_det())
+                    .sum::<f32>()
+                    / n
+            }
+            Objective::AOptimal => {
+                self.start
+                    .iter()
+                    .zip(beliefs)
+                    .map(|(a, b)| 1.0 - b.trace() / a.trace().max(f32::MIN_POSITIVE))
+                    .sum::<f32>()
+                    / n
+            }
+            // Reaching beats not reaching (scores near 1e6 against below 100); sooner is
+            // better. Short of the target, the smaller final CEP50 wins; between sequences that
+            // reach it at the same sample, too (its weight keeps it under a second).
+            Objective::Goal { .. } => {
+                let info = -libm::logf(cep50_m.max(1e-3));
+                match reached_s {
+                    Some(t) => 1e6 - t + 0.05 * info,
+                    None => info,
+                }
+            }
+        };
+        Outcome {
+            score,
+            reached_s,
+            cep50_m,
+        }
+    }
+
+    /// Walk on from `state` with `beliefs` after `elapsed` seconds and `depth` legs; the best
+    /// outcome below.
+    fn walk(
+        &mut self,
+        state: &R::State,
+        beliefs: &[Belief; MAX_POINTS],
+        len: usize,
+        elapsed: f32,
+        depth: usize,
+    ) -> Option<Outcome> {
+        let mut best: Option<Outcome> = None;
+        let reach = self.reach;
+        reach.moves(state, &mut |next, leg| {
+            if !(leg.seconds > 0.0) || !leg.seconds.is_finite() || !leg.length().is_finite() {
+                return;
+            }
+            let left = self.options.horizon_s - elapsed;
+            let cut = leg.seconds > left;
+            let whole = leg;
+            let leg = if cut {
+                leg.part(left / leg.seconds)
+            } else {
+                leg
+            };
+            let mut b = *beliefs;
+            let met = self.drive(&mut b[..len], &leg).map(|t| elapsed + t);
+            let o = if met.is_some() || cut || depth + 1 >= self.options.depth {
+                self.sequences += 1;
+                self.outcome(&b[..len], met)
+            } else {
+                match self.walk(&next, &b, len, elapsed + leg.seconds, depth + 1) {
+                    Some(o) => o,
+                    None => {
+                        // A dead end: the sequence stops here.
+                        self.sequences += 1;
+                        self.outcome(&b[..len], None)
+                    }
+                }
+            };
+            if depth == 0 {
+                let better = self.best.as_ref().is_none_or(|c| o.score > c.score);
+                if better && o.score.is_finite() {
+                    // The whole first move: the state is at its end, wherever the horizon cut.
+                    self.best = Some(Choice {
+                        state: next,
+                        leg: whole,
+                        score: o.score,
+                        reached_s: o.reached_s,
+                        cep50_m: o.cep50_m,
+                        sequences: 0,
+                    });
+                }
+            }
+            if best.as_ref().is_none_or(|x| o.score > x.score) && o.score.is_finite() {
+                best = Some(o);
+            }
+        });
+        best
+    }
+}
+
+/// The first move of the best sequence from `state`, the beliefs (one per hypothesis, see
+/// [`super::belief::beliefs`]) updated along each. `Err(TooFewMeasurements)` without a belief
+/// or a move.
+pub fn plan<R: Reach>(
+    beliefs: &[Belief],
+    state: R::State,
+    reach: &R,
+    options: PlanOptions,
+) -> Result<Choice<R::State>, Error> {
+    options.check()?;
+    let len = beliefs.len().min(MAX_POINTS);
+    let Some(first) = beliefs.first() else {
+        return Err(Error::TooFewMeasurements);
+    };
+    let mut start = [*first; MAX_POINTS];
+    start[..len].copy_from_slice(&beliefs[..len]);
+    let mut search = Search {
+        reach,
+        options,
+        start: &start[..len],
+        best: None,
+        sequences: 0,
+    };
+    let _ = search.walk(&state, &start, len, 0.0, 0);
+    let sequences = search.sequences;
+    search
+        .best
+        .map(|c| Choice { sequences, ..c })
+        .ok_or(Error::TooFewMeasurements)
+}
+
+/// Free headings in open terrain: legs of a fixed length in `count` evenly spaced directions,
+/// those within `max_turn` of the current heading.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FreeHeadings {
+    /// Directions (at most 64).
+    pub count: u32,
+    /// Length of a leg, metres.
+    pub leg_m: f32,
+    /// Speed, m/s.
+    pub speed: f32,
+    /// Largest turn at the start of a leg, radians (pi: any direction, a U-turn included).
+    pub max_turn: f32,
+}
+
+/// A free-heading state: where the vehicle is and which way it points.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pose {
+    /// Position, metres.
+    pub position: [f32; 2],
+    /// Heading, radians counter-clockwise from east.
+    pub heading: f32,
+}
+
+impl Reach for FreeHeadings {
+    type State = Pose;
+    fn moves(&self, state: &Pose, each: &mut dyn FnMut(Pose, Leg)) {
+        if !(self.speed > 0.0) || !(self.leg_m > 0.0) {
+            return;
+        }
+        let count = self.count.clamp(1, 64);
+        for k in 0..count {
+            let h = TAU * k as f32 / count as f32;
+            let turn = libm::fabsf(crate::model::bearing::wrap(h - state.heading));
+            if turn > self.max_turn + 1e-4 {
+                continue;
+            }
+            let to = [
+                state.position[0] + self.leg_m * libm::cosf(h),
+                state.position[1] + self.leg_m * libm::sinf(h),
+            ];
+            each(
+                Pose {
+                    position: to,
+                    heading: h,
+                },
+                Leg {
+                    from: state.position,
+                    to,
+                    seconds: self.leg_m / self.speed,
+                },
+            );
+        }
+    }
+}
+
+impl Default for FreeHeadings {
+    fn default() -> Self {
+        Self {
+            count: 16,
+            leg_m: 300.0,
+            speed: 15.0,
+            max_turn: PI,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fix::bias::BiasPrior;
+    use crate::model::bearing::{Bearing, predicted};
+
+    const DEG: f32 = PI / 180.0;
+
+    /// Bearings from 300 m of road heading east at the origin, emitter 3 km north.
+    fn start(prior: BiasPrior) -> Belief {
+        let e = [0.0, 3000.0];
+        let bs: [Bearing; 20] = core::array::from_fn(|k| {
+            let v = [15.0 * k as f32, 0.0];
+            Bearing {
+                vehicle: v,
+                theta: predicted(&e, &v),
+                sigma: 4.0 * DEG,
+            }
+        });
+        Belief::from_bearings(e, &bs, prior, 2e4).unwrap()
+    }
+
+    fn options(objective: Objective, depth: usize) -> PlanOptions {
+        PlanOptions {
+            objective,
+            depth,
+            horizon_s: 20.0 * depth as f32,
+            rate_hz: 1.0,
+            sigma: 4.0 * DEG,
+            sample_m: 100.0,
+        }
+    }
+
+    fn pose() -> Pose {
+        Pose {
+            position: [285.0, 0.0],
+            heading: 0.0,
+        }
+    }
+
+    #[test]
+    fn greedy_d_crosses_the_line_of_sight_and_closes() {
+        // The ellipse's major axis lies along the line of sight (north): D-optimal wants the
+        // next line of sight along the minor axis, so it drives across, east or west, and
+        // (closer is better) somewhat toward the emitter.
+        let b = start(BiasPrior::calibrated(0.0));
+        let c = plan(
+            &[b],
+            pose(),
+            &FreeHeadings::default(),
+            options(Objective::DOptimal, 1),
+        )
+        .unwrap();
+        let h = c.leg.heading();
+        assert!(
+            libm::sinf(h) > 0.0 && libm::fabsf(libm::cosf(h)) > 0.3,
+            "{}",
+            h / DEG
+        );
+        assert_eq!(c.sequences, 16);
+        let a = plan(
+            &[b],
+            pose(),
+            &FreeHeadings::default(),
+            options(Objective::AOptimal, 1),
+        )
+        .unwrap();
+        assert!(
+            libm::sinf(a.leg.heading()) > 0.0,
+            "{}",
+            a.leg.heading() / DEG
+        );
+    }
+
+    #[test]
+    fn look_ahead_scores_every_sequence_and_beats_a_poor_move() {
+        let b = start(BiasPrior::default());
+        let headings = FreeHeadings {
+            max_turn: PI / 2.0,
+            ..FreeHeadings::default()
+        };
+        let goal = Objective::Goal { target_m: 100.0 };
+        let c = plan(&[b], pose(), &headings, options(goal, 3)).unwrap();
+        // 9 headings within 90 degrees, three levels deep.
+        assert_eq!(c.sequences, 9 * 9 * 9);
+        // Driving away from the emitter (south) is never the best first move.
+        assert!(
+            libm::sinf(c.leg.heading()) > -0.1,
+            "{}",
+            c.leg.heading() / DEG
+        );
+        // The chosen sequence predicts a CEP50 below what straight-on driving gives.
+        let mut straight = b;
+        for k in 0..60 {
+            straight.observe([285.0 + 15.0 * k as f32, 0.0], 4.0 * DEG, 1.0);
+        }
+        assert!(
+            c.cep50_m < straight.cep50(),
+            "{} {}",
+            c.cep50_m,
+            straight.cep50()
+        );
+    }
+
+    #[test]
+    fn bad_settings_and_no_moves_are_errors() {
+        let b = start(BiasPrior::default());
+        let mut o = options(Objective::DOptimal, 0);
+        assert_eq!(
+            plan(&[b], pose(), &FreeHeadings::default(), o).map(|_| ()),
+            Err(Error::OutOfRange)
+        );
+        o.depth = 1;
+        o.sigma = f32::NAN;
+        assert_eq!(
+            plan(&[b], pose(), &FreeHeadings::default(), o).map(|_| ()),
+            Err(Error::NonFinite)
+        );
+        let none = FreeHeadings {
+            speed: 0.0,
+            ..FreeHeadings::default()
+        };
+        assert_eq!(
+            plan(&[b], pose(), &none, options(Objective::DOptimal, 1)).map(|_| ()),
+            Err(Error::TooFewMeasurements)
+        );
+        assert_eq!(
+            plan(
+                &[],
+                pose(),
+                &FreeHeadings::default(),
+                options(Objective::DOptimal, 1)
+            )
+            .map(|_| ()),
+            Err(Error::TooFewMeasurements)
+        );
+    }
+}

@@ -1,0 +1,465 @@
+//! The road network guidance drives on: read once per area from an OpenStreetMap extract
+//! (`.osm.pbf` through the osmpbf crate, or OSM XML through quick-xml), kept as a compact
+//! graph (compressed adjacency: one offset per node, 12 bytes per directed edge), placed in
+//! the drive's local frame when the drive's origin is known.
+//!
+//! Only ways a car drives on are kept (`highway` = motorway ... residential, service, the
+//! `_link`s, living_street, unclassified, road); `oneway` is honoured (motorways are one way
+//! unless tagged otherwise, `oneway=-1` runs backwards). Speeds come from `maxspeed` where it
+//! parses (km/h or mph) and from the road class otherwise. Every OSM node of a kept way is a
+//! graph node (no chains contracted), so a curved road is its polyline.
+
+use foxhunt_bridge::geo::LocalFrame;
+use foxhunt_bridge::nmea::LatLon;
+use std::collections::HashMap;
+use std::path::Path;
+
+/// One directed road segment.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Edge {
+    /// The node it leads to.
+    pub to: u32,
+    /// Length, metres.
+    pub length_m: f32,
+    /// Speed driven on it, m/s.
+    pub speed: f32,
+}
+
+/// A road network: nodes in local metres (and latitude/longitude when read from OSM) and the
+/// directed edges out of each.
+#[derive(Debug, Clone, Default)]
+pub struct RoadGraph {
+    positions: Vec<[f32; 2]>,
+    geodetic: Vec<LatLon>,
+    first: Vec<u32>,
+    edges: Vec<Edge>,
+}
+
+/// A road between two nodes as it is built: (from, to, speed m/s, both ways).
+pub type Segment = (u32, u32, f32, bool);
+
+impl RoadGraph {
+    /// A graph of `positions` (local metres) and `segments`; segments naming a missing node,
+    /// joining a node to itself or with a bad speed are dropped.
+    pub fn new(positions: Vec<[f32; 2]>, segments: &[Segment]) -> Self {
+        let n = positions.len();
+        let mut directed: Vec<(u32, Edge)> = Vec::with_capacity(2 * segments.len());
+        for &(a, b, speed, both) in segments {
+            let (Some(pa), Some(pb)) = (positions.get(a as usize), positions.get(b as usize))
+            else {
+                continue;
+            };
+            let length_m = ((pa[0] - pb[0]).powi(2) + (pa[1] - pb[1]).powi(2)).sqrt();
+            if a == b || !(speed > 0.0) || !length_m.is_finite() || !(length_m > 0.0) {
+                continue;
+            }
+            directed.push((
+                a,
+                Edge {
+                    to: b,
+                    length_m,
+                    speed,
+                },
+            ));
+            if both {
+                directed.push((
+                    b,
+                    Edge {
+                        to: a,
+                        length_m,
+                        speed,
+                    },
+                ));
+            }
+        }
+        directed.sort_by_key(|(from, e)| (*from, e.to));
+        directed.dedup_by_key(|(from, e)| (*from, e.to));
+        let mut first = vec![0u32; n + 1];
+        for (from, _) in &directed {
+            first[*from as usize + 1] += 1;
+        }
+        for i in 0..n {
+            first[i + 1] += first[i];
+        }
+        Self {
+            positions,
+            geodetic: Vec::new(),
+            first,
+            edges: directed.into_iter().map(|(_, e)| e).collect(),
+        }
+    }
+
+    /// Nodes.
+    pub fn len(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// No node at all.
+    pub fn is_empty(&self) -> bool {
+        self.positions.is_empty()
+    }
+
+    /// Directed edges.
+    pub fn edge_count(&self) -> usize {
+        self.edges.len()
+    }
+
+    /// Position of node `n`, local metres.
+    pub fn position(&self, n: u32) -> Option<[f32; 2]> {
+        self.positions.get(n as usize).copied()
+    }
+
+    /// Latitude and longitude of node `n` (graphs read from OSM).
+    pub fn geodetic(&self, n: u32) -> Option<LatLon> {
+        self.geodetic.get(n as usize).copied()
+    }
+
+    /// The edges out of node `n`.
+    pub fn out(&self, n: u32) -> &[Edge] {
+        let (Some(a), Some(b)) = (self.first.get(n as usize), self.first.get(n as usize + 1))
+        else {
+            return &[];
+        };
+        self.edges.get(*a as usize..*b as usize).unwrap_or(&[])
+    }
+
+    /// Every road once (an undirected pair once), as node pairs: what a map draws.
+    pub fn segments(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
+        (0..self.len() as u32).flat_map(move |a| {
+            self.out(a).iter().filter_map(move |e| {
+                let back = self.out(e.to).iter().any(|r| r.to == a);
+                (!back || a < e.to).then_some((a, e.to))
+            })
+        })
+    }
+
+    /// The node nearest `p` (O(n)), if any.
+    pub fn nearest(&self, p: [f32; 2]) -> Option<u32> {
+        self.positions
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| !self.out(*i as u32).is_empty())
+            .map(|(i, q)| (i, (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(i, _)| i as u32)
+    }
+
+    /// The same roads placed in `frame` (graphs read from OSM).
+    pub fn localise(&mut self, frame: &LocalFrame) {
+        for (p, g) in self.positions.iter_mut().zip(&self.geodetic) {
+            if let Ok(en) = frame.to_local(*g) {
+                *p = [en[0] as f32, en[1] as f32];
+            }
+        }
+        for a in 0..self.positions.len() {
+            let pa = self.positions[a];
+            let (s, e) = (self.first[a] as usize, self.first[a + 1] as usize);
+            for k in s..e {
+                let pb = self.positions[self.edges[k].to as usize];
+                self.edges[k].length_m = ((pa[0] - pb[0]).powi(2) + (pa[1] - pb[1]).powi(2)).sqrt();
+            }
+        }
+    }
+
+    /// Read an extract: `.pbf` as OSM PBF, anything else as OSM XML. Nodes are placed in a
+    /// frame at the extract's first kept node until [`RoadGraph::localise`] moves them.
+    pub fn load(path: &Path) -> Result<Self, String> {
+        let osm = if path.to_string_lossy().ends_with(".pbf") {
+            read_pbf(path)?
+        } else {
+            let text =
+                std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+            read_xml(&text).map_err(|e| format!("{}: {e}", path.display()))?
+        };
+        osm.graph().map_err(|e| format!("{}: {e}", path.display()))
+    }
+}
+
+/// Speed of a road class, m/s (used where `maxspeed` says nothing).
+fn class_speed(class: &str) -> Option<f32> {
+    let kmh = match class.trim_end_matches("_link") {
+        "motorway" => 110.0,
+        "trunk" => 90.0,
+        "primary" => 70.0,
+        "secondary" => 60.0,
+        "tertiary" => 50.0,
+        "unclassified" | "road" => 40.0,
+        "residential" => 30.0,
+        "living_street" => 10.0,
+        "service" => 20.0,
+        _ => return None,
+    };
+    Some(kmh / 3.6)
+}
+
+/// `maxspeed` in m/s: "50", "50 km/h", "30 mph".
+fn max_speed(text: &str) -> Option<f32> {
+    let t = text.trim();
+    let (number, factor) = match t.strip_suffix("mph") {
+        Some(n) => (n, 1.609_344 / 3.6),
+        None => (t.trim_end_matches("km/h"), 1.0 / 3.6),
+    };
+    number
+        .trim()
+        .parse::<f32>()
+        .ok()
+        .filter(|v| *v > 0.0 && v.is_finite())
+        .map(|v| v * factor)
+}
+
+/// A way's tags that matter.
+#[derive(Debug, Default, Clone)]
+struct WayTags {
+    highway: Option<String>,
+    oneway: Option<String>,
+    maxspeed: Option<String>,
+}
+
+impl WayTags {
+    fn set(&mut self, k: &str, v: &str) {
+        match k {
+            "highway" => self.highway = Some(v.to_string()),
+            "oneway" => self.oneway = Some(v.to_string()),
+            "maxspeed" => self.maxspeed = Some(v.to_string()),
+            _ => {}
+        }
+    }
+
+    /// (speed, direction: 1 forward only, -1 backward only, 0 both) for a drivable way.
+    fn drivable(&self) -> Option<(f32, i8)> {
+        let class = self.highway.as_deref()?;
+        let default = class_speed(class)?;
+        let speed = self
+            .maxspeed
+            .as_deref()
+            .and_then(max_speed)
+            .unwrap_or(default);
+        let dir = match self.oneway.as_deref() {
+            Some("yes" | "true" | "1") => 1,
+            Some("-1" | "reverse") => -1,
+            Some("no" | "false" | "0") => 0,
+            _ if class == "motorway" => 1,
+            _ => 0,
+        };
+        Some((speed, dir))
+    }
+}
+
+/// What an extract holds for the graph: node coordinates by id and the drivable ways.
+#[derive(Debug, Default)]
+struct Osm {
+    nodes: HashMap<i64, LatLon>,
+    ways: Vec<(Vec<i64>, f32, i8)>,
+}
+
+impl Osm {
+    fn way(&mut self, refs: Vec<i64>, tags: &WayTags) {
+        if let Some((speed, dir)) = tags.drivable()
+            && refs.len() >= 2
+        {
+            self.ways.push((refs, speed, dir));
+        }
+    }
+
+    /// The graph of the ways, their nodes numbered in order of first use; nodes a way names
+    /// but the extract lacks end that way's run there.
+    fn graph(&self) -> Result<RoadGraph, String> {
+        let mut index: HashMap<i64, u32> = HashMap::new();
+        let mut geodetic: Vec<LatLon> = Vec::new();
+        let mut segments: Vec<Segment> = Vec::new();
+        for (refs, speed, dir) in &self.ways {
+            let mut last: Option<u32> = None;
+            for id in refs {
+                let Some(ll) = self.nodes.get(id) else {
+                    last = None;
+                    continue;
+                };
+                let n = *index.entry(*id).or_insert_with(|| {
+                    geodetic.push(*ll);
+                    (geodetic.len() - 1) as u32
+                });
+                if let Some(p) = last {
+                    match dir {
+                        1 => segments.push((p, n, *speed, false)),
+                        -1 => segments.push((n, p, *speed, false)),
+                        _ => segments.push((p, n, *speed, true)),
+                    }
+                }
+                last = Some(n);
+            }
+        }
+        let Some(first) = geodetic.first() else {
+            return Err("no drivable road (highway=...) in the extract".into());
+        };
+        let frame = LocalFrame::new(*first, 0.0).map_err(|e| format!("bad coordinates: {e:?}"))?;
+        let positions: Vec<[f32; 2]> = geodetic
+            .iter()
+            .map(|g| {
+                frame
+                    .to_local(*g)
+                    .map(|p| [p[0] as f32, p[1] as f32])
+                    .unwrap_or([f32::NAN; 2])
+            })
+            .collect();
+        let mut g = RoadGraph::new(positions, &segments);
+        g.geodetic = geodetic;
+        Ok(g)
+    }
+}
+
+/// Read OSM XML (`<node id lat lon>`, `<way><nd ref/><tag k v/></way>`).
+fn read_xml(bytes: &[u8]) -> Result<Osm, String> {
+    use quick_xml::events::Event;
+    let mut reader = quick_xml::Reader::from_reader(bytes);
+    let mut osm = Osm::default();
+    let mut buf = Vec::new();
+    let mut way: Option<(Vec<i64>, WayTags)> = None;
+    let attr = |e: &quick_xml::events::BytesStart<'_>, key: &[u8]| -> Option<String> {
+        e.attributes()
+            .flatten()
+            .find(|a| a.key.as_ref() == key)
+            .and_then(|a| a.unescape_value().ok().map(|v| v.into_owned()))
+    };
+    loop {
+        let ev = reader
+            .read_event_into(&mut buf)
+            .map_err(|e| format!("OSM XML at byte {}: {e}", reader.buffer_position()))?;
+        match &ev {
+            Event::Start(e) | Event::Empty(e) => match e.name().as_ref() {
+                b"node" => {
+                    let id = attr(e, b"id").and_then(|v| v.parse::<i64>().ok());
+                    let lat = attr(e, b"lat").and_then(|v| v.parse::<f64>().ok());
+                    let lon = attr(e, b"lon").and_then(|v| v.parse::<f64>().ok());
+                    if let (Some(id), Some(lat), Some(lon)) = (id, lat, lon)
+                        && lat.abs() <= 90.0
+                        && lon.abs() <= 180.0
+                    {
+                        osm.nodes.insert(id, LatLon { lat, lon });
+                    }
+                }
+                b"way" => {
+                    way = Some((Vec::new(), WayTags::default()));
+                    if matches!(ev, Event::Empty(_)) {
+                        way = None;
+                    }
+                }
+                b"nd" => {
+                    if let (Some(w), Some(r)) =
+                        (way.as_mut(), attr(e, b"ref").and_then(|v| v.parse().ok()))
+                    {
+                        w.0.push(r);
+                    }
+                }
+                b"tag" => {
+                    if let (Some(w), Some(k), Some(v)) =
+                        (way.as_mut(), attr(e, b"k"), attr(e, b"v"))
+                    {
+                        w.1.set(&k, &v);
+                    }
+                }
+                _ => {}
+            },
+            Event::End(e) if e.name().as_ref() == b"way" => {
+                if let Some((refs, tags)) = way.take() {
+                    osm.way(refs, &tags);
+                }
+            }
+            Event::Eof => break,
+            _ => {}
+        }
+        buf.clear();
+    }
+    Ok(osm)
+}
+
+/// Read an OSM PBF extract.
+fn read_pbf(path: &Path) -> Result<Osm, String> {
+    use osmpbf::{Element, ElementReader};
+    let reader = ElementReader::from_path(path)
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let mut osm = Osm::default();
+    reader
+        .for_each(|el| match el {
+            Element::Node(n) => {
+                osm.nodes.insert(
+                    n.id(),
+                    LatLon {
+                        lat: n.lat(),
+                        lon: n.lon(),
+                    },
+                );
+            }
+            Element::DenseNode(n) => {
+                osm.nodes.insert(
+                    n.id(),
+                    LatLon {
+                        lat: n.lat(),
+                        lon: n.lon(),
+                    },
+                );
+            }
+            Element::Way(w) => {
+                let mut tags = WayTags::default();
+                for (k, v) in w.tags() {
+                    tags.set(k, v);
+                }
+                if tags.drivable().is_some() {
+                    osm.way(w.refs().collect(), &tags);
+                }
+            }
+            Element::Relation(_) => {}
+        })
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(osm)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const XML: &str = r#"<?xml version="1.0"?>
+<osm version="0.6">
+  <node id="1" lat="47.0" lon="8.0"/>
+  <node id="2" lat="47.0" lon="8.01"/>
+  <node id="3" lat="47.01" lon="8.01"/>
+  <node id="4" lat="47.01" lon="8.02"/>
+  <way id="10"><nd ref="1"/><nd ref="2"/><nd ref="3"/>
+    <tag k="highway" v="residential"/><tag k="maxspeed" v="30 mph"/></way>
+  <way id="11"><nd ref="3"/><nd ref="4"/><tag k="highway" v="primary"/><tag k="oneway" v="-1"/></way>
+  <way id="12"><nd ref="1"/><nd ref="4"/><tag k="highway" v="footway"/></way>
+  <way id="13"><nd ref="2"/><nd ref="99"/><tag k="highway" v="service"/></way>
+</osm>"#;
+
+    #[test]
+    fn osm_xml_gives_drivable_directed_roads() {
+        let g = read_xml(XML.as_bytes()).unwrap().graph().unwrap();
+        assert_eq!(g.len(), 4);
+        // 1-2, 2-3 both ways; 3-4 backwards only; the footway and the dangling service road
+        // add nothing.
+        assert_eq!(g.edge_count(), 5);
+        let first = g.out(0);
+        assert_eq!(first.len(), 1);
+        // 0.01 degree of longitude at 47 N: 759 m; 30 mph.
+        assert!((first[0].length_m - 759.0).abs() < 3.0, "{first:?}");
+        assert!((first[0].speed - 13.41).abs() < 0.01);
+        assert!(g.out(2).iter().all(|e| e.to != 3));
+        assert_eq!(g.out(3).len(), 1);
+        assert_eq!(g.segments().count(), 3);
+        assert_eq!(g.nearest([800.0, 10.0]), Some(1));
+        assert!(
+            read_xml(b"<osm><node id='1' lat='x'/></osm>")
+                .unwrap()
+                .graph()
+                .is_err()
+        );
+        assert!(read_xml(b"<osm><way></nd></osm>").is_err());
+    }
+
+    #[test]
+    fn speeds_parse() {
+        assert_eq!(max_speed("50"), Some(50.0 / 3.6));
+        assert!((max_speed("30 mph").unwrap() - 13.41).abs() < 0.01);
+        assert_eq!(max_speed("none"), None);
+        assert!(class_speed("motorway_link").is_some() && class_speed("footway").is_none());
+    }
+}

@@ -1,0 +1,246 @@
+//! What the live map shows at one moment, built from the bearings decoded so far: the route,
+//! the latest bearing rays, every emitter and other source of the field pipeline with its
+//! ellipse, the guidance advice and the CEP50 history. Everything is in latitude and longitude
+//! (the page draws, it does not compute).
+
+use crate::capture::Decoded;
+use crate::guidance::{FixView, GuidanceOptions, Situation, advise, track_heading};
+use crate::locate::geodetic;
+use crate::roads::RoadGraph;
+use crate::runs::Pipeline;
+use foxhunt_bridge::geo::LocalFrame;
+use foxhunt_core::fix::bias::BiasPrior;
+use foxhunt_core::fix::ellipse::Ellipse;
+use foxhunt_core::fix::locate::{ChannelOutcome, LocateConfig, NoEmitter, Source};
+use serde::Serialize;
+
+/// Route points sent at most (the route is thinned evenly beyond).
+const ROUTE_POINTS: usize = 2000;
+/// Latest bearings drawn as rays.
+const RAYS: usize = 40;
+
+/// A latitude, longitude pair as Leaflet takes it.
+pub type LL = [f64; 2];
+
+/// A located source on the map.
+#[derive(Debug, Clone, Serialize)]
+pub struct MapSource {
+    /// Position.
+    pub at: LL,
+    /// Its ellipse (closed ring).
+    pub ellipse: Vec<LL>,
+    /// Confidence of the ellipse.
+    pub confidence: f32,
+    /// CEP50, metres.
+    pub cep50_m: f32,
+    /// Channel frequency, MHz.
+    pub freq_mhz: Option<f32>,
+    /// Bearings it holds.
+    pub used: u32,
+    /// Residuals consistent with the noise model.
+    pub consistent: bool,
+    /// The DF unit's offset, degrees, and its sd.
+    pub offset_deg: [f32; 2],
+}
+
+/// The advice on the map.
+#[derive(Debug, Clone, Serialize)]
+pub struct MapAdvice {
+    /// The advice's fields.
+    #[serde(flatten)]
+    pub report: crate::guidance::AdviceReport,
+    /// The point to drive to.
+    pub waypoint_ll: LL,
+    /// Where the vehicle is.
+    pub vehicle_ll: LL,
+    /// The next turn's place, on roads.
+    pub turn_ll: Option<LL>,
+    /// The advice in one line.
+    pub line: String,
+}
+
+/// One update of the live map (the `/state` body and every server-sent event).
+#[derive(Debug, Clone, Serialize, Default)]
+pub struct MapState {
+    /// Update number (0: nothing yet).
+    pub update: u64,
+    /// Bearings so far.
+    pub bearings: usize,
+    /// The local origin.
+    pub origin: Option<LL>,
+    /// The vehicle's route.
+    pub route: Vec<LL>,
+    /// The latest bearings: from the vehicle to a point along the bearing.
+    pub rays: Vec<[LL; 2]>,
+    /// One emitter per channel.
+    pub emitters: Vec<MapSource>,
+    /// Other sources (reflections, a second transmitter on a channel).
+    pub others: Vec<MapSource>,
+    /// Why there is no fix, when there is none.
+    pub fix_error: Option<String>,
+    /// The suggested move.
+    pub advice: Option<MapAdvice>,
+    /// Why there is no advice, when there is none.
+    pub advice_error: Option<String>,
+    /// (bearings, CEP50 m) of every update with a fix.
+    pub history: Vec<[f64; 2]>,
+    /// The input has ended.
+    pub done: bool,
+}
+
+fn ll(frame: &LocalFrame, p: [f32; 2]) -> LL {
+    let g = geodetic(frame, p);
+    [g.lat, g.lon]
+}
+
+fn ring(frame: &LocalFrame, s: &Source) -> Vec<LL> {
+    let e: &Ellipse = &s.ellipse;
+    let (c, si) = (e.orientation.cos(), e.orientation.sin());
+    (0..=72)
+        .map(|k| {
+            let t = k as f32 * std::f32::consts::TAU / 72.0;
+            let (a, b) = (e.major * t.cos(), e.minor * t.sin());
+            ll(
+                frame,
+                [
+                    s.position[0] + a * c - b * si,
+                    s.position[1] + a * si + b * c,
+                ],
+            )
+        })
+        .collect()
+}
+
+fn map_source(frame: &LocalFrame, s: &Source) -> MapSource {
+    MapSource {
+        at: ll(frame, s.position),
+        ellipse: ring(frame, s),
+        confidence: s.ellipse.confidence,
+        cep50_m: s.cep50,
+        freq_mhz: s.freq_mhz,
+        used: s.used,
+        consistent: s.consistent,
+        offset_deg: [s.bias.to_degrees(), s.bias_sd.to_degrees()],
+    }
+}
+
+/// The field pipeline on the observations, as `foxhunt locate` runs it.
+fn fix(d: &Decoded) -> Result<Pipeline, String> {
+    crate::runs::pipeline(&d.observations, &LocateConfig::default(), 1).map_err(|e| e.to_string())
+}
+
+fn no_emitter(r: &Pipeline) -> String {
+    match r.channels().first().map(|c| c.outcome) {
+        Some(ChannelOutcome::NoConsistentEmitter(why)) => match why {
+            NoEmitter::NoConsensus => "no point gathers more bearings than luck would".into(),
+            NoEmitter::TooNoisy => "the bearings are too noisy for a fix".into(),
+            NoEmitter::TooFew => "too few bearings for a checked fix".into(),
+            NoEmitter::Geometry(e) => format!("no fix yet: {e}"),
+        },
+        _ => "no bearing yet".into(),
+    }
+}
+
+/// Build the map's state after `update` updates; `history` carries the CEP50 history from
+/// the last state; `roads` (placed in the drive's frame) makes the advice a road turn.
+pub fn build(
+    d: &Decoded,
+    update: u64,
+    history: &[[f64; 2]],
+    roads: Option<&RoadGraph>,
+    done: bool,
+) -> MapState {
+    let bearings: Vec<foxhunt_core::Bearing> = d.bearings().copied().collect();
+    let mut st = MapState {
+        update,
+        bearings: bearings.len(),
+        history: history.to_vec(),
+        done,
+        ..MapState::default()
+    };
+    let Some(frame) = d.frame else {
+        st.fix_error = Some("no GPS fix yet".into());
+        return st;
+    };
+    st.origin = Some([frame.origin.lat, frame.origin.lon]);
+    let stride = bearings.len().div_ceil(ROUTE_POINTS).max(1);
+    st.route = bearings
+        .iter()
+        .step_by(stride)
+        .chain(bearings.last())
+        .map(|b| ll(&frame, b.vehicle))
+        .collect();
+    let report = fix(d);
+    let emitter = report
+        .as_ref()
+        .ok()
+        .and_then(|r| r.emitters().first().copied());
+    let reach = emitter
+        .map(|e| {
+            let v = bearings.last().map(|b| b.vehicle).unwrap_or([0.0; 2]);
+            1.5 * (e.position[0] - v[0]).hypot(e.position[1] - v[1])
+        })
+        .unwrap_or(3000.0)
+        .clamp(500.0, 20_000.0);
+    st.rays = bearings[bearings.len().saturating_sub(RAYS)..]
+        .iter()
+        .map(|b| {
+            let end = [
+                b.vehicle[0] + reach * b.theta.cos(),
+                b.vehicle[1] + reach * b.theta.sin(),
+            ];
+            [ll(&frame, b.vehicle), ll(&frame, end)]
+        })
+        .collect();
+    match &report {
+        Ok(r) => {
+            st.emitters = r.emitters().iter().map(|s| map_source(&frame, s)).collect();
+            st.others = r
+                .others()
+                .iter()
+                .map(|o| map_source(&frame, &o.source))
+                .collect();
+            if st.emitters.is_empty() {
+                st.fix_error = Some(no_emitter(r));
+            }
+        }
+        Err(e) => st.fix_error = Some(e.clone()),
+    }
+    if let Some(e) = emitter {
+        st.history.push([bearings.len() as f64, f64::from(e.cep50)]);
+    }
+    let Some(vehicle) = bearings.last().map(|b| b.vehicle) else {
+        st.advice_error = Some("no bearing yet".into());
+        return st;
+    };
+    let situation = Situation {
+        bearings: &bearings,
+        vehicle,
+        heading: track_heading(&bearings),
+        fix: emitter.map(|e| FixView {
+            position: e.position,
+            covariance: e.covariance,
+            consistent: e.consistent,
+            effective: e.effective,
+        }),
+        prior: BiasPrior::default(),
+    };
+    let options = if roads.is_some() {
+        GuidanceOptions::roads()
+    } else {
+        GuidanceOptions::default()
+    };
+    match advise(&situation, roads, &options) {
+        Ok(a) => {
+            st.advice = Some(MapAdvice {
+                report: a.report(),
+                waypoint_ll: ll(&frame, a.waypoint),
+                vehicle_ll: ll(&frame, vehicle),
+                turn_ll: a.turn.map(|t| ll(&frame, t.at)),
+                line: a.line(),
+            })
+        }
+        Err(e) => st.advice_error = Some(e),
+    }
+    st
+}

@@ -1,0 +1,173 @@
+//! The live map in a real headless browser (Debian's chromium, installed by .ci/run): a capture
+//! replayed through `foxhunt serve`, the page loaded, and its DOM checked for the fix and the
+//! suggested move; a screenshot is saved to target/tmp/web/live-map.png.
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+
+fn chromium() -> PathBuf {
+    for c in ["chromium", "chromium-browser"] {
+        if let Ok(out) = Command::new("which").arg(c).output()
+            && out.status.success()
+        {
+            return PathBuf::from(String::from_utf8_lossy(&out.stdout).trim());
+        }
+    }
+    panic!("no chromium on PATH: .ci/run installs Debian's chromium (apt-get install chromium)");
+}
+
+/// An OSM XML street grid of about 300 m around the sample drive's area (origin 47 N, 8 E).
+fn grid_osm(path: &Path) {
+    let mut s = String::from("<?xml version=\"1.0\"?>\n<osm version=\"0.6\">\n");
+    let (lat0, lon0, dlat, dlon) = (46.995, 7.99, 0.0027, 0.004);
+    let (rows, cols) = (10, 12);
+    for j in 0..rows {
+        for i in 0..cols {
+            let id = 1 + j * cols + i;
+            s += &format!(
+                "  <node id=\"{id}\" lat=\"{:.6}\" lon=\"{:.6}\"/>\n",
+                lat0 + dlat * j as f64,
+                lon0 + dlon * i as f64
+            );
+        }
+    }
+    let mut way = 1000;
+    for j in 0..rows {
+        way += 1;
+        s += &format!("  <way id=\"{way}\">");
+        for i in 0..cols {
+            s += &format!("<nd ref=\"{}\"/>", 1 + j * cols + i);
+        }
+        s += "<tag k=\"highway\" v=\"residential\"/></way>\n";
+    }
+    for i in 0..cols {
+        way += 1;
+        s += &format!("  <way id=\"{way}\">");
+        for j in 0..rows {
+            s += &format!("<nd ref=\"{}\"/>", 1 + j * cols + i);
+        }
+        s += "<tag k=\"highway\" v=\"tertiary\"/></way>\n";
+    }
+    s += "</osm>\n";
+    std::fs::write(path, s).expect("write the extract");
+}
+
+/// `foxhunt serve` on `capture` (roads from `osm`), once its input has ended: the child and its
+/// address.
+fn serve(capture: &Path, osm: &Path) -> (Child, String) {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .args([
+            "serve",
+            "--addr",
+            "127.0.0.1:0",
+            "--pace",
+            "0",
+            "--linger",
+            "2",
+        ])
+        .arg("--roads")
+        .arg(osm)
+        .arg(capture)
+        .stderr(Stdio::piped())
+        .stdout(Stdio::null())
+        .spawn()
+        .expect("start foxhunt serve");
+    let mut lines = BufReader::new(child.stderr.take().expect("its stderr")).lines();
+    let mut addr = None;
+    for l in lines.by_ref() {
+        let l = l.expect("a line of its stderr");
+        if let Some(a) = l.strip_prefix("foxhunt serve: http://") {
+            addr = Some(format!("http://{a}"));
+        }
+        if l.contains("input ended") {
+            break;
+        }
+    }
+    (child, addr.expect("serve printed its address"))
+}
+
+fn browser(dir: &Path, what: &[&str], url: &str) -> std::process::Output {
+    let profile = dir.join(format!("profile-{}", what[0].trim_start_matches("--")));
+    let _ = std::fs::remove_dir_all(&profile);
+    Command::new("timeout")
+        .arg("120")
+        .arg(chromium())
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--no-first-run",
+            "--window-size=1200,800",
+            "--virtual-time-budget=3000",
+        ])
+        .arg(format!("--user-data-dir={}", profile.display()))
+        .args(what)
+        .arg(url)
+        .output()
+        .expect("run chromium")
+}
+
+#[test]
+fn the_live_map_shows_the_fix_and_the_suggested_move() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("web");
+    std::fs::create_dir_all(&dir).unwrap();
+    // The first half of the sample drive: a fix, but not yet good enough, so a move is shown.
+    let sample =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../serial-bridge/captures/aoa-drive.nmea");
+    let text = std::fs::read_to_string(sample).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let half = lines[..lines.len() * 11 / 20].join("\n") + "\n";
+    let capture = dir.join("half-drive.nmea");
+    std::fs::write(&capture, half).unwrap();
+    let osm = dir.join("grid.osm");
+    grid_osm(&osm);
+
+    let (mut child, url) = serve(&capture, &osm);
+    let out = browser(&dir, &["--dump-dom"], &url);
+    let _ = child.wait();
+    let dom = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        dom.contains("data-emitters=\"1\""),
+        "no emitter on the page:\n{dom}"
+    );
+    assert!(dom.contains("Emitter 1") && dom.contains("CEP50"), "{dom}");
+    let reason = dom
+        .split("data-reason=\"")
+        .nth(1)
+        .and_then(|r| r.split('"').next())
+        .unwrap_or("");
+    assert!(
+        [
+            "widen-angle",
+            "get-closer",
+            "calibration-leg",
+            "more-bearings"
+        ]
+        .contains(&reason),
+        "suggested move's reason `{reason}`:\n{dom}"
+    );
+    // The move is a road turn (the extract was given).
+    assert!(
+        dom.contains("at the next junction"),
+        "no road turn in the advice:\n{dom}"
+    );
+
+    let (mut child, url) = serve(&capture, &osm);
+    let png = dir.join("live-map.png");
+    let _ = std::fs::remove_file(&png);
+    let shot = format!("--screenshot={}", png.display());
+    let out = browser(&dir, &[shot.as_str()], &url);
+    let _ = child.wait();
+    let size = std::fs::metadata(&png).map(|m| m.len()).unwrap_or(0);
+    assert!(
+        size > 20_000,
+        "screenshot {} is {size} bytes: {}",
+        png.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    println!("screenshot: {}", png.display());
+}

@@ -1,0 +1,100 @@
+// The live map: draws the state the server pushes (server-sent events "state"); it computes
+// nothing itself.
+"use strict";
+
+const map = L.map("map", { preferCanvas: true, zoomSnap: 0.25 }).setView([0, 0], 2);
+const layers = L.layerGroup().addTo(map);
+let fitted = false;
+
+fetch("/config.json").then((r) => r.json()).then((c) => {
+  if (c && c.tiles) {
+    L.tileLayer(c.tiles, { maxZoom: 19, attribution: "tiles: see --tiles" }).addTo(map);
+  }
+});
+fetch("/roads.geojson").then((r) => r.json()).then((g) => {
+  if (g) {
+    L.geoJSON(g, { style: { color: "#888", weight: 1.5 }, interactive: false }).addTo(map);
+  }
+});
+
+function text(id, html, attrs) {
+  const el = document.getElementById(id);
+  el.innerHTML = html;
+  for (const [k, v] of Object.entries(attrs || {})) el.setAttribute(k, v);
+}
+
+function fmt(x, d) { return Number(x).toFixed(d); }
+
+function drawHistory(h) {
+  const svg = document.getElementById("history");
+  if (!h.length) { svg.innerHTML = ""; return; }
+  const w = 300, ht = 120, pad = 34;
+  const n = h[h.length - 1][0] || 1;
+  const lo = 1, hi = 4; // log10 of 10 m .. 10 km
+  const x = (b) => pad + (w - pad - 4) * b / n;
+  const y = (c) => {
+    const l = Math.min(hi, Math.max(lo, Math.log10(Math.max(c, 1))));
+    return 4 + (ht - pad) * (hi - l) / (hi - lo);
+  };
+  let s = "";
+  for (const c of [10, 100, 1000, 10000]) {
+    s += `<line x1="${pad}" x2="${w}" y1="${y(c)}" y2="${y(c)}" stroke="#ddd"/>`;
+    s += `<text x="${pad - 3}" y="${y(c) + 3}" font-size="9" text-anchor="end">${c}</text>`;
+  }
+  const pts = h.map((p) => `${fmt(x(p[0]), 1)},${fmt(y(p[1]), 1)}`).join(" ");
+  s += `<polyline fill="none" stroke="#d62728" stroke-width="1.5" points="${pts}"/>`;
+  s += `<text x="${w / 2}" y="${ht - 4}" font-size="9" text-anchor="middle">bearings (${n}); CEP50 m, log</text>`;
+  svg.innerHTML = s;
+}
+
+function render(st) {
+  layers.clearLayers();
+  text("status", `update ${st.update}, ${st.bearings} bearings${st.done ? ", input ended" : ""}`);
+  if (st.route.length) L.polyline(st.route, { color: "#1f77b4", weight: 3 }).addTo(layers);
+  for (const r of st.rays) L.polyline(r, { color: "#ff7f0e", weight: 1, opacity: 0.5 }).addTo(layers);
+  const bounds = L.latLngBounds(st.route.length ? st.route : []);
+  let fix = "";
+  st.emitters.forEach((e, i) => {
+    L.polygon(e.ellipse, { color: "#d62728", weight: 2, fillOpacity: 0.1 }).addTo(layers);
+    L.circleMarker(e.at, { radius: 6, color: "#d62728", fillOpacity: 1 }).addTo(layers)
+      .bindTooltip(`emitter ${i + 1}`);
+    bounds.extend(e.at);
+    fix += `<div class="emitter">Emitter ${i + 1}${e.freq_mhz ? ` (${fmt(e.freq_mhz, 3)} MHz)` : ""}: `
+      + `${fmt(e.at[0], 5)}, ${fmt(e.at[1], 5)}<br>CEP50 <b>${fmt(e.cep50_m, 0)} m</b>, `
+      + `${fmt(100 * e.confidence, 0)} % ellipse; ${e.used} bearings`
+      + `${e.consistent ? "" : ", <span class=why>inconsistent</span>"}; `
+      + `offset ${fmt(e.offset_deg[0], 1)} ± ${fmt(e.offset_deg[1], 1)}°</div>`;
+  });
+  st.others.forEach((o, i) => {
+    L.polygon(o.ellipse, { color: "#9467bd", weight: 1.5, dashArray: "4 3", fillOpacity: 0.05 }).addTo(layers);
+    L.circleMarker(o.at, { radius: 4, color: "#9467bd", fillOpacity: 1 }).addTo(layers);
+    fix += `<div class="other">Other source ${i + 1}: ${fmt(o.at[0], 5)}, ${fmt(o.at[1], 5)}, `
+      + `CEP50 ${fmt(o.cep50_m, 0)} m, ${o.used} bearings</div>`;
+  });
+  text("fix", fix || (st.fix_error || "no fix yet"), { "data-emitters": st.emitters.length });
+  const a = st.advice;
+  if (a) {
+    const path = a.turn_ll ? [a.vehicle_ll, a.turn_ll, a.waypoint_ll] : [a.vehicle_ll, a.waypoint_ll];
+    L.polyline(path, { color: "#2ca02c", weight: 5, dashArray: "8 6" }).addTo(layers);
+    L.circleMarker(a.waypoint_ll, { radius: 5, color: "#2ca02c", fillOpacity: 1 }).addTo(layers);
+    if (a.turn_ll) L.circleMarker(a.turn_ll, { radius: 7, color: "#2ca02c", fill: false }).addTo(layers);
+    bounds.extend(a.waypoint_ll);
+    const verdict = a.good_enough
+      ? `<div class="good">Good enough: stop</div>`
+      : `<div class="why">${a.reason_text}</div><small>missing: ${a.missing.join(", ")}</small><br>`;
+    text("advice", `<div class="move">${a.line}</div>${verdict}`
+      + `<small>predicted CEP50 in ${a.on_roads ? "road" : "free-heading"} plan: ${fmt(a.predicted_cep50_m, 0)} m</small>`,
+      { "data-reason": a.reason, "data-heading": fmt(a.heading_deg, 0) });
+  } else {
+    text("advice", st.advice_error || "none yet");
+  }
+  drawHistory(st.history);
+  if (!fitted && bounds.isValid()) {
+    map.fitBounds(bounds.pad(0.15));
+    fitted = true;
+  }
+}
+
+fetch("/state").then((r) => r.json()).then(render);
+const source = new EventSource("/events");
+source.addEventListener("state", (ev) => render(JSON.parse(ev.data)));
