@@ -55,6 +55,8 @@ pub struct Decoded {
     pub gps: KindTally,
     /// Bearing records seen.
     pub bearing_records: KindTally,
+    /// What a DF unit running foxhunt's firmware said (its own sentences in the capture).
+    pub unit: crate::unit::UnitLog,
 }
 
 /// Whether a frame carries a GPS position, a bearing, or something else.
@@ -172,6 +174,11 @@ fn absorb(d: &mut Decoded, e: Event, keep_track: bool) {
 
 /// One frame into the bridge, its refusals attributed to its kind.
 fn push(bridge: &mut foxhunt_bridge::Bridge<0>, f: &Frame<'_>, d: &mut Decoded, keep_track: bool) {
+    if let Frame::Nmea(text) = f
+        && d.unit.push(text)
+    {
+        return;
+    }
     let before = *bridge.counters();
     bridge.push(f, &mut |e| absorb(d, e, keep_track));
     let after = bridge.counters();

@@ -25,3 +25,4 @@ pub mod scenario;
 pub mod serve;
 pub mod simulate;
 pub mod tracking;
+pub mod unit;

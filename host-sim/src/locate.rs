@@ -12,6 +12,7 @@
 
 use crate::capture::Decoded;
 use crate::runs::{Pipeline, locate_bearings, pipeline, with_estimated_noise};
+use crate::unit::UnitReport;
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;
 use foxhunt_core::fix::bias::{BiasPrior, MAX_SOURCES};
@@ -208,8 +209,12 @@ pub struct LocateReport {
     pub used: u32,
     /// Measurements and frames rejected, by reason.
     pub rejected: BTreeMap<&'static str, u32>,
-    /// The local frame's origin (the first vehicle fix).
+    /// The local frame's origin (the first vehicle fix; without one, the unit's fix).
     pub origin: LatLonReport,
+    /// What a DF unit running foxhunt's firmware said about its own fix, when the capture
+    /// holds its sentences.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub unit: Option<UnitReport>,
 }
 
 /// A source as the maps draw it, in local metres.
@@ -396,6 +401,14 @@ pub fn geodetic(frame: &LocalFrame, p: [f32; 2]) -> LatLon {
 /// Locate every emitter of a decoded capture.
 pub fn locate(d: &Decoded, o: &LocateOptions) -> Result<Located, String> {
     o.check()?;
+    let unit = d.unit.report();
+    if d.observations.is_empty()
+        && let Some(u) = unit
+            .clone()
+            .filter(|u| u.lat.is_some() || d.frame.is_none())
+    {
+        return Ok(unit_only(d, o, u));
+    }
     let Some(frame) = d.frame else {
         return Err(no_vehicle_position(d));
     };
@@ -420,10 +433,39 @@ pub fn locate(d: &Decoded, o: &LocateOptions) -> Result<Located, String> {
                 lat: frame.origin.lat,
                 lon: frame.origin.lon,
             },
+            unit,
         },
         drawn,
         cloud,
     })
+}
+
+/// A capture of a DF unit's own output (its user port): the unit's fix is the report.
+fn unit_only(d: &Decoded, o: &LocateOptions, u: UnitReport) -> Located {
+    let origin = match (d.frame, u.lat, u.lon) {
+        (Some(f), _, _) => LatLonReport {
+            lat: f.origin.lat,
+            lon: f.origin.lon,
+        },
+        (None, lat, lon) => LatLonReport {
+            lat: lat.unwrap_or(0.0),
+            lon: lon.unwrap_or(0.0),
+        },
+    };
+    Located {
+        report: LocateReport {
+            method: o.method.name(),
+            emitters: Vec::new(),
+            other_sources: Vec::new(),
+            channels: Vec::new(),
+            used: 0,
+            rejected: rejections(d),
+            origin,
+            unit: Some(u),
+        },
+        drawn: Vec::new(),
+        cloud: Vec::new(),
+    }
 }
 
 /// What one locate path gives: emitters, other sources, channels, drawn sources, particles.
@@ -723,6 +765,9 @@ impl LocateReport {
                 "channel {freq} ({} bearings): {}",
                 c.bearings, c.outcome
             );
+        }
+        if let Some(u) = &self.unit {
+            let _ = writeln!(out, "{}", u.line());
         }
         let rejected: Vec<String> = self
             .rejected

@@ -886,3 +886,82 @@ fn locate_reads_a_serial_line_and_updates_the_fix() {
     let expected: Vec<u64> = (1..=60).collect();
     assert_eq!(used, expected);
 }
+
+/// The sample drive through the DF unit's own code (the firmware's `Unit`, on the host): the
+/// bytes its user port sends.
+fn unit_output() -> Vec<u8> {
+    use foxhunt_bridge::unit::{Port, Unit, UnitConfig};
+    let drive = std::fs::read(capture("aoa-drive.nmea")).expect("sample");
+    let mut unit = Unit::new(UnitConfig::default());
+    let mut out = Vec::new();
+    for line in drive.split_inclusive(|b| *b == b'\n') {
+        let port = if line.starts_with(b"$PFOXB") {
+            Port::Df
+        } else {
+            Port::Gps
+        };
+        unit.feed(port, line, &mut |s| {
+            out.extend_from_slice(s);
+            true
+        });
+    }
+    out
+}
+
+#[test]
+fn locate_reads_back_what_the_df_unit_said() {
+    let dir = scratch("unit");
+    let said = unit_output();
+    let text = String::from_utf8_lossy(&said).into_owned();
+    let last = text
+        .lines()
+        .rev()
+        .find(|l| l.starts_with("$PFOXF") && l.contains(",A*"))
+        .expect("the unit sent a valid fix");
+    let fields: Vec<&str> = last.split(',').collect();
+    let lat = 47.0 + fields[2][2..].parse::<f64>().expect("minutes") / 60.0;
+    let cep50: f64 = fields[9].parse().expect("cep50");
+    let unit_only = scratch_file(&dir, "unit.txt", &said);
+
+    // Only the unit's output: its fix is the report, not an error about missing bearings.
+    let out = foxhunt(&["locate", "--json", &unit_only]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let u = &r["unit"];
+    assert_eq!(u["status"], "A", "{u}");
+    assert!((u["lat"].as_f64().expect("lat") - lat).abs() < 1e-9, "{u}");
+    assert!(
+        (u["cep50_m"].as_f64().expect("cep") - cep50).abs() < 0.05,
+        "{u}"
+    );
+    assert!(u["fixes"].as_u64().expect("fixes") > 10, "{u}");
+    assert_eq!(r["emitters"].as_array().map(Vec::len), Some(0), "{r}");
+    let out = foxhunt(&["locate", &unit_only]);
+    let shown = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        shown.contains("DF unit (") && shown.contains("(valid)"),
+        "{shown}"
+    );
+
+    // The drive and the unit's output in one capture: the host's fix beside the unit's, and
+    // the two agree within the host's ellipse (the same bearings, another estimator).
+    let mut both = std::fs::read(capture("aoa-drive.nmea")).expect("sample");
+    both.extend_from_slice(&said);
+    let mixed = scratch_file(&dir, "mixed.txt", &both);
+    let out = foxhunt(&["locate", "--json", &mixed]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let (e, u) = (&r["emitters"][0], &r["unit"]);
+    let metres_per_deg = 111_195.0;
+    let dn = (e["lat"].as_f64().expect("lat") - u["lat"].as_f64().expect("lat")) * metres_per_deg;
+    let de = (e["lon"].as_f64().expect("lon") - u["lon"].as_f64().expect("lon"))
+        * metres_per_deg
+        * 47f64.to_radians().cos();
+    let apart = dn.hypot(de);
+    let major = e["ellipse"]["major_m"].as_f64().expect("major");
+    assert!(
+        apart < major,
+        "host and unit {apart:.1} m apart, host's semi-major {major:.1} m"
+    );
+    assert_eq!(r["used"], 60, "the unit's sentences are not bearings: {r}");
+}
