@@ -895,11 +895,7 @@ fn unit_output() -> Vec<u8> {
     let mut unit = Unit::new(UnitConfig::default());
     let mut out = Vec::new();
     for line in drive.split_inclusive(|b| *b == b'\n') {
-        let port = if line.starts_with(b"$PFOXB") {
-            Port::Df
-        } else {
-            Port::Gps
-        };
+        let port = Port::of_record(line).unwrap_or(Port::Gps);
         unit.feed(port, line, &mut |s| {
             out.extend_from_slice(s);
             true

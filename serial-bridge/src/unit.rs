@@ -62,6 +62,22 @@ impl Port {
     pub fn from_index(i: u8) -> Option<Self> {
         Self::ALL.get(usize::from(i)).copied()
     }
+
+    /// The port a record of a mixed capture belongs to, from its first bytes: `$PFOXC`
+    /// commands the user port; `$PFOXB`, Agrelo `%`, KrakenSDR XML `<` and CSV (a digit) the
+    /// DF port; other sentences the GPS port; MT frames (`0xFE`) the ZigBee port. `None`: not
+    /// the start of a record (the bytes go with the record before them).
+    pub fn of_record(record: &[u8]) -> Option<Self> {
+        match record.first() {
+            Some(b'$') if record.starts_with(b"$PFOXC") => Some(Self::User),
+            Some(b'$') if record.starts_with(b"$PFOXB") => Some(Self::Df),
+            Some(b'$') => Some(Self::Gps),
+            Some(b'%' | b'<') => Some(Self::Df),
+            Some(c) if c.is_ascii_digit() => Some(Self::Df),
+            Some(0xFE) => Some(Self::Zigbee),
+            _ => None,
+        }
+    }
 }
 
 /// The unit's settings.
@@ -553,11 +569,7 @@ mod tests {
     /// The bundled drive split by sentence kind into the GPS and DF ports, in its own order.
     fn run(unit: &mut Unit, out: &mut std::vec::Vec<u8>) {
         for line in CAPTURE.split_inclusive(|b| *b == b'\n') {
-            let port = if line.starts_with(b"$PFOXB") {
-                Port::Df
-            } else {
-                Port::Gps
-            };
+            let port = Port::of_record(line).unwrap_or(Port::Gps);
             unit.feed(port, line, &mut |s| {
                 out.extend_from_slice(s);
                 true

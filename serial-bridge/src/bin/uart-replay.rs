@@ -60,6 +60,7 @@ mod host {
     use foxhunt_bridge::nmea::{Pfoxb, Sentence};
     use foxhunt_bridge::stream::{Demux, Frame};
     use foxhunt_bridge::telemetry::UnitSentence;
+    use foxhunt_bridge::unit::Port;
     use std::io::{Read, Write};
     use std::os::unix::net::UnixStream;
     use std::path::{Path, PathBuf};
@@ -132,27 +133,22 @@ mod host {
 
     /// Port and time (ms of day, or a Kraken epoch) of a record, if it names them.
     fn classify(r: &[u8]) -> (Option<usize>, Option<i64>) {
-        match r.first() {
-            Some(b'$') if r.starts_with(b"$PFOXC") => (Some(3), None),
-            Some(b'$') if r.starts_with(b"$PFOXB") => {
-                let t = body(r).and_then(|b| Pfoxb::parse(b).ok()).map(|p| p.time);
-                (Some(1), t.map(|t| i64::from(t.ms_of_day)))
-            }
-            Some(b'$') => {
-                let t = body(r).and_then(Sentence::time_of);
-                (Some(0), t.map(|t| i64::from(t.ms_of_day)))
-            }
-            Some(b'%') | Some(b'<') => (Some(1), None),
-            Some(c) if c.is_ascii_digit() => {
-                let epoch = std::str::from_utf8(r)
-                    .ok()
-                    .and_then(|s| s.split(',').next())
-                    .and_then(|s| s.trim().parse::<i64>().ok());
-                (Some(1), epoch.map(|e| e.rem_euclid(DAY_MS)))
-            }
-            Some(0xFE) => (Some(2), None),
-            _ => (None, None),
-        }
+        let port = Port::of_record(r);
+        let time = match r.first() {
+            Some(b'$') if r.starts_with(b"$PFOXB") => body(r)
+                .and_then(|b| Pfoxb::parse(b).ok())
+                .map(|p| i64::from(p.time.ms_of_day)),
+            Some(b'$') if port == Some(Port::Gps) => body(r)
+                .and_then(Sentence::time_of)
+                .map(|t| i64::from(t.ms_of_day)),
+            Some(c) if c.is_ascii_digit() => std::str::from_utf8(r)
+                .ok()
+                .and_then(|s| s.split(',').next())
+                .and_then(|s| s.trim().parse::<i64>().ok())
+                .map(|e| e.rem_euclid(DAY_MS)),
+            _ => None,
+        };
+        (port.map(|p| p as usize), time)
     }
 
     fn records(capture: &[u8]) -> Vec<Record> {
