@@ -30,8 +30,11 @@ fn serve(capture: &Path, osm: &Path) -> (Child, String) {
             "127.0.0.1:0",
             "--pace",
             "0",
+            // The server's exit ends the page's event stream, which lets the browser finish
+            // loading; until then it must still be there when the browser starts, which on a
+            // loaded machine took more than 2 s.
             "--linger",
-            "2",
+            "8",
         ])
         .arg("--roads")
         .arg(osm)
