@@ -4,7 +4,8 @@
 //! A reader thread hands the bytes over in chunks as the line delivers them; the decoder takes
 //! every chunk already waiting, then, if new bearings arrived, recomputes the fix and prints
 //! one line (a JSON object with `--json`): the fix, or why there is none yet (`{"used": n,
-//! "error": "..."}`). A slow line gets an update per bearing; a fast pipe
+//! "error": "..."}`), with the guidance advice (where to drive next and why, or "good enough"
+//! when the stop rule holds; [`crate::guidance::guide`]). A slow line gets an update per bearing; a fast pipe
 //! gets one per batch, so a replayed hour of bearings costs a few solves, not one per bearing.
 //! When no byte comes for 100 ms the demultiplexer is told the line is idle (a frame waiting
 //! on look-ahead is delivered), and `--quiet-exit` counts from the last byte.
@@ -16,9 +17,10 @@
 
 use crate::capture::{Decoded, Decoder};
 use crate::gpsd::{GpsdAddress, Report, Watch};
+use crate::guidance::guide::Guide;
 use crate::io::{Out, Stop, note};
 use crate::kraken_http::KrakenUrl;
-use crate::locate::{LocateOptions, locate};
+use crate::locate::{LocateOptions, locate_guided};
 use foxhunt_bridge::BridgeConfig;
 use std::io::{ErrorKind, Read};
 use std::sync::mpsc;
@@ -167,9 +169,9 @@ fn reader(
     Ok(rx)
 }
 
-/// Read the line until it closes or stays quiet, printing each updated fix to `out`; what was
-/// decoded, for the final report.
-pub fn run(o: &LiveOptions, out: &mut Out) -> Result<Decoded, Stop> {
+/// Read the line until it closes or stays quiet, printing each updated fix and `guide`'s advice
+/// to `out`; what was decoded, for the final report.
+pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<Decoded, Stop> {
     o.locate.check()?;
     let rx = reader(&o.source, o.gpsd.as_ref())?;
     let mut dec = Decoder::new(BridgeConfig::default(), o.keep_track);
@@ -215,11 +217,11 @@ pub fn run(o: &LiveOptions, out: &mut Out) -> Result<Decoded, Stop> {
         if n > reported {
             reported = n;
             dec.snapshot();
-            let line = match (locate(&dec.decoded, &o.locate), o.json) {
+            let line = match (locate_guided(&dec.decoded, &o.locate, guide), o.json) {
                 (Ok(l), true) => serde_json::to_string(&l.report).map_err(|e| e.to_string())?,
                 (Ok(l), false) => l.report.update_line(),
-                (Err(e), true) => serde_json::json!({"used": n, "error": e}).to_string(),
-                (Err(e), false) => format!("{n} bearings: no fix yet: {e}"),
+                (Err(e), true) => serde_json::to_string(&e).map_err(|e| e.to_string())?,
+                (Err(e), false) => e.line(),
             };
             out.line(&line)?;
             out.flush()?;

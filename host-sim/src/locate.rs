@@ -11,6 +11,7 @@
 //! unless given, and no offset.
 
 use crate::capture::Decoded;
+use crate::guidance::guide::{Guide, LocatedAdvice};
 use crate::runs::{Pipeline, locate_bearings, pipeline, with_estimated_noise};
 use crate::unit::UnitReport;
 use foxhunt_bridge::geo::LocalFrame;
@@ -211,6 +212,13 @@ pub struct LocateReport {
     pub rejected: BTreeMap<&'static str, u32>,
     /// The local frame's origin (the first vehicle fix; without one, the unit's fix).
     pub origin: LatLonReport,
+    /// Where to drive next and whether to stop, for the first emitter (absent until a
+    /// [`crate::guidance::guide::Guide`] has advised).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub advice: Option<LocatedAdvice>,
+    /// Why there is no advice, when guidance was asked and gave none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub advice_error: Option<String>,
     /// What a DF unit running foxhunt's firmware said about its own fix, when the capture
     /// holds its sentences.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -237,6 +245,10 @@ pub struct Located {
     pub drawn: Vec<Drawn>,
     /// The method's particles (empty for batch fixes, the EKF and the pipeline).
     pub cloud: Vec<[f32; 2]>,
+    /// The field pipeline's first emitter, which guidance starts from (`None` for the other
+    /// methods: the stop rule wants a fix whose consistency and independent bearings were
+    /// checked).
+    pub emitter: Option<Source>,
 }
 
 /// Rejections by reason, every reason listed (zero included) so scripts can rely on the keys.
@@ -263,6 +275,79 @@ fn rejections(d: &Decoded) -> BTreeMap<&'static str, u32> {
         ("time_backwards", 0),
         ("no_consistent_emitter", 0),
     ])
+}
+
+/// No fix yet, as a live update reports it (`--json`: `used`, `error` and the advice made from
+/// the bearings alone).
+#[derive(Debug, Clone, Serialize)]
+pub struct NoFix {
+    /// Bearings decoded.
+    pub used: u32,
+    /// Why there is no fix.
+    pub error: String,
+    /// Where to drive (across the line of bearing) before there is a fix.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub advice: Option<LocatedAdvice>,
+    /// Why there is no advice either.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub advice_error: Option<String>,
+}
+
+impl NoFix {
+    /// One line for a live update.
+    pub fn line(&self) -> String {
+        format!(
+            "{} bearings: no fix yet: {}{}",
+            self.used,
+            self.error,
+            advice_suffix(self.advice.as_ref(), self.advice_error.as_deref())
+        )
+    }
+}
+
+/// `; ADVICE` (or `; no advice: WHY`) for a one-line update.
+fn advice_suffix(advice: Option<&LocatedAdvice>, error: Option<&str>) -> String {
+    match (advice, error) {
+        (Some(a), _) => format!("; {}", a.line),
+        (None, Some(e)) => format!("; no advice: {e}"),
+        (None, None) => String::new(),
+    }
+}
+
+/// Locate every emitter of `d`, and advise through `guide`: from the first emitter of the
+/// field pipeline, or, with no fix yet, from the bearings alone. The one place where the
+/// final report and the live updates get their advice.
+pub fn locate_guided(
+    d: &Decoded,
+    o: &LocateOptions,
+    guide: &mut Guide,
+) -> Result<Located, Box<NoFix>> {
+    match locate(d, o) {
+        Ok(mut l) => {
+            let advice = match (&l.emitter, o.method) {
+                (Some(e), _) => guide.located(d, Some(e), o),
+                (None, Method::MlRobust) => guide.located(d, None, o),
+                (None, m) => Err(format!(
+                    "the stop rule wants a fix whose consistency and independent bearings are                      checked (--method ml-robust, not {})",
+                    m.name()
+                )),
+            };
+            match advice {
+                Ok(a) => l.report.advice = Some(a),
+                Err(e) => l.report.advice_error = Some(e),
+            }
+            Ok(l)
+        }
+        Err(error) => {
+            let advice = guide.located(d, None, o);
+            Err(Box::new(NoFix {
+                used: d.observations.len() as u32,
+                error,
+                advice_error: advice.as_ref().err().cloned(),
+                advice: advice.ok(),
+            }))
+        }
+    }
 }
 
 /// Why a capture gives no position for the vehicle, in words a user can act on.
@@ -416,7 +501,8 @@ pub fn locate(d: &Decoded, o: &LocateOptions) -> Result<Located, String> {
         return Err(no_bearing(d));
     }
     let mut rejected = rejections(d);
-    let (emitters, other_sources, channels, drawn, cloud) = if o.method == Method::MlRobust {
+    let (emitters, other_sources, channels, drawn, cloud, emitter) = if o.method == Method::MlRobust
+    {
         located_by_pipeline(d, o, &frame, &mut rejected)?
     } else {
         located_by(d, o, &frame, &mut rejected)?
@@ -433,10 +519,13 @@ pub fn locate(d: &Decoded, o: &LocateOptions) -> Result<Located, String> {
                 lat: frame.origin.lat,
                 lon: frame.origin.lon,
             },
+            advice: None,
+            advice_error: None,
             unit,
         },
         drawn,
         cloud,
+        emitter,
     })
 }
 
@@ -462,19 +551,24 @@ fn unit_only(d: &Decoded, o: &LocateOptions, u: UnitReport) -> Located {
             rejected: rejections(d),
             origin,
             unit: Some(u),
+            advice: None,
+            advice_error: None,
         },
         drawn: Vec::new(),
         cloud: Vec::new(),
+        emitter: None,
     }
 }
 
-/// What one locate path gives: emitters, other sources, channels, drawn sources, particles.
+/// What one locate path gives: emitters, other sources, channels, drawn sources, particles,
+/// the pipeline's first emitter.
 type Parts = (
     Vec<SourceReport>,
     Vec<SourceReport>,
     Vec<ChannelSummary>,
     Vec<Drawn>,
     Vec<[f32; 2]>,
+    Option<Source>,
 );
 
 /// A pipeline source as the report has it.
@@ -589,7 +683,14 @@ fn located_by_pipeline(
             other,
         })
         .collect();
-    Ok((emitters, others, channels, drawn, Vec::new()))
+    Ok((
+        emitters,
+        others,
+        channels,
+        drawn,
+        Vec::new(),
+        r.emitters().first().copied(),
+    ))
 }
 
 fn located_by(
@@ -674,7 +775,14 @@ fn located_by(
         ellipse,
         other: false,
     }];
-    Ok((vec![report], Vec::new(), vec![channel], drawn, s.cloud))
+    Ok((
+        vec![report],
+        Vec::new(),
+        vec![channel],
+        drawn,
+        s.cloud,
+        None,
+    ))
 }
 
 /// Whether a particle cloud is as wide as the bearings allow (`Some(false)`: collapsed).
@@ -766,6 +874,15 @@ impl LocateReport {
                 c.bearings, c.outcome
             );
         }
+        match (&self.advice, &self.advice_error) {
+            (Some(a), _) => {
+                let _ = writeln!(out, "advice: {}", a.line);
+            }
+            (None, Some(e)) => {
+                let _ = writeln!(out, "no advice: {e}");
+            }
+            (None, None) => {}
+        }
         if let Some(u) = &self.unit {
             let _ = writeln!(out, "{}", u.line());
         }
@@ -803,6 +920,11 @@ impl LocateReport {
                 )
             })
             .collect();
-        format!("{} bearings: {}", self.used, fixes.join("; "))
+        format!(
+            "{} bearings: {}{}",
+            self.used,
+            fixes.join("; "),
+            advice_suffix(self.advice.as_ref(), self.advice_error.as_deref())
+        )
     }
 }

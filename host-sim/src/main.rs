@@ -23,7 +23,11 @@ enum Command {
     /// With no CAPTURE, locates the bundled sample drive (made by `foxhunt simulate
     /// --scenario aoa-drive`). `-` reads standard input live: a fix line per update as the
     /// bytes arrive, as with --baud. --gpsd takes positions and heading from a running gpsd
-    /// beside such a live line; --kraken polls a KrakenSDR's web page instead of a line. Maps are written only where asked (--maps PREFIX, or
+    /// beside such a live line; --kraken polls a KrakenSDR's web page instead of a line. Each
+    /// update (and the report of a recorded drive) ends with the advice: where to drive next
+    /// (a heading, or with --roads FILE the next road turn) and why ("widen the angle", "get
+    /// closer", "drive a calibration leg"), or "good enough: stop" once the stop rule holds
+    /// (--target-cep50-m, default 100 m). Maps are written only where asked (--maps PREFIX, or
     /// --geojson/--kml/--svg), never onto an input. Exit status: 0 with a fix, 1 when the
     /// capture gives none (the message says why), 2 on a usage error.
     ///
@@ -36,6 +40,7 @@ enum Command {
     ///   foxhunt locate /dev/ttyUSB0 --baud 4800 --quiet-exit 30
     ///   foxhunt locate /dev/ttyUSB0 --baud 4800 --gpsd       # positions, heading from gpsd
     ///   foxhunt locate --kraken http://192.168.1.20:8081     # a KrakenSDR on the network
+    ///   foxhunt locate /dev/ttyUSB0 --baud 4800 --roads area.osm.pbf --target-cep50-m 50
     #[command(verbatim_doc_comment)]
     Locate(cmd::locate::Args),
     /// Track a ZigBee node indoors from a coordinator's capture (AF_INCOMING_MSG frames).

@@ -6,6 +6,9 @@ use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 
+mod common;
+use common::grid_osm;
+
 fn chromium() -> PathBuf {
     for c in ["chromium", "chromium-browser"] {
         if let Ok(out) = Command::new("which").arg(c).output()
@@ -15,42 +18,6 @@ fn chromium() -> PathBuf {
         }
     }
     panic!("no chromium on PATH: .ci/run installs Debian's chromium (apt-get install chromium)");
-}
-
-/// An OSM XML street grid of about 300 m around the sample drive's area (origin 47 N, 8 E).
-fn grid_osm(path: &Path) {
-    let mut s = String::from("<?xml version=\"1.0\"?>\n<osm version=\"0.6\">\n");
-    let (lat0, lon0, dlat, dlon) = (46.995, 7.99, 0.0027, 0.004);
-    let (rows, cols) = (10, 12);
-    for j in 0..rows {
-        for i in 0..cols {
-            let id = 1 + j * cols + i;
-            s += &format!(
-                "  <node id=\"{id}\" lat=\"{:.6}\" lon=\"{:.6}\"/>\n",
-                lat0 + dlat * j as f64,
-                lon0 + dlon * i as f64
-            );
-        }
-    }
-    let mut way = 1000;
-    for j in 0..rows {
-        way += 1;
-        s += &format!("  <way id=\"{way}\">");
-        for i in 0..cols {
-            s += &format!("<nd ref=\"{}\"/>", 1 + j * cols + i);
-        }
-        s += "<tag k=\"highway\" v=\"residential\"/></way>\n";
-    }
-    for i in 0..cols {
-        way += 1;
-        s += &format!("  <way id=\"{way}\">");
-        for j in 0..rows {
-            s += &format!("<nd ref=\"{}\"/>", 1 + j * cols + i);
-        }
-        s += "<tag k=\"highway\" v=\"tertiary\"/></way>\n";
-    }
-    s += "</osm>\n";
-    std::fs::write(path, s).expect("write the extract");
 }
 
 /// `foxhunt serve` on `capture` (roads from `osm`), once its input has ended: the child and its
@@ -63,8 +30,11 @@ fn serve(capture: &Path, osm: &Path) -> (Child, String) {
             "127.0.0.1:0",
             "--pace",
             "0",
+            // The server's exit ends the page's event stream, which lets the browser finish
+            // loading; until then it must still be there when the browser starts, which on a
+            // loaded machine took more than 2 s.
             "--linger",
-            "2",
+            "8",
         ])
         .arg("--roads")
         .arg(osm)

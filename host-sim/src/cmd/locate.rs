@@ -1,14 +1,14 @@
 //! `foxhunt locate`: the fix of a recorded drive, of a live serial line or of standard input,
 //! with its maps.
 
-use super::method;
+use super::{GuidanceArgs, method};
 use crate::calibration::Calibration;
 use crate::capture::{Decoded, Decoder};
 use crate::gpsd::GpsdAddress;
 use crate::io::{Out, Outcome, Outputs, Source, Stop, note, stream};
 use crate::kraken_http::KrakenUrl;
 use crate::live::{LiveOptions, LiveSource};
-use crate::locate::{LocateOptions, Located, PARTICLES, locate};
+use crate::locate::{LocateOptions, Located, PARTICLES, locate, locate_guided};
 use crate::maps;
 use foxhunt_bridge::BridgeConfig;
 use foxhunt_core::Method;
@@ -47,7 +47,15 @@ pub struct Args {
     /// residuals).
     #[arg(long, allow_hyphen_values = true)]
     pub sigma_deg: Option<f32>,
-    /// Print one JSON object (stable field names); live: one per update.
+    /// Print one JSON object (stable field names); live: one per update. Its `advice` (the
+    /// first emitter's; before a fix, from the bearings alone): heading_deg (clockwise from
+    /// north), compass, target {lat, lon} (the point to drive to), turn (with --roads: kind
+    /// straight/left/right/u-turn, angle_deg, at east/north m) and turn_at {lat, lon},
+    /// reason (widen-angle, get-closer, calibration-leg, more-bearings, check-unit,
+    /// good-enough) and reason_text, good_enough, missing (precision, consistency, bearings;
+    /// fix before one), bound_cep50_m, offset_known_cep50_m, predicted_cep50_m, reached_s,
+    /// on_roads, line; `advice_error` says why there is none. No fix yet: {used, error,
+    /// advice}.
     #[arg(long)]
     pub json: bool,
     /// Write PREFIX.geojson, PREFIX.kml and PREFIX.svg.
@@ -87,6 +95,9 @@ pub struct Args {
         default_missing_value = ""
     )]
     pub gpsd: Option<String>,
+    /// The roads and the stop rule's target of the advice.
+    #[command(flatten)]
+    pub guidance: GuidanceArgs,
     /// Live: poll a KrakenSDR about twice a second, `http://HOST:8081` (its DOA_value.html,
     /// else doa.xml) or the URL of either page; no CAPTURE.
     #[arg(long, value_name = "URL")]
@@ -222,6 +233,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
         outputs.check(f, true)?;
     }
     let keep_track = paths.iter().any(Option::is_some);
+    let mut guide = a.guidance.guide()?;
     let decoded = match input {
         Input::Sample => {
             let mut dec = Decoder::new(BridgeConfig::default(), keep_track);
@@ -248,7 +260,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
                 json: a.json,
                 keep_track,
             };
-            let d = crate::live::run(&o, out)?;
+            let d = crate::live::run(&o, &mut guide, out)?;
             // The live updates were the output; a final fix goes only to the maps.
             if keep_track && let Ok(l) = locate(&d, &options) {
                 write_maps(&l, &d, &paths, &outputs)?;
@@ -267,7 +279,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
         out.line(text.trim_end())?;
         return finish(a, &decoded, started);
     }
-    let l = locate(&decoded, &options)?;
+    let l = locate_guided(&decoded, &options, &mut guide).map_err(|e| e.error)?;
     write_maps(&l, &decoded, &paths, &outputs)?;
     if a.json {
         let text = serde_json::to_string(&l.report).map_err(|e| e.to_string())?;

@@ -1,5 +1,6 @@
 //! `foxhunt serve`: the live map of a replayed capture or of standard input.
 
+use super::GuidanceArgs;
 use crate::io::Outcome;
 use crate::serve::{Input, ServeOptions, serve};
 use std::path::PathBuf;
@@ -14,10 +15,9 @@ pub struct Args {
     /// Address to listen on (port 0: any free port; the address is printed on stderr).
     #[arg(long, default_value = "127.0.0.1:8080")]
     pub addr: String,
-    /// An OpenStreetMap extract (.osm.pbf or OSM XML): the basemap, and road turns in the
-    /// advice. Without it the map has no basemap and the advice is a free heading.
-    #[arg(long)]
-    pub roads: Option<PathBuf>,
+    /// The roads and the stop rule's target.
+    #[command(flatten)]
+    pub guidance: GuidanceArgs,
     /// Online map tiles, a URL template such as https://tile.example/{z}/{x}/{y}.png.
     #[arg(long)]
     pub tiles: Option<String>,
@@ -57,7 +57,7 @@ pub fn run(a: &Args) -> Outcome {
     serve(ServeOptions {
         addr: a.addr.clone(),
         input,
-        roads: a.roads.clone(),
+        guide: a.guidance.guide()?,
         tiles: a.tiles.clone(),
         linger,
     })

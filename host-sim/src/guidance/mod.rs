@@ -12,6 +12,7 @@
 //! not: give `--roads` there.
 
 pub mod bench;
+pub mod guide;
 pub mod networks;
 pub mod policy;
 pub mod reach;
@@ -170,6 +171,13 @@ pub fn azimuth_deg(theta: f32) -> f32 {
 
 fn whole_degrees(azimuth: f32) -> i32 {
     (azimuth.round() as i32).rem_euclid(360)
+}
+
+/// The eight-point compass word of an azimuth (degrees clockwise from north).
+pub fn compass(azimuth: f32) -> &'static str {
+    const POINTS: [&str; 8] = ["N", "NE", "E", "SE", "S", "SW", "W", "NW"];
+    let k = (azimuth.rem_euclid(360.0) / 45.0).round() as usize % 8;
+    POINTS.get(k).copied().unwrap_or("N")
 }
 
 /// The circular mean of the last `n` bearings' angles.
@@ -341,6 +349,8 @@ pub fn advise(
 pub struct AdviceReport {
     /// Direction to drive, degrees clockwise from north.
     pub heading_deg: f32,
+    /// Its eight-point compass word (`N`, `NE`, ... `NW`).
+    pub compass: &'static str,
     /// The point to drive to, local metres east and north.
     pub waypoint: [f32; 2],
     /// The next road turn, if on roads.
@@ -384,8 +394,10 @@ impl Advice {
                 .collect()
             })
             .unwrap_or_else(|| vec!["fix"]);
+        let heading_deg = azimuth_deg(self.heading);
         AdviceReport {
-            heading_deg: azimuth_deg(self.heading),
+            heading_deg,
+            compass: compass(heading_deg),
             waypoint: self.waypoint,
             turn: self.turn,
             reason: self.reason.name(),
@@ -402,13 +414,19 @@ impl Advice {
 
     /// One line for a live update: the move and why.
     pub fn line(&self) -> String {
+        self.line_to(None)
+    }
+
+    /// [`Advice::line`], naming the point to drive to (`to`, as the caller writes places).
+    pub fn line_to(&self, to: Option<&str>) -> String {
         let r = self.report();
         if r.good_enough {
             return "good enough: stop".into();
         }
+        let to = to.map(|t| format!(" to {t}")).unwrap_or_default();
         let mv = match self.turn {
             Some(t) => format!(
-                "at the next junction {} ({:+.0} deg), then head {} deg",
+                "at the next junction {} ({:+.0} deg), then head {} deg ({}){to}",
                 match t.kind {
                     TurnKind::Straight => "go straight",
                     TurnKind::Left => "turn left",
@@ -416,9 +434,14 @@ impl Advice {
                     TurnKind::UTurn => "turn back",
                 },
                 t.angle_deg,
-                whole_degrees(r.heading_deg)
+                whole_degrees(r.heading_deg),
+                r.compass
             ),
-            None => format!("head {} deg", whole_degrees(r.heading_deg)),
+            None => format!(
+                "head {} deg ({}){to}",
+                whole_degrees(r.heading_deg),
+                r.compass
+            ),
         };
         format!(
             "{mv}: {} (missing: {})",
@@ -462,6 +485,10 @@ mod tests {
         assert!(a.report().missing == vec!["fix"] && !a.line().is_empty());
         assert_eq!(azimuth_deg(PI / 2.0 + 1e-4), 0.0);
         assert_eq!(azimuth_deg(0.0), 90.0);
+        assert_eq!(
+            [0.0, 22.4, 22.6, 90.0, 180.0, 292.0, 337.6, 359.9].map(compass),
+            ["N", "N", "NE", "E", "S", "W", "N", "N"]
+        );
         assert!(
             advise(
                 &Situation { bearings: &[], ..s },

@@ -14,6 +14,7 @@
 pub mod state;
 
 use crate::capture::Decoder;
+use crate::guidance::guide::Guide;
 use crate::roads::RoadGraph;
 use axum::Router;
 use axum::extract::State;
@@ -61,8 +62,8 @@ pub struct ServeOptions {
     pub addr: String,
     /// The input.
     pub input: Input,
-    /// An OpenStreetMap extract for the basemap and road guidance.
-    pub roads: Option<PathBuf>,
+    /// Guidance: the roads (also the basemap) and the stop rule.
+    pub guide: Guide,
     /// An online tile URL template (`https://.../{z}/{x}/{y}.png`), if wanted.
     pub tiles: Option<String>,
     /// After the input ends, serve this long more and exit (`None`: until stopped).
@@ -127,14 +128,13 @@ pub fn roads_geojson(g: &RoadGraph) -> String {
 /// bearings, and a last one when the input ends.
 fn feed(
     input: Input,
-    mut roads: Option<RoadGraph>,
+    mut guide: Guide,
     shared: Arc<Shared>,
     done: Arc<Notify>,
 ) -> Result<(), String> {
     let mut dec = Decoder::new(BridgeConfig::default(), false);
     let mut update = 0u64;
     let mut history: Vec<[f64; 2]> = Vec::new();
-    let mut placed = false;
     let mut reported = 0usize;
     let mut publish = |dec: &mut Decoder, end: bool| {
         let n = dec.decoded.observations.len();
@@ -143,12 +143,8 @@ fn feed(
         }
         reported = n;
         dec.snapshot();
-        if !placed && let (Some(g), Some(frame)) = (roads.as_mut(), dec.decoded.frame.as_ref()) {
-            g.localise(frame);
-            placed = true;
-        }
         update += 1;
-        let st = state::build(&dec.decoded, update, &history, roads.as_ref(), end);
+        let st = state::build(&dec.decoded, update, &history, &mut guide, end);
         history = st.history.clone();
         if let Ok(body) = serde_json::to_string(&st) {
             if let Ok(mut l) = shared.latest.write() {
@@ -216,11 +212,7 @@ fn feed(
 
 /// Run the server until stopped (or `linger` after the input ends).
 pub fn serve(o: ServeOptions) -> Result<(), String> {
-    let roads = match &o.roads {
-        Some(p) => Some(RoadGraph::load(p)?),
-        None => None,
-    };
-    if let Some(g) = &roads {
+    if let Some(g) = o.guide.road_graph() {
         crate::io::note(&format!(
             "foxhunt serve: {} road nodes, {} directed segments",
             g.len(),
@@ -231,8 +223,9 @@ pub fn serve(o: ServeOptions) -> Result<(), String> {
     let shared = Arc::new(Shared {
         latest: RwLock::new(serde_json::to_string(&state::MapState::default()).unwrap_or_default()),
         tx,
-        roads: roads
-            .as_ref()
+        roads: o
+            .guide
+            .road_graph()
             .map(roads_geojson)
             .unwrap_or_else(|| "null".into()),
         config: serde_json::json!({ "tiles": o.tiles }).to_string(),
@@ -283,11 +276,11 @@ pub fn serve(o: ServeOptions) -> Result<(), String> {
             )
             .with_state(shared.clone());
         let done = Arc::new(Notify::new());
-        let (feeder_done, input) = (done.clone(), o.input.clone());
+        let (feeder_done, input, guide) = (done.clone(), o.input.clone(), o.guide);
         let feeder = std::thread::Builder::new()
             .name("foxhunt-serve-input".into())
             .spawn(move || {
-                if let Err(e) = feed(input, roads, shared, feeder_done.clone()) {
+                if let Err(e) = feed(input, guide, shared, feeder_done.clone()) {
                     crate::io::note(&format!("foxhunt serve: {e}"));
                     feeder_done.notify_one();
                 }

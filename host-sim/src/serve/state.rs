@@ -4,12 +4,10 @@
 //! (the page draws, it does not compute).
 
 use crate::capture::Decoded;
-use crate::guidance::{FixView, GuidanceOptions, Situation, advise, track_heading};
-use crate::locate::geodetic;
-use crate::roads::RoadGraph;
+use crate::guidance::guide::Guide;
+use crate::locate::{LocateOptions, geodetic};
 use crate::runs::Pipeline;
 use foxhunt_bridge::geo::LocalFrame;
-use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::fix::ellipse::Ellipse;
 use foxhunt_core::fix::locate::{ChannelOutcome, LocateConfig, NoEmitter, Source};
 use serde::Serialize;
@@ -142,12 +140,12 @@ fn no_emitter(r: &Pipeline) -> String {
 }
 
 /// Build the map's state after `update` updates; `history` carries the CEP50 history from
-/// the last state; `roads` (placed in the drive's frame) makes the advice a road turn.
+/// the last state; `guide` advises (with roads: a road turn).
 pub fn build(
     d: &Decoded,
     update: u64,
     history: &[[f64; 2]],
-    roads: Option<&RoadGraph>,
+    guide: &mut Guide,
     done: bool,
 ) -> MapState {
     let bearings: Vec<foxhunt_core::Bearing> = d.bearings().copied().collect();
@@ -213,24 +211,7 @@ pub fn build(
         st.advice_error = Some("no bearing yet".into());
         return st;
     };
-    let situation = Situation {
-        bearings: &bearings,
-        vehicle,
-        heading: track_heading(&bearings),
-        fix: emitter.map(|e| FixView {
-            position: e.position,
-            covariance: e.covariance,
-            consistent: e.consistent,
-            effective: e.effective,
-        }),
-        prior: BiasPrior::default(),
-    };
-    let options = if roads.is_some() {
-        GuidanceOptions::roads()
-    } else {
-        GuidanceOptions::default()
-    };
-    match advise(&situation, roads, &options) {
+    match guide.advise(d, emitter.as_ref(), &LocateOptions::default()) {
         Ok(a) => {
             st.advice = Some(MapAdvice {
                 report: a.report(),

@@ -1,0 +1,39 @@
+//! Test fixtures shared by the integration tests.
+
+use std::path::Path;
+
+/// An OSM XML street grid of about 300 m around the sample drive's area (origin 47 N, 8 E).
+pub fn grid_osm(path: &Path) {
+    let mut s = String::from("<?xml version=\"1.0\"?>\n<osm version=\"0.6\">\n");
+    let (lat0, lon0, dlat, dlon) = (46.995, 7.99, 0.0027, 0.004);
+    let (rows, cols) = (10, 12);
+    for j in 0..rows {
+        for i in 0..cols {
+            let id = 1 + j * cols + i;
+            s += &format!(
+                "  <node id=\"{id}\" lat=\"{:.6}\" lon=\"{:.6}\"/>\n",
+                lat0 + dlat * j as f64,
+                lon0 + dlon * i as f64
+            );
+        }
+    }
+    let mut way = 1000;
+    for j in 0..rows {
+        way += 1;
+        s += &format!("  <way id=\"{way}\">");
+        for i in 0..cols {
+            s += &format!("<nd ref=\"{}\"/>", 1 + j * cols + i);
+        }
+        s += "<tag k=\"highway\" v=\"residential\"/></way>\n";
+    }
+    for i in 0..cols {
+        way += 1;
+        s += &format!("  <way id=\"{way}\">");
+        for j in 0..rows {
+            s += &format!("<nd ref=\"{}\"/>", 1 + j * cols + i);
+        }
+        s += "<tag k=\"highway\" v=\"tertiary\"/></way>\n";
+    }
+    s += "</osm>\n";
+    std::fs::write(path, s).expect("write the extract");
+}
