@@ -30,11 +30,10 @@ fn serve(capture: &Path, osm: &Path) -> (Child, String) {
             "127.0.0.1:0",
             "--pace",
             "0",
-            // The server's exit ends the page's event stream, which lets the browser finish
-            // loading; until then it must still be there when the browser starts, which on a
-            // loaded machine took more than 2 s.
+            // The page's event stream ends with `end` (the input has ended), which lets the
+            // browser finish loading; the server stays until the test stops it.
             "--linger",
-            "8",
+            "300",
         ])
         .arg("--roads")
         .arg(osm)
@@ -98,8 +97,13 @@ fn the_live_map_shows_the_fix_and_the_suggested_move() {
 
     let (mut child, url) = serve(&capture, &osm);
     let out = browser(&dir, &["--dump-dom"], &url);
+    let _ = child.kill();
     let _ = child.wait();
     let dom = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        dom.contains("data-ended=\"1\""),
+        "the page did not hear that the input ended:\n{dom}"
+    );
     assert!(
         dom.contains("data-emitters=\"1\""),
         "no emitter on the page:\n{dom}"
@@ -131,6 +135,7 @@ fn the_live_map_shows_the_fix_and_the_suggested_move() {
     let _ = std::fs::remove_file(&png);
     let shot = format!("--screenshot={}", png.display());
     let out = browser(&dir, &[shot.as_str()], &url);
+    let _ = child.kill();
     let _ = child.wait();
     let size = std::fs::metadata(&png).map(|m| m.len()).unwrap_or(0);
     assert!(

@@ -98,3 +98,8 @@ function render(st) {
 fetch("/state").then((r) => r.json()).then(render);
 const source = new EventSource("/events");
 source.addEventListener("state", (ev) => render(JSON.parse(ev.data)));
+source.addEventListener("end", () => {
+  // The input has ended: no more states will come, and reconnecting would only ask again.
+  source.close();
+  document.body.dataset.ended = "1";
+});

@@ -9,7 +9,7 @@
 //! (`--tiles`, a URL template the page passes to Leaflet).
 //!
 //! Routes: `/` the page, `/app.js`, `/leaflet/*`, `/state` (the latest state, JSON),
-//! `/events` (server-sent events `state`), `/roads.geojson`, `/config.json`.
+//! `/events` (server-sent events `state`, and `end` once the input has ended), `/roads.geojson`, `/config.json`.
 
 pub mod state;
 
@@ -27,6 +27,7 @@ use std::convert::Infallible;
 use std::future::IntoFuture;
 use std::io::{BufRead, Read};
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, RwLock};
 use std::time::Duration;
 use tokio::sync::{Notify, broadcast};
@@ -72,7 +73,10 @@ pub struct ServeOptions {
 
 struct Shared {
     latest: RwLock<String>,
-    tx: broadcast::Sender<String>,
+    /// Every new state; `None` once, when the input has ended.
+    tx: broadcast::Sender<Option<String>>,
+    /// The input has ended: a page that connects now gets the last state and `end`.
+    ended: AtomicBool,
     roads: String,
     config: String,
 }
@@ -100,10 +104,24 @@ async fn latest(State(s): State<Arc<Shared>>) -> Response {
 async fn events(
     State(s): State<Arc<Shared>>,
 ) -> Sse<impl tokio_stream::Stream<Item = Result<Event, Infallible>>> {
-    let first = s.latest.read().map(|l| l.clone()).unwrap_or_default();
+    // Subscribe before reading `ended`: either the end is still to come through the channel,
+    // or it has been and nothing more will.
     let rx = BroadcastStream::new(s.tx.subscribe());
-    let stream = tokio_stream::once(Ok(Event::default().event("state").data(first)))
-        .chain(rx.filter_map(|m| m.ok().map(|d| Ok(Event::default().event("state").data(d)))));
+    let ended = s.ended.load(Ordering::Acquire);
+    let first = s.latest.read().map(|l| l.clone()).unwrap_or_default();
+    let state = |d: String| Ok(Event::default().event("state").data(d));
+    let live = rx
+        .filter_map(|m| m.ok())
+        .take_while(Option::is_some)
+        .filter_map(move |m| m.map(state))
+        .take(if ended { 0 } else { usize::MAX });
+    // `end` lets the page close its event source, so a finished replay stops loading (a
+    // headless browser then returns) and the browser does not reconnect for ever.
+    let stream = tokio_stream::once(state(first))
+        .chain(live)
+        .chain(tokio_stream::once(Ok(Event::default()
+            .event("end")
+            .data("input ended"))));
     Sse::new(stream).keep_alive(KeepAlive::default())
 }
 
@@ -150,7 +168,7 @@ fn feed(
             if let Ok(mut l) = shared.latest.write() {
                 *l = body.clone();
             }
-            let _ = shared.tx.send(body);
+            let _ = shared.tx.send(Some(body));
         }
     };
     match input {
@@ -206,6 +224,8 @@ fn feed(
         "foxhunt serve: input ended after {} bearings",
         dec.decoded.observations.len()
     ));
+    shared.ended.store(true, Ordering::Release);
+    let _ = shared.tx.send(None);
     done.notify_one();
     Ok(())
 }
@@ -223,6 +243,7 @@ pub fn serve(o: ServeOptions) -> Result<(), String> {
     let shared = Arc::new(Shared {
         latest: RwLock::new(serde_json::to_string(&state::MapState::default()).unwrap_or_default()),
         tx,
+        ended: AtomicBool::new(false),
         roads: o
             .guide
             .road_graph()
