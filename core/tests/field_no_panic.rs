@@ -7,10 +7,11 @@ use foxhunt_core::fix::bias::{self, BiasPrior, Start, same_priors};
 use foxhunt_core::fix::consistency;
 use foxhunt_core::fix::init::{InitOptions, initial_biased_particles};
 use foxhunt_core::fix::locate::{LocateConfig, NoiseModel, Observation, Workspace, locate};
+use foxhunt_core::fix::reach;
 use foxhunt_core::fix::robust::{self, OffsetWindow, RansacOptions, RefineOptions};
 use foxhunt_core::{
-    Bearing, BiasedBearingEkf, BiasedEmitter, Filter, GaussianUniform, ParticleSet, Sir, SirConfig,
-    Tukey, stats,
+    Bearing, BiasedBearingEkf, BiasedEmitter, Filter, Gaussian, GaussianUniform, ParticleSet, Sir,
+    SirConfig, Tukey, stats,
 };
 use proptest::prelude::*;
 use rand_core::SeedableRng;
@@ -142,6 +143,18 @@ proptest! {
                 prop_assert!(finite(&f.position) && finite(&f.covariance.concat()));
             }
             if let Ok(c) = bias::crlb(&start, &bs, p) { prop_assert!(c.rmse.is_finite() && c.rmse > 0.0); }
+            // The profile likelihood and the region's reach, any line, any scale.
+            let options = bias::BiasedOptions { scale: sd.abs(), position_sd_m: mean.abs(), ..Default::default() };
+            let begin = Start { position: start, bias: [0.0; 4] };
+            if let Ok(q) = bias::profile(&obs, &same_priors(p), begin, [mean, sd], &Gaussian, options) {
+                prop_assert!(finite(&q.position) && finite(&[q.deviance, q.along_sd]));
+            }
+            if let Ok(f) = bias::ml_sources(&obs, &same_priors(p), begin, &Gaussian, Default::default()) {
+                let fit = reach::Fit { fix: &f, priors: &same_priors(p), scale: sd, inflation: mean };
+                if let Ok(r) = reach::reach(&obs, fit, &f.covariance, 5.99, 1e5) {
+                    prop_assert!(finite(&r.covariance.concat()) && r.stretch.is_finite());
+                }
+            }
         }
         if let Ok(c) = bias::calibrate(&bs, start) { prop_assert!(finite(&[c.bias, c.sd, c.sigma, c.effective])); }
         let mut rng = XorShiftRng::seed_from_u64(3);

@@ -114,6 +114,10 @@ pub struct BiasedOptions {
     pub tolerance_m: f32,
     /// Every bearing's sigma is multiplied by this (an estimated noise scale; 1 = as given).
     pub scale: f32,
+    /// Vehicle position error, metres: a bearing at range r then has sd sqrt((scale
+    /// sigma)^2 + (position_sd_m / r)^2), so a point a metre from the vehicle is not pinned by
+    /// its bearing (0: positions exact, the plain model).
+    pub position_sd_m: f32,
 }
 
 impl Default for BiasedOptions {
@@ -122,6 +126,7 @@ impl Default for BiasedOptions {
             max_iterations: 50,
             tolerance_m: 1e-3,
             scale: 1.0,
+            position_sd_m: 0.0,
         }
     }
 }
@@ -187,16 +192,37 @@ struct Problem<'a, T, L> {
     loss: &'a L,
     origin: [f32; 2],
     scale: f32,
+    position_sd: f32,
     free: [bool; MAX_SOURCES],
 }
 
 impl<T: Sighting, L: Likelihood> Problem<'_, T, L> {
+    /// The bearing's sd at centred position `p` (the position error's share included).
+    fn sigma(&self, b: &Bearing, p: [f32; 2]) -> f32 {
+        let plain = self.scale * b.sigma;
+        if self.position_sd > 0.0 {
+            let (dx, dy) = (
+                p[0] - (b.vehicle[0] - self.origin[0]),
+                p[1] - (b.vehicle[1] - self.origin[1]),
+            );
+            let d2 = (dx * dx + dy * dy).max(1e-6);
+            libm::sqrtf(plain * plain + self.position_sd * self.position_sd / d2)
+        } else {
+            plain
+        }
+    }
+
     fn cost(&self, x: &[f32; STATE]) -> f32 {
         let p = [x[0], x[1]];
         let mut c = 0.0f32;
         for (b, s) in usable(self.items) {
             let r = residual(b, self.origin, p, x[2 + s]);
-            c -= self.loss.ln(r, self.scale * b.sigma);
+            let sigma = self.sigma(b, p);
+            c -= self.loss.ln(r, sigma);
+            if self.position_sd > 0.0 {
+                // The normalising constant, now that the sd depends on the position.
+                c += libm::logf(sigma / (self.scale * b.sigma));
+            }
         }
         for s in 0..MAX_SOURCES {
             if self.free[s] {
@@ -218,7 +244,7 @@ impl<T: Sighting, L: Likelihood> Problem<'_, T, L> {
             let (dx, dy) = (p[0] - v[0], p[1] - v[1]);
             let d2 = (dx * dx + dy * dy).max(1e-6);
             let r = wrap(b.theta - predicted(&p, &v) - x[2 + s]);
-            let sigma = self.scale * b.sigma;
+            let sigma = self.sigma(b, p);
             let w = self.loss.irls_weight(r, sigma) / (sigma * sigma);
             // d h / d [x, y, b_s] for h = atan2(dy, dx) + b_s.
             let jac = [-dy / d2, dx / d2, 1.0];
@@ -310,13 +336,78 @@ pub fn ml_sources<T: Sighting, L: Likelihood>(
     loss: &L,
     options: BiasedOptions,
 ) -> Result<BiasedFix, Error> {
+    let (problem, mut x, geo) = set_up(items, priors, start, loss, options)?;
+    let iterations = descend(&problem, &mut x, options, None);
+    finish(&problem, &x, &geo, iterations)
+}
+
+/// One point of the profile likelihood: the best fit with the position held on a line.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProfilePoint {
+    /// The best position on the line, metres.
+    pub position: [f32; 2],
+    /// The offsets there, radians.
+    pub bias: [f32; MAX_SOURCES],
+    /// -2 ln L there (the offsets' prior included), up to a constant shared by every point
+    /// of the same sightings, loss and scale: differences are likelihood-ratio statistics.
+    pub deviance: f32,
+    /// Standard deviation of the position along the line, offsets integrated out, metres.
+    pub along_sd: f32,
+}
+
+/// The profile likelihood at one slice: the position free only along the unit vector
+/// `along` through `start.position` (its component across the line held), the offsets free.
+/// Where the Fisher ellipse is a poor picture of the likelihood (a range the bearings barely
+/// observe), walking such slices outward shows how far the data really allow the fix to go.
+pub fn profile<T: Sighting, L: Likelihood>(
+    items: &[T],
+    priors: &[BiasPrior; MAX_SOURCES],
+    start: Start,
+    along: [f32; 2],
+    loss: &L,
+    options: BiasedOptions,
+) -> Result<ProfilePoint, Error> {
+    check_finite(&along)?;
+    let norm = libm::hypotf(along[0], along[1]);
+    if !(norm > 0.0) {
+        return Err(Error::OutOfRange);
+    }
+    let along = [along[0] / norm, along[1] / norm];
+    let (problem, mut x, geo) = set_up(items, priors, start, loss, options)?;
+    descend(&problem, &mut x, options, Some(along));
+    let (h, g) = problem.normal(&x);
+    let (h, _) = on_line(&h, &g, along);
+    let c = inverse_scaled(&h).ok_or(Error::DegenerateGeometry)?;
+    let point = ProfilePoint {
+        position: [x[0] + geo.origin[0], x[1] + geo.origin[1]],
+        bias: core::array::from_fn(|s| x[2 + s]),
+        deviance: 2.0 * problem.cost(&x),
+        along_sd: libm::sqrtf(c[0][0].max(0.0)),
+    };
+    check_finite(&point.position)?;
+    check_finite(&point.bias)?;
+    check_finite(&[point.deviance, point.along_sd])?;
+    Ok(point)
+}
+
+/// A checked problem, the solver's starting state (centred on the drive) and the geometry.
+type SetUp<'a, T, L> = (Problem<'a, T, L>, [f32; STATE], Geometry);
+
+/// The checked problem and the solver's starting state (centred on the drive).
+fn set_up<'a, T: Sighting, L: Likelihood>(
+    items: &'a [T],
+    priors: &'a [BiasPrior; MAX_SOURCES],
+    start: Start,
+    loss: &'a L,
+    options: BiasedOptions,
+) -> Result<SetUp<'a, T, L>, Error> {
     for p in priors {
         p.check()?;
     }
-    check_finite(&[options.scale, options.tolerance_m])?;
+    check_finite(&[options.scale, options.tolerance_m, options.position_sd_m])?;
     check_finite(&start.position)?;
     check_finite(&start.bias)?;
-    if !(options.scale > 0.0) {
+    if !(options.scale > 0.0 && options.position_sd_m >= 0.0) {
         return Err(Error::OutOfRange);
     }
     let geo = sighting_geometry(items)?;
@@ -331,6 +422,7 @@ pub fn ml_sources<T: Sighting, L: Likelihood>(
         loss,
         origin: geo.origin,
         scale: options.scale,
+        position_sd: options.position_sd_m,
         free,
     };
     let mut x = [0.0f32; STATE];
@@ -343,13 +435,54 @@ pub fn ml_sources<T: Sighting, L: Likelihood>(
             priors[s].mean
         };
     }
-    let mut current = problem.cost(&x);
+    Ok((problem, x, geo))
+}
+
+/// The normal equations with the position reduced to one unknown t along `along` (x = x0 +
+/// t along): row and column 0 become t's, row 1 an identity that leaves the rest alone.
+fn on_line(
+    h: &[[f32; STATE]; STATE],
+    g: &[f32; STATE],
+    along: [f32; 2],
+) -> ([[f32; STATE]; STATE], [f32; STATE]) {
+    let [a, b] = along;
+    let mut r = *h;
+    let mut q = *g;
+    r[0][0] = a * a * h[0][0] + a * b * (h[0][1] + h[1][0]) + b * b * h[1][1];
+    for k in 2..STATE {
+        let v = a * h[0][k] + b * h[1][k];
+        r[0][k] = v;
+        r[k][0] = v;
+        r[1][k] = 0.0;
+        r[k][1] = 0.0;
+    }
+    r[0][1] = 0.0;
+    r[1][0] = 0.0;
+    r[1][1] = 1.0;
+    q[0] = a * g[0] + b * g[1];
+    q[1] = 0.0;
+    (r, q)
+}
+
+/// Levenberg-Marquardt from `x` to the minimum (along `line` only, if given); returns the
+/// iterations.
+fn descend<T: Sighting, L: Likelihood>(
+    problem: &Problem<'_, T, L>,
+    x: &mut [f32; STATE],
+    options: BiasedOptions,
+    line: Option<[f32; 2]>,
+) -> u32 {
+    let mut current = problem.cost(x);
     let mut lambda = 1e-3f32;
     let mut iterations = 0;
     let mut converged = false;
     while iterations < options.max_iterations && !converged {
         iterations += 1;
-        let (h, g) = problem.normal(&x);
+        let (h, g) = problem.normal(x);
+        let (h, g) = match line {
+            Some(along) => on_line(&h, &g, along),
+            None => (h, g),
+        };
         let mut accepted = false;
         for _ in 0..12 {
             let mut damped = h;
@@ -360,8 +493,13 @@ pub fn ml_sources<T: Sighting, L: Likelihood>(
                 lambda *= 10.0;
                 continue;
             };
-            let delta = mat_vec(&inv, &g);
-            let mut next = x;
+            let mut delta = mat_vec(&inv, &g);
+            if let Some([a, b]) = line {
+                let t = delta[0];
+                delta[0] = t * a;
+                delta[1] = t * b;
+            }
+            let mut next = *x;
             for (n, d) in next.iter_mut().zip(delta.iter()) {
                 *n += d;
             }
@@ -373,7 +511,7 @@ pub fn ml_sources<T: Sighting, L: Likelihood>(
                     .fold(0.0f32, |m, d| m.max(libm::fabsf(*d)));
                 converged = (step < options.tolerance_m && turn * 1000.0 < options.tolerance_m)
                     || current - c <= 1e-7 * current.abs();
-                x = next;
+                *x = next;
                 current = c;
                 lambda = (lambda * 0.1).max(1e-7);
                 accepted = true;
@@ -386,7 +524,7 @@ pub fn ml_sources<T: Sighting, L: Likelihood>(
             converged = true;
         }
     }
-    finish(&problem, &x, &geo, iterations)
+    iterations
 }
 
 /// Covariance, offsets and counts at the solution.

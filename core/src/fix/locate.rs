@@ -23,7 +23,11 @@
 //!    scaled by 2 F(2, N_eff - p) when the noise was estimated ([`NoiseModel::Estimated`]), or
 //!    by chi-square when the DF unit's sigmas hold ([`NoiseModel::Known`], checked by the
 //!    residuals' chi-square; a unit noisier than it claims gets the estimated scale and
-//!    `consistent: false`).
+//!    `consistent: false`). The ellipse is then made to hold the likelihood-ratio region along
+//!    its major axis ([`super::reach`]): driving at the emitter, the Fisher ellipse at a fix on
+//!    the line of bearing next to the vehicle is tens of metres while the likelihood stays flat
+//!    for kilometres. A region that runs out to [`RansacOptions::max_range`] is "no consistent
+//!    emitter" with [`Error::ParallelBearings`]: the range is unobservable, not a fix.
 //!
 //! No allocation: the caller lends the working storage ([`Buffers`], or a [`Workspace`] of
 //! fixed capacity `B`), the report holds at most `C` channels and `O` other sources, and every
@@ -58,6 +62,7 @@ use super::channel::{self, NO_CHANNEL};
 use super::consistency;
 use super::ellipse::Ellipse;
 use super::evidence::{self, Verdict};
+use super::reach;
 use super::robust::{self, OffsetWindow, RansacOptions, RefineOptions, TRIM_CUT};
 use crate::error::{Error, check_finite};
 use crate::likelihood::Gaussian;
@@ -303,6 +308,10 @@ pub struct Source {
     pub ellipse_scale: f32,
     /// Circular error probable, metres (with the same scaling).
     pub cep50: f32,
+    /// The ellipse's major axis over the Fisher ellipse's (after the N / N_eff and far-side
+    /// widening): above 1 where the likelihood reaches farther than its curvature at the fix
+    /// says ([`super::reach`]), a range the bearings barely observe.
+    pub stretch: f32,
     /// The bias-aware bound at the fix: sqrt(trace) of the marginal position block of the
     /// inverse information, at the noise used, metres.
     pub crlb: f32,
@@ -419,6 +428,7 @@ const EMPTY_SOURCE: Source = Source {
     },
     ellipse_scale: 0.0,
     cep50: 0.0,
+    stretch: 0.0,
     crlb: 0.0,
     bias: 0.0,
     bias_sd: 0.0,
@@ -822,7 +832,22 @@ fn find_source<R: Rng + ?Sized>(
     let dof_for_scale = if estimated { Some(dof) } else { None };
     let k = consistency::ellipse_scale(config.confidence, dof_for_scale)
         .map_err(NoEmitter::Geometry)?;
-    let covariance = far_side(&widened, &fix.position, members, k, config.ransac.max_range);
+    let stretched = far_side(&widened, &fix.position, members, k, config.ransac.max_range);
+    // The Fisher ellipse is the likelihood's curvature at the fix; where the range is barely
+    // observed the likelihood-ratio region reaches much farther: the ellipse is made to hold
+    // it, and a region that runs out to the search's range is no fix.
+    let fit = reach::Fit {
+        fix: &at_scale,
+        priors,
+        scale: scale_used,
+        inflation: tau,
+    };
+    let held = reach::reach(members, fit, &stretched, k, config.ransac.max_range)
+        .map_err(NoEmitter::Geometry)?;
+    if !held.bounded {
+        return Err(NoEmitter::Geometry(Error::ParallelBearings));
+    }
+    let covariance = held.covariance;
     let k50 = consistency::ellipse_scale(0.5, dof_for_scale).map_err(NoEmitter::Geometry)?;
     let ellipse =
         Ellipse::with_scale(&covariance, k, config.confidence).map_err(NoEmitter::Geometry)?;
@@ -847,6 +872,7 @@ fn find_source<R: Rng + ?Sized>(
         ellipse,
         ellipse_scale: k,
         cep50,
+        stretch: held.stretch,
         crlb,
         bias: at_scale.bias[main],
         bias_sd: at_scale.bias_sd[main],
@@ -875,6 +901,7 @@ fn find_source<R: Rng + ?Sized>(
         source.covariance[0][1],
         source.covariance[1][1],
         source.cep50,
+        source.stretch,
         source.crlb,
         source.bias,
         source.bias_sd,

@@ -14,6 +14,7 @@ pub mod ml;
 pub mod order;
 pub mod pcrb;
 pub mod ple;
+pub mod reach;
 pub mod robust;
 
 use crate::error::Error;
