@@ -398,7 +398,9 @@ fn parallel_bearings_and_a_stopped_vehicle_are_reported_then_recovered() {
         }
     };
     let capture = drive.capture(route);
-    let run = run_mcu("degenerate", &capture, 30.0, false);
+    // 10x: with RMC the GPS line carries 150 bytes a second, and at 30x a loaded machine's
+    // QEMU fell behind on it (its bearings then arrived after the fixes kept for them).
+    let run = run_mcu("degenerate", &capture, 10.0, false);
     let (unit, _, _) = check("degenerate", &run);
     let fixes: Vec<_> = bodies(&run.user)
         .iter()
@@ -407,8 +409,13 @@ fn parallel_bearings_and_a_stopped_vehicle_are_reported_then_recovered() {
             _ => None,
         })
         .collect();
+    assert!(
+        fixes.len() >= 200,
+        "{} fix sentences for 240 bearings: the emulated lines fell behind",
+        fixes.len()
+    );
     // While the bearings are one line or the vehicle stands still, no position.
-    for f in &fixes[..110] {
+    for f in fixes.iter().take(110) {
         assert!(
             matches!(
                 f.status,
