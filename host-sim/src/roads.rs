@@ -144,6 +144,24 @@ impl RoadGraph {
             .map(|(i, _)| i as u32)
     }
 
+    /// The road nearest `p` (O(edges)): its two nodes, if any.
+    pub fn nearest_segment(&self, p: [f32; 2]) -> Option<(u32, u32)> {
+        let distance_sq = |a: [f32; 2], b: [f32; 2]| {
+            let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+            let len_sq = dx * dx + dy * dy;
+            let t = if len_sq > 0.0 {
+                (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len_sq).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            (a[0] + t * dx - p[0]).powi(2) + (a[1] + t * dy - p[1]).powi(2)
+        };
+        self.segments()
+            .filter_map(|(a, b)| Some(((a, b), distance_sq(self.position(a)?, self.position(b)?))))
+            .min_by(|x, y| x.1.total_cmp(&y.1))
+            .map(|(s, _)| s)
+    }
+
     /// The same roads placed in `frame` (graphs read from OSM).
     pub fn localise(&mut self, frame: &LocalFrame) {
         for (p, g) in self.positions.iter_mut().zip(&self.geodetic) {

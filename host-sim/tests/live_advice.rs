@@ -278,6 +278,31 @@ fn with_roads_the_advice_is_the_next_turn() {
         off_grid(lat, 46.995, 0.0027) < 1e-6 && off_grid(lon, 7.99, 0.004) < 1e-6,
         "turn at {lat}, {lon}: not a grid node"
     );
+    // The turn lies ahead of the vehicle, not behind it: along the way it was driving (its
+    // last two fixes; the last is the corner where the drive turns north, off the grid's roads).
+    let degrees = |v: &str, d: usize| {
+        v[..d].parse::<f64>().expect("deg") + v[d..].parse::<f64>().expect("min") / 60.0
+    };
+    let fixes: Vec<(f64, f64)> = half
+        .lines()
+        .filter(|l| l.starts_with("$GPRMC"))
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            (degrees(f[3], 2), degrees(f[5], 3))
+        })
+        .collect();
+    let [.., (plat, plon), (vlat, vlon)] = fixes[..] else {
+        panic!("two RMC fixes")
+    };
+    let metres =
+        |dlat: f64, dlon: f64| (dlon * 111_195.0 * vlat.to_radians().cos(), dlat * 111_195.0);
+    let (me, mn) = metres(vlat - plat, vlon - plon);
+    let (te, tn) = metres(lat - vlat, lon - vlon);
+    let along = (te * me + tn * mn) / me.hypot(mn);
+    assert!(
+        along > 0.0,
+        "the next turn is {along:.0} m along the vehicle's way: behind it"
+    );
     assert!(
         a["line"]
             .as_str()

@@ -69,10 +69,32 @@ impl Reach for Roads<'_> {
     }
 }
 
-/// Where a vehicle at `position` heading `heading` joins the graph: the nearest node, having
-/// come from its neighbour that lies most behind the vehicle.
+/// How near a node (metres) the vehicle counts as at it rather than on a road between two.
+const AT_NODE_M: f32 = 15.0;
+
+/// Where a vehicle at `position` heading `heading` (radians from east) joins the graph. Between
+/// two junctions: the end of the road it is on that lies ahead, having come from the other
+/// end, so the next turn is never one already passed. At a junction (or with no heading): that
+/// node, having come from its neighbour that lies most behind the vehicle.
 pub fn join(g: &RoadGraph, position: [f32; 2], heading: Option<f32>) -> Option<OnRoad> {
     let node = g.nearest(position)?;
+    let at_node = g
+        .position(node)
+        .is_some_and(|p| (p[0] - position[0]).hypot(p[1] - position[1]) < AT_NODE_M);
+    if let (false, Some(h)) = (at_node, heading)
+        && let Some((a, b)) = g.nearest_segment(position)
+    {
+        let off = |n: u32| {
+            g.position(n).map_or(f32::INFINITY, |q| {
+                wrap((q[1] - position[1]).atan2(q[0] - position[0]) - h).abs()
+            })
+        };
+        let (ahead, behind) = if off(a) <= off(b) { (a, b) } else { (b, a) };
+        return Some(OnRoad {
+            node: ahead,
+            from: Some(behind),
+        });
+    }
     let from = heading.and_then(|h| {
         let p = g.position(node)?;
         g.out(node)
