@@ -488,25 +488,34 @@ fn cell(v: Option<f64>, digits: usize) -> String {
         .unwrap_or_else(|| "-".into())
 }
 
+/// A row's cells, shared by the Markdown and the terminal tables (shares in percent).
+fn cells(r: &Row) -> [String; 10] {
+    let pct = |x: f64| format!("{:.0}", 100.0 * x);
+    [
+        r.scenario.to_string(),
+        r.method.to_string(),
+        r.runs.to_string(),
+        cell(r.distance_km, 2),
+        cell(r.time_min, 1),
+        pct(r.reached),
+        pct(r.wrong),
+        cell(r.cep50_2km_m, 0),
+        pct(r.final_inside),
+        pct(r.calibration_advice),
+    ]
+}
+
 /// The rows as a Markdown table.
 pub fn markdown(rows: &[Row]) -> String {
     let mut out = String::from(
         "| scenario | policy | runs | distance to goal, km (median) | time, min | reached | wrong | CEP50 after 2 km, m | final ellipse holds truth | calibration advice |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     for r in rows {
+        let c = cells(r);
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {} | {} | {:.0} % | {:.0} % | {} | {:.0} % | {:.0} % |",
-            r.scenario,
-            r.method,
-            r.runs,
-            cell(r.distance_km, 2),
-            cell(r.time_min, 1),
-            100.0 * r.reached,
-            100.0 * r.wrong,
-            cell(r.cep50_2km_m, 0),
-            100.0 * r.final_inside,
-            100.0 * r.calibration_advice,
+            "| {} | {} | {} | {} | {} | {} % | {} % | {} | {} % | {} % |",
+            c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7], c[8], c[9]
         );
     }
     out
@@ -530,19 +539,11 @@ pub fn table(rows: &[Row]) -> String {
         "calib"
     );
     for r in rows {
+        let c = cells(r);
         let _ = writeln!(
             out,
-            "{:<24} {:<14} {:>5} {:>8} {:>7} {:>7.0}% {:>5.0}% {:>9} {:>7.0}% {:>6.0}%",
-            r.scenario,
-            r.method,
-            r.runs,
-            cell(r.distance_km, 2),
-            cell(r.time_min, 1),
-            100.0 * r.reached,
-            100.0 * r.wrong,
-            cell(r.cep50_2km_m, 0),
-            100.0 * r.final_inside,
-            100.0 * r.calibration_advice,
+            "{:<24} {:<14} {:>5} {:>8} {:>7} {:>7}% {:>5}% {:>9} {:>7}% {:>6}%",
+            c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7], c[8], c[9]
         );
     }
     out

@@ -112,12 +112,14 @@ fn free_heading(p: Policy, d: &Decision<'_>) -> Option<f32> {
         return Some(d.heading);
     }
     let sigma = median_sigma(bearings)?;
-    let greedy = |objective: Objective| -> Option<f32> {
+    // The core planner over free headings of one leg each: `depth` legs deep, turns up to
+    // `max_turn` per leg.
+    let planned = |objective: Objective, depth: usize, max_turn: f32| -> Option<f32> {
         let (b, n) = situation_beliefs(s).ok()?;
         let options = PlanOptions {
             objective,
-            depth: 1,
-            horizon_s: OPEN_LEG_M / OPEN_SPEED,
+            depth,
+            horizon_s: depth as f32 * OPEN_LEG_M / OPEN_SPEED,
             rate_hz: 1.0,
             sigma,
             sample_m: 100.0,
@@ -126,7 +128,7 @@ fn free_heading(p: Policy, d: &Decision<'_>) -> Option<f32> {
             count: 16,
             leg_m: OPEN_LEG_M,
             speed: OPEN_SPEED,
-            max_turn: PI,
+            max_turn,
         };
         let pose = Pose {
             position: s.vehicle,
@@ -155,34 +157,15 @@ fn free_heading(p: Policy, d: &Decision<'_>) -> Option<f32> {
                 b
             })
         }
-        Policy::GreedyD => greedy(Objective::DOptimal),
-        Policy::GreedyA => greedy(Objective::AOptimal),
-        Policy::Lookahead => {
-            let (b, n) = situation_beliefs(s).ok()?;
-            let options = PlanOptions {
-                objective: Objective::Goal {
-                    target_m: PLAN_TARGET_SHARE * GOAL_M,
-                },
-                depth: 3,
-                horizon_s: 3.0 * OPEN_LEG_M / OPEN_SPEED,
-                rate_hz: 1.0,
-                sigma,
-                sample_m: 100.0,
-            };
-            let free = FreeHeadings {
-                count: 16,
-                leg_m: OPEN_LEG_M,
-                speed: OPEN_SPEED,
-                max_turn: 0.75 * PI,
-            };
-            let pose = Pose {
-                position: s.vehicle,
-                heading: d.heading,
-            };
-            plan(&b[..n], pose, &free, options)
-                .ok()
-                .map(|c| c.leg.heading())
-        }
+        Policy::GreedyD => planned(Objective::DOptimal, 1, PI),
+        Policy::GreedyA => planned(Objective::AOptimal, 1, PI),
+        Policy::Lookahead => planned(
+            Objective::Goal {
+                target_m: PLAN_TARGET_SHARE * GOAL_M,
+            },
+            3,
+            0.75 * PI,
+        ),
     }
 }
 
