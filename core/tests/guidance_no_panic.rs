@@ -5,7 +5,7 @@
 use foxhunt_core::Bearing;
 use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::guidance::belief::{Belief, Hypotheses};
-use foxhunt_core::guidance::plan::{FreeHeadings, Objective, PlanOptions, Pose, plan};
+use foxhunt_core::guidance::plan::{Cost, FreeHeadings, Objective, PlanOptions, Pose, plan};
 use foxhunt_core::guidance::stop::{FixQuality, StopRule, verdict};
 use proptest::prelude::*;
 
@@ -40,7 +40,7 @@ proptest! {
         e in (wild(), wild()),
         prior_sd in wild(),
         v in (wild(), wild()),
-        objective in 0u8..3,
+        objective in 0u8..4,
         depth in 0usize..4,
         sigma in wild(),
         target in wild(),
@@ -52,7 +52,14 @@ proptest! {
             let objective = match objective {
                 0 => Objective::DOptimal,
                 1 => Objective::AOptimal,
-                _ => Objective::Goal { target_m: target },
+                2 => Objective::Goal {
+                    target_m: target,
+                    cost: Cost::Time,
+                },
+                _ => Objective::Goal {
+                    target_m: target,
+                    cost: Cost::Distance,
+                },
             };
             let options = PlanOptions {
                 objective,

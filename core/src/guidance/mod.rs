@@ -15,7 +15,7 @@
 //! ```
 //! use foxhunt_core::fix::bias::BiasPrior;
 //! use foxhunt_core::guidance::belief::{Belief, Hypotheses, beliefs, MAX_POINTS};
-//! use foxhunt_core::guidance::plan::{plan, FreeHeadings, Objective, PlanOptions, Pose};
+//! use foxhunt_core::guidance::plan::{plan, Cost, FreeHeadings, Objective, PlanOptions, Pose};
 //! use foxhunt_core::model::bearing::{Bearing, predicted};
 //!
 //! // Twenty bearings from 300 m of road east, of an emitter about 3 km north.
@@ -29,7 +29,7 @@
 //! let mut b = [Belief::from_bearings(e, &bs, BiasPrior::default(), 2e4)?; MAX_POINTS];
 //! let n = beliefs(&h, &bs, BiasPrior::default(), 2e4, &mut b);
 //! let options = PlanOptions {
-//!     objective: Objective::Goal { target_m: 100.0 },
+//!     objective: Objective::Goal { target_m: 100.0, cost: Cost::Time },
 //!     depth: 3,
 //!     horizon_s: 60.0,
 //!     rate_hz: 1.0,

@@ -12,9 +12,10 @@
 //! Objectives ([`Objective`]), each averaged over the hypothesised emitter positions:
 //! - `DOptimal`: ln det P before minus after (the log-volume of the ellipse removed);
 //! - `AOptimal`: the relative drop of trace P;
-//! - `Goal`: the earliest time at which the predicted CEP50 falls below a target radius, and
-//!   where no sequence reaches it, the smallest predicted CEP50 at the horizon. With depth 1
-//!   it is greedy; with a horizon of minutes it is the look-ahead.
+//! - `Goal`: the soonest (in seconds or in metres driven, [`Cost`]) that the predicted CEP50
+//!   falls below a target radius, and where no sequence reaches it, the smallest predicted
+//!   CEP50 at the horizon. With depth 1 it is greedy; with a horizon of minutes it is the
+//!   look-ahead.
 //!
 //! Cost: (candidate sequences) x (samples per leg) x (hypotheses) updates of 3 x 3 (about 60
 //! flops each), plus the objective (a 2 x 2 eigen-decomposition) per leaf.
@@ -84,7 +85,21 @@ pub enum Objective {
     Goal {
         /// Target CEP50, metres.
         target_m: f32,
+        /// What "soonest" counts.
+        cost: Cost,
     },
+}
+
+/// What reaching the goal costs: where every road has the same speed the two agree; where
+/// they differ (a highway and its side roads) a fast road is cheap in time but gives fewer
+/// bearings per kilometre.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Cost {
+    /// Seconds of driving (what the driver waits).
+    #[default]
+    Time,
+    /// Metres driven.
+    Distance,
 }
 
 /// Settings of [`plan`].
@@ -108,7 +123,7 @@ impl PlanOptions {
     /// `Ok` when usable.
     pub fn check(&self) -> Result<(), Error> {
         check_finite(&[self.horizon_s, self.rate_hz, self.sigma, self.sample_m])?;
-        if let Objective::Goal { target_m } = self.objective
+        if let Objective::Goal { target_m, .. } = self.objective
             && !(target_m > 0.0 && target_m.is_finite())
         {
             return Err(Error::OutOfRange);
@@ -164,6 +179,30 @@ fn mean_cep(beliefs: &[Belief]) -> f32 {
     )
 }
 
+/// What a sequence has cost so far.
+#[derive(Debug, Clone, Copy, Default)]
+struct Spent {
+    seconds: f32,
+    metres: f32,
+}
+
+impl Spent {
+    /// After the first `share` of `leg` too.
+    fn after(self, leg: &Leg, share: f32) -> Spent {
+        Spent {
+            seconds: self.seconds + share * leg.seconds,
+            metres: self.metres + share * leg.length(),
+        }
+    }
+
+    fn cost(&self, cost: Cost) -> f32 {
+        match cost {
+            Cost::Time => self.seconds,
+            Cost::Distance => self.metres,
+        }
+    }
+}
+
 struct Search<'a, R: Reach> {
     reach: &'a R,
     options: PlanOptions,
@@ -173,13 +212,13 @@ struct Search<'a, R: Reach> {
 }
 
 impl<R: Reach> Search<'_, R> {
-    /// Add a leg's bearings to the beliefs; the time within the leg at which the target was
+    /// Add a leg's bearings to the beliefs; the share of the leg after which the target was
     /// first met, if it was.
     fn drive(&self, beliefs: &mut [Belief], leg: &Leg) -> Option<f32> {
         let n = libm::ceilf(leg.length() / self.options.sample_m).clamp(1.0, MAX_SAMPLES as f32);
         let count = leg.seconds * self.options.rate_hz / n;
         let target = match self.options.objective {
-            Objective::Goal { target_m } => Some(target_m),
+            Objective::Goal { target_m, .. } => Some(target_m),
             _ => None,
         };
         let mut met = None;
@@ -196,13 +235,14 @@ impl<R: Reach> Search<'_, R> {
                 && met.is_none()
                 && mean_cep(beliefs) < tm
             {
-                met = Some((i as f32 + 1.0) / n * leg.seconds);
+                met = Some((i as f32 + 1.0) / n);
             }
         }
         met
     }
 
-    fn outcome(&self, beliefs: &[Belief], reached_s: Option<f32>) -> Outcome {
+    /// `reached`: the (seconds, metres) from now at which the target is met, if it is.
+    fn outcome(&self, beliefs: &[Belief], reached: Option<Spent>) -> Outcome {
         let n = beliefs.len().max(1) as f32;
         let cep50_m = mean_cep(beliefs);
         let score = match self.options.objective {
@@ -225,29 +265,29 @@ impl<R: Reach> Search<'_, R> {
             // Reaching beats not reaching (scores near 1e6 against below 100); sooner is
             // better. Short of the target, the smaller final CEP50 wins; between sequences that
             // reach it at the same sample, too (its weight keeps it under a second).
-            Objective::Goal { .. } => {
+            Objective::Goal { cost, .. } => {
                 let info = -libm::logf(cep50_m.max(1e-3));
-                match reached_s {
-                    Some(t) => 1e6 - t + 0.05 * info,
+                match reached {
+                    Some(r) => 1e6 - r.cost(cost) + 0.05 * info,
                     None => info,
                 }
             }
         };
         Outcome {
             score,
-            reached_s,
+            reached_s: reached.map(|r| r.seconds),
             cep50_m,
         }
     }
 
-    /// Walk on from `state` with `beliefs` after `elapsed` seconds and `depth` legs; the best
-    /// outcome below.
+    /// Walk on from `state` with `beliefs` after `spent` and `depth` legs; the best outcome
+    /// below.
     fn walk(
         &mut self,
         state: &R::State,
         beliefs: &[Belief; MAX_POINTS],
         len: usize,
-        elapsed: f32,
+        spent: Spent,
         depth: usize,
     ) -> Option<Outcome> {
         let mut best: Option<Outcome> = None;
@@ -256,7 +296,7 @@ impl<R: Reach> Search<'_, R> {
             if !(leg.seconds > 0.0) || !leg.seconds.is_finite() || !leg.length().is_finite() {
                 return;
             }
-            let left = self.options.horizon_s - elapsed;
+            let left = self.options.horizon_s - spent.seconds;
             let cut = leg.seconds > left;
             let whole = leg;
             let leg = if cut {
@@ -265,12 +305,14 @@ impl<R: Reach> Search<'_, R> {
                 leg
             };
             let mut b = *beliefs;
-            let met = self.drive(&mut b[..len], &leg).map(|t| elapsed + t);
+            let met = self
+                .drive(&mut b[..len], &leg)
+                .map(|share| spent.after(&leg, share));
             let o = if met.is_some() || cut || depth + 1 >= self.options.depth {
                 self.sequences += 1;
                 self.outcome(&b[..len], met)
             } else {
-                match self.walk(&next, &b, len, elapsed + leg.seconds, depth + 1) {
+                match self.walk(&next, &b, len, spent.after(&leg, 1.0), depth + 1) {
                     Some(o) => o,
                     None => {
                         // A dead end: the sequence stops here.
@@ -317,18 +359,36 @@ pub fn plan<R: Reach>(
     };
     let mut start = [*first; MAX_POINTS];
     start[..len].copy_from_slice(&beliefs[..len]);
+    // A goal met before moving ranks every sequence by its first sample alone (the cheapest
+    // wins, however little it teaches). The bound can be met while the fix is not yet
+    // believed (an emitter near the track: the bound at the point fix is tiny, its honest
+    // ellipse is not), so the plan then learns the most instead: D-optimal over the horizon.
+    let met_already = matches!(options.objective, Objective::Goal { target_m, .. }
+        if mean_cep(&start[..len]) < target_m);
+    let searched = if met_already {
+        PlanOptions {
+            objective: Objective::DOptimal,
+            ..options
+        }
+    } else {
+        options
+    };
     let mut search = Search {
         reach,
-        options,
+        options: searched,
         start: &start[..len],
         best: None,
         sequences: 0,
     };
-    let _ = search.walk(&state, &start, len, 0.0, 0);
+    let _ = search.walk(&state, &start, len, Spent::default(), 0);
     let sequences = search.sequences;
     search
         .best
-        .map(|c| Choice { sequences, ..c })
+        .map(|c| Choice {
+            sequences,
+            reached_s: if met_already { Some(0.0) } else { c.reached_s },
+            ..c
+        })
         .ok_or(Error::TooFewMeasurements)
 }
 
@@ -479,7 +539,10 @@ mod tests {
             max_turn: PI / 2.0,
             ..FreeHeadings::default()
         };
-        let goal = Objective::Goal { target_m: 100.0 };
+        let goal = Objective::Goal {
+            target_m: 100.0,
+            cost: Cost::Time,
+        };
         let c = plan(&[b], pose(), &headings, options(goal, 3)).unwrap();
         // 9 headings within 90 degrees, three levels deep.
         assert_eq!(c.sequences, 9 * 9 * 9);
@@ -500,6 +563,65 @@ mod tests {
             c.cep50_m,
             straight.cep50()
         );
+    }
+
+    /// The same road east twice: a fast one and a slow one (twice the bearings per metre).
+    struct FastOrSlow;
+
+    impl Reach for FastOrSlow {
+        type State = bool;
+        fn moves(&self, _: &bool, each: &mut dyn FnMut(bool, Leg)) {
+            for (fast, speed) in [(true, 30.0), (false, 10.0)] {
+                let leg = Leg {
+                    from: [285.0, 0.0],
+                    to: [3285.0, 0.0],
+                    seconds: 3000.0 / speed,
+                };
+                each(fast, leg);
+            }
+        }
+    }
+
+    #[test]
+    fn the_goal_costs_seconds_or_metres() {
+        let b = start(BiasPrior::calibrated(0.0));
+        let at = |cost: Cost| {
+            let goal = Objective::Goal {
+                target_m: 150.0,
+                cost,
+            };
+            let o = PlanOptions {
+                horizon_s: 300.0,
+                ..options(goal, 1)
+            };
+            plan(&[b], true, &FastOrSlow, o).unwrap()
+        };
+        let (time, distance) = (at(Cost::Time), at(Cost::Distance));
+        // Sooner in seconds: the fast road (more angle per second); sooner in metres: the slow
+        // one (more bearings per metre). Both reach the target within their leg.
+        assert!(time.state, "{time:?}");
+        assert!(!distance.state, "{distance:?}");
+        assert!(time.reached_s.is_some() && distance.reached_s.is_some());
+    }
+
+    #[test]
+    fn a_goal_met_before_moving_plans_for_information() {
+        let b = start(BiasPrior::calibrated(0.0));
+        let goal = Objective::Goal {
+            target_m: 1e5,
+            cost: Cost::Distance,
+        };
+        let c = plan(&[b], pose(), &FreeHeadings::default(), options(goal, 1)).unwrap();
+        let d = plan(
+            &[b],
+            pose(),
+            &FreeHeadings::default(),
+            options(Objective::DOptimal, 1),
+        )
+        .unwrap();
+        // Not the cheapest first sample (any heading would do) but the most informative move.
+        assert_eq!(c.leg, d.leg);
+        assert_eq!(c.reached_s, Some(0.0));
     }
 
     #[test]

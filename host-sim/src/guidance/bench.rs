@@ -271,7 +271,13 @@ pub fn run(set: Set, policy: Policy, g: Option<&RoadGraph>, run: usize, seed: u6
     let mut heading = s.heading;
     let mut on_road = s.on_road;
     let mut leg: Option<(Move, f32)> = None; // the move and the seconds driven on it
-    let mut bearings: Vec<Bearing> = Vec::new();
+    // The unit's first bearing is in before the vehicle moves off: the first move is a
+    // decision too (at a highway exit it is two kilometres of driving).
+    let mut bearings: Vec<Bearing> = vec![Bearing {
+        vehicle: pos,
+        theta: wrap(predicted(&s.emitter, &pos) + s.offset + s.sigma * random::normal(&mut noise)),
+        sigma: s.sigma,
+    }];
     let mut last_fix: Option<BiasedFix> = None;
     let mut out = RunResult {
         distance_m: None,

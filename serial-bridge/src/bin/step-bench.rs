@@ -101,7 +101,9 @@ mod image {
     fn run_guidance(look: bool, steps: usize) -> Result<u32, Error> {
         use foxhunt_core::fix::bias::BiasPrior;
         use foxhunt_core::guidance::belief::{Belief, Hypotheses, MAX_POINTS, beliefs};
-        use foxhunt_core::guidance::plan::{FreeHeadings, Objective, PlanOptions, Pose, plan};
+        use foxhunt_core::guidance::plan::{
+            Cost, FreeHeadings, Objective, PlanOptions, Pose, plan,
+        };
         let mut rng = XorShiftRng::seed_from_u64(1);
         let z: [Bearing; 60] = core::array::from_fn(|k| {
             let v = loop300(AOA_EMITTER, k);
@@ -122,7 +124,10 @@ mod image {
         let n = beliefs(&h, &z, prior, 2.0e4, &mut b);
         let (objective, depth, max_turn) = if look {
             (
-                Objective::Goal { target_m: 1e-3 },
+                Objective::Goal {
+                    target_m: 1e-3,
+                    cost: Cost::Time,
+                },
                 3,
                 core::f32::consts::FRAC_PI_2,
             )
