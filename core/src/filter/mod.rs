@@ -180,8 +180,7 @@ impl<const N: usize, const D: usize> ParticleState<N, D> {
         rng: &mut R,
     ) {
         if S::MOVES {
-            let fitness = model.fitness(z, likelihood);
-            let spent = swarm.optimise(&mut self.set, fitness, rng);
+            let spent = optimise_swarm(&mut self.set, model, z, likelihood, swarm, rng);
             self.evaluations += u64::from(spent);
         }
     }
@@ -236,4 +235,24 @@ impl<const N: usize, const D: usize> ParticleState<N, D> {
     pub(crate) fn evaluations(&self) -> u64 {
         self.evaluations
     }
+}
+
+/// One swarm move over `set`, kept out of line: inlined into the registry's dispatch, which
+/// builds every filter in one function, the swarms' inner loops lost registers to it.
+#[inline(never)]
+fn optimise_swarm<const N: usize, const D: usize, M, L, S, R>(
+    set: &mut ParticleSet<N, D>,
+    model: &M,
+    z: &M::Measurement,
+    likelihood: &L,
+    swarm: &mut S,
+    rng: &mut R,
+) -> u32
+where
+    M: Model<D>,
+    L: Likelihood,
+    S: Swarm<D>,
+    R: Rng + ?Sized,
+{
+    swarm.optimise(set, model.fitness(z, likelihood), rng)
 }

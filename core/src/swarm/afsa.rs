@@ -142,7 +142,9 @@ fn neighbour_sums<const N: usize, const D: usize>(
 ) -> ([[f32; D]; N], [f32; N]) {
     let mut sums = [[0.0f32; D]; N];
     let mut counts = [0.0f32; N];
-    for (k, xk) in sorted.iter().enumerate() {
+    // Each fish a copy: the scan then keeps its coordinates in registers across the stores
+    // into the neighbours' sums.
+    for (k, &xk) in sorted.iter().enumerate() {
         let (left, right) = sums.split_at_mut(k + 1);
         let (n_left, n_right) = counts.split_at_mut(k + 1);
         let (mut sum, mut n) = ([0.0f32; D], 0.0f32);
@@ -150,7 +152,7 @@ fn neighbour_sums<const N: usize, const D: usize>(
             if !(xj[0] <= xk[0] + v) {
                 break;
             }
-            let d2 = distance_sq(xk, xj);
+            let d2 = distance_sq(&xk, xj);
             if d2 > 0.0 && d2 < v * v {
                 n += 1.0;
                 *n_j += 1.0;
@@ -208,9 +210,11 @@ mod tests {
         );
         let sorted: [[f32; 2]; 64] = core::array::from_fn(|k| set.states[order[k] as usize]);
         let (sums, counts) = neighbour_sums(&sorted, 1.0);
-        for (k, xk) in sorted.iter().enumerate() {
+        // Each fish a copy: the scan then keeps its coordinates in registers across the stores
+        // into the neighbours' sums.
+        for (k, &xk) in sorted.iter().enumerate() {
             let near = |xj: &&[f32; 2]| {
-                let d2 = distance_sq(xk, xj);
+                let d2 = distance_sq(&xk, xj);
                 d2 > 0.0 && d2 < 1.0
             };
             assert_eq!(

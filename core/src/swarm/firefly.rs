@@ -5,7 +5,7 @@
 //! deviation at the start of the move, so the same constants work for an emitter kilometres
 //! away and for the UNGM's unitless state.
 
-use super::{Swarm, argmax, axis_scale, evaluate, sane};
+use super::{Swarm, argmax, axis_scale, each_axis, evaluate, sane};
 use crate::particles::ParticleSet;
 use crate::{fastmath, random};
 use rand_core::Rng;
@@ -84,12 +84,12 @@ impl Default for ImprovedFirefly {
 
 /// Squared distance in units of `scale`.
 fn scaled_r2<const D: usize>(a: &[f32; D], b: &[f32; D], scale: &[f32; D]) -> f32 {
-    (0..D)
-        .map(|k| {
-            let d = (a[k] - b[k]) / scale[k];
-            d * d
-        })
-        .sum()
+    let mut r2 = 0.0;
+    each_axis::<D>(|k| {
+        let d = (a[k] - b[k]) / scale[k];
+        r2 += d * d;
+    });
+    r2
 }
 
 impl<const D: usize> Swarm<D> for Firefly {
@@ -114,10 +114,10 @@ impl<const D: usize> Swarm<D> for Firefly {
                         let xi = &mut set.states[i];
                         let beta = p.beta0
                             * fastmath::exp_nonpositive(-p.gamma * scaled_r2(xi, &xj, &scale));
-                        for k in 0..D {
+                        each_axis::<D>(|k| {
                             xi[k] += beta * (xj[k] - xi[k])
                                 + alpha * scale[k] * (random::uniform(rng) - 0.5);
-                        }
+                        });
                         moved = true;
                     }
                 }
@@ -162,10 +162,10 @@ impl<const D: usize> Swarm<D> for ImprovedFirefly {
                 let beta = p.beta0 / (1.0 + rel)
                     * fastmath::exp_nonpositive(-p.gamma * scaled_r2(xi, &g, &scale))
                     * eps;
-                for k in 0..D {
+                each_axis::<D>(|k| {
                     xi[k] +=
                         beta * (g[k] - xi[k]) + alpha * scale[k] * (random::uniform(rng) - 0.5);
-                }
+                });
                 light[i] = sane(fitness(xi));
                 evals += 1;
             }

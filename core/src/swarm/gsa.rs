@@ -102,10 +102,11 @@ impl<const D: usize> Swarm<D> for Gsa {
             }
             for i in 0..N {
                 let keep = random::uniform(rng);
-                for d in 0..D {
-                    velocity[i][d] = keep * velocity[i][d] + accel[i][d];
-                    set.states[i][d] += velocity[i][d];
-                }
+                let (v, x) = (&mut velocity[i], &mut set.states[i]);
+                each_axis::<D>(|d| {
+                    v[d] = keep * v[d] + accel[i][d];
+                    x[d] += v[d];
+                });
                 ln_fit[i] = sane(fitness(&set.states[i]));
                 evals += 1;
             }

@@ -3,7 +3,7 @@
 //! (w = 0.7, c1 = c2 = 1.5, 10 iterations: chosen). O(N D) per iteration; velocities and
 //! personal bests live on the stack for the duration of one move.
 
-use super::{Swarm, argmax, evaluate, sane};
+use super::{Swarm, argmax, each_axis, evaluate, sane};
 use crate::particles::ParticleSet;
 use crate::random;
 use rand_core::Rng;
@@ -50,14 +50,14 @@ impl<const D: usize> Swarm<D> for Pso {
             for i in 0..N {
                 let x = &mut set.states[i];
                 let v = &mut velocity[i];
-                for k in 0..D {
+                each_axis::<D>(|k| {
                     let r1 = random::uniform(rng);
                     let r2 = random::uniform(rng);
                     v[k] = self.inertia * v[k]
                         + self.cognitive * r1 * (pbest[i][k] - x[k])
                         + self.social * r2 * (gbest[k] - x[k]);
                     x[k] += v[k];
-                }
+                });
                 fit[i] = sane(fitness(x));
                 evals += 1;
                 if fit[i] > pfit[i] {

@@ -31,8 +31,9 @@ mod image {
 
     const N: usize = 100;
 
-    /// Step a started filter `steps` times cycling through `z`; the estimate's first
-    /// coordinate.
+    /// Step a started filter `steps` times cycling through `z`, print its estimate's mean and
+    /// the likelihood evaluations spent (what a change of code must leave alone, and the
+    /// machine-independent half of a change of cost); the mean's first coordinate.
     struct Run<'a, Z, const D: usize> {
         cloud: &'a [[f32; D]],
         z: &'a [Z],
@@ -47,7 +48,9 @@ mod image {
             for z in self.z.iter().cycle().take(self.steps) {
                 let _ = f.step(z, self.rng);
             }
-            Ok(f.estimate()?.mean[0])
+            let mean = f.estimate()?.mean;
+            println!("mean {mean:?}, {} evaluations", f.evaluations());
+            Ok(mean[0])
         }
     }
 
