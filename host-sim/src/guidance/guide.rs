@@ -503,9 +503,10 @@ mod tests {
             .flat_map(|v| [v.bound_cep50_m, v.offset_known_cep50_m])
             .chain([r.bound_cep50_m, r.offset_known_cep50_m, r.reached_s])
             .flatten();
-        if !numbers.into_iter().chain(verdicts).all(f32::is_finite)
-            || !(a.target.lat.is_finite() && a.target.lon.is_finite())
-        {
+        let finite = numbers.into_iter().chain(verdicts).all(f32::is_finite)
+            && a.target.lat.is_finite()
+            && a.target.lon.is_finite();
+        if !finite {
             return Err(format!("a number is not finite: {a:?}"));
         }
         if a.emitters.len() != emitters {
