@@ -212,7 +212,7 @@ pub struct LocateReport {
     pub rejected: BTreeMap<&'static str, u32>,
     /// The local frame's origin (the first vehicle fix; without one, the unit's fix).
     pub origin: LatLonReport,
-    /// Where to drive next and whether to stop, for the first emitter (absent until a
+    /// Where to drive next and whether to stop, for every emitter (absent until a
     /// [`crate::guidance::guide::Guide`] has advised).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub advice: Option<LocatedAdvice>,
@@ -245,10 +245,10 @@ pub struct Located {
     pub drawn: Vec<Drawn>,
     /// The method's particles (empty for batch fixes, the EKF and the pipeline).
     pub cloud: Vec<[f32; 2]>,
-    /// The field pipeline's first emitter, which guidance starts from (`None` for the other
-    /// methods: the stop rule wants a fix whose consistency and independent bearings were
-    /// checked).
-    pub emitter: Option<Source>,
+    /// The field pipeline's emitters (in the report's order), which guidance starts from
+    /// (empty for the other methods: the stop rule wants a fix whose consistency and
+    /// independent bearings were checked).
+    pub emitters: Vec<Source>,
 }
 
 /// Rejections by reason, every reason listed (zero included) so scripts can rely on the keys.
@@ -314,8 +314,8 @@ fn advice_suffix(advice: Option<&LocatedAdvice>, error: Option<&str>) -> String 
     }
 }
 
-/// Locate every emitter of `d`, and advise through `guide`: from the first emitter of the
-/// field pipeline, or, with no fix yet, from the bearings alone. The one place where the
+/// Locate every emitter of `d`, and advise through `guide`: from every emitter of the field
+/// pipeline, or, with no fix yet, from the bearings alone. The one place where the
 /// final report and the live updates get their advice.
 pub fn locate_guided(
     d: &Decoded,
@@ -324,10 +324,9 @@ pub fn locate_guided(
 ) -> Result<Located, Box<NoFix>> {
     match locate(d, o) {
         Ok(mut l) => {
-            let advice = match (&l.emitter, o.method) {
-                (Some(e), _) => guide.located(d, Some(e), o),
-                (None, Method::MlRobust) => guide.located(d, None, o),
-                (None, m) => Err(format!(
+            let advice = match (l.emitters.is_empty(), o.method) {
+                (false, _) | (true, Method::MlRobust) => guide.located(d, &l.emitters, o),
+                (true, m) => Err(format!(
                     "the stop rule wants a fix whose consistency and independent bearings are                      checked (--method ml-robust, not {})",
                     m.name()
                 )),
@@ -339,7 +338,7 @@ pub fn locate_guided(
             Ok(l)
         }
         Err(error) => {
-            let advice = guide.located(d, None, o);
+            let advice = guide.located(d, &[], o);
             Err(Box::new(NoFix {
                 used: d.observations.len() as u32,
                 error,
@@ -501,7 +500,7 @@ pub fn locate(d: &Decoded, o: &LocateOptions) -> Result<Located, String> {
         return Err(no_bearing(d));
     }
     let mut rejected = rejections(d);
-    let (emitters, other_sources, channels, drawn, cloud, emitter) = if o.method == Method::MlRobust
+    let (emitters, other_sources, channels, drawn, cloud, sources) = if o.method == Method::MlRobust
     {
         located_by_pipeline(d, o, &frame, &mut rejected)?
     } else {
@@ -525,7 +524,7 @@ pub fn locate(d: &Decoded, o: &LocateOptions) -> Result<Located, String> {
         },
         drawn,
         cloud,
-        emitter,
+        emitters: sources,
     })
 }
 
@@ -556,19 +555,19 @@ fn unit_only(d: &Decoded, o: &LocateOptions, u: UnitReport) -> Located {
         },
         drawn: Vec::new(),
         cloud: Vec::new(),
-        emitter: None,
+        emitters: Vec::new(),
     }
 }
 
 /// What one locate path gives: emitters, other sources, channels, drawn sources, particles,
-/// the pipeline's first emitter.
+/// the pipeline's emitters.
 type Parts = (
     Vec<SourceReport>,
     Vec<SourceReport>,
     Vec<ChannelSummary>,
     Vec<Drawn>,
     Vec<[f32; 2]>,
-    Option<Source>,
+    Vec<Source>,
 );
 
 /// A pipeline source as the report has it.
@@ -689,7 +688,7 @@ fn located_by_pipeline(
         channels,
         drawn,
         Vec::new(),
-        r.emitters().first().copied(),
+        r.emitters().to_vec(),
     ))
 }
 
@@ -781,7 +780,7 @@ fn located_by(
         vec![channel],
         drawn,
         s.cloud,
-        None,
+        Vec::new(),
     ))
 }
 
@@ -908,15 +907,25 @@ impl LocateReport {
         out
     }
 
-    /// One line for a live update.
+    /// One line for a live update (several emitters: numbered as the advice names them).
     pub fn update_line(&self) -> String {
+        let several = self.emitters.len() > 1;
         let fixes: Vec<String> = self
             .emitters
             .iter()
-            .map(|e| {
+            .enumerate()
+            .map(|(i, e)| {
                 format!(
-                    "{:.6}, {:.6} CEP50 {:.1} m (bound {:.1} m)",
-                    e.lat, e.lon, e.cep50_m, e.crlb_m
+                    "{}{:.6}, {:.6} CEP50 {:.1} m (bound {:.1} m)",
+                    if several {
+                        format!("emitter {} ", i + 1)
+                    } else {
+                        String::new()
+                    },
+                    e.lat,
+                    e.lon,
+                    e.cep50_m,
+                    e.crlb_m
                 )
             })
             .collect();

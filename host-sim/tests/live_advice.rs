@@ -332,3 +332,130 @@ fn with_roads_the_advice_is_the_next_turn() {
         "{report}"
     );
 }
+
+/// `foxhunt locate - ARGS` fed `bytes` in chunks of `lines` sentences: its update lines.
+fn live_chunks(bytes: &[u8], lines: usize, args: &[&str]) -> Vec<String> {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .args(["locate", "-"])
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run foxhunt");
+    let mut stdin = child.stdin.take().expect("stdin");
+    let sentences: Vec<&[u8]> = bytes.split_inclusive(|b| *b == b'\n').collect();
+    let feed = sentences
+        .chunks(lines)
+        .map(<[&[u8]]>::concat)
+        .collect::<Vec<_>>();
+    let writer = std::thread::spawn(move || {
+        for c in feed {
+            stdin.write_all(&c).expect("write");
+            stdin.flush().expect("flush");
+            std::thread::sleep(Duration::from_millis(150));
+        }
+    });
+    let out = child.wait_with_output().expect("foxhunt ends");
+    writer.join().expect("writer");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(str::to_string)
+        .collect()
+}
+
+#[test]
+fn two_emitters_each_get_a_verdict_and_the_move_names_the_one_it_serves() {
+    let dir = scratch("two-emitters");
+    let file = dir.join("two.nmea");
+    let made = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .args([
+            "simulate",
+            "--condition",
+            "two-emitters",
+            "--force",
+            "--out",
+        ])
+        .arg(&file)
+        .output()
+        .expect("run foxhunt simulate");
+    assert!(made.status.success(), "{made:?}");
+    let bytes = std::fs::read(&file).expect("capture");
+    // 40 sentences (20 bearings, 10 per emitter) per chunk, a pause between: updates as the
+    // drive goes on (how many depends on how the pipe batches them).
+    let lines = json(&live_chunks(&bytes, 40, &["--json"]));
+    assert!(lines.len() >= 3, "{} updates", lines.len());
+    let mut split = false;
+    for v in &lines {
+        let a = &v["advice"];
+        let emitters = v["emitters"].as_array().map(Vec::len).unwrap_or(0);
+        if emitters < 2 {
+            continue;
+        }
+        check_advice(a);
+        let verdicts = a["emitters"].as_array().expect("verdicts");
+        assert_eq!(verdicts.len(), emitters, "{v}");
+        let short: Vec<u64> = verdicts
+            .iter()
+            .filter(|x| x["good_enough"] == false)
+            .map(|x| x["emitter"].as_u64().expect("emitter number"))
+            .collect();
+        for x in verdicts {
+            assert!(REASONS.contains(&x["reason"].as_str().unwrap_or("")), "{x}");
+            assert!(
+                x["bound_cep50_m"].as_f64().is_some_and(f64::is_finite),
+                "{x}"
+            );
+        }
+        // The move is for exactly those not good enough, and says so.
+        assert_eq!(a["for_emitters"], serde_json::json!(short), "{v}");
+        assert_eq!(a["good_enough"], short.is_empty(), "{v}");
+        let line = a["line"].as_str().unwrap_or("");
+        if short.is_empty() {
+            assert_eq!(line, "good enough: stop (emitters 1, 2)", "{v}");
+        } else {
+            let names: Vec<String> = short.iter().map(u64::to_string).collect();
+            let s = if short.len() > 1 { "s" } else { "" };
+            assert!(
+                line.contains(&format!(" for emitter{s} {};", names.join(", "))),
+                "{line}"
+            );
+        }
+        // Never "good enough" beside a reported CEP50 above the 100 m target.
+        for (x, e) in verdicts
+            .iter()
+            .zip(v["emitters"].as_array().expect("emitters"))
+        {
+            if x["good_enough"] == true {
+                let cep = e["cep50_m"].as_f64().unwrap_or(f64::INFINITY);
+                assert!(cep < 100.0, "good enough at {cep} m: {v}");
+            }
+        }
+        split |= short.len() == 1;
+    }
+    let last = lines.last().expect("a last update");
+    assert_eq!(last["advice"]["good_enough"], true, "{last}");
+    assert_eq!(
+        last["advice"]["for_emitters"],
+        serde_json::json!([]),
+        "{last}"
+    );
+    assert!(
+        split,
+        "no update with one emitter good enough and one short"
+    );
+    // The text lines number the fixes and carry each emitter's verdict.
+    let text = live_chunks(&bytes, 200, &[]);
+    let last = text.last().expect("a line");
+    assert!(
+        last.contains("emitter 1 47.")
+            && last.contains("emitter 2 47.")
+            && last.ends_with("good enough: stop (emitters 1, 2)"),
+        "{last}"
+    );
+}

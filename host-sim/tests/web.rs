@@ -146,3 +146,45 @@ fn the_live_map_shows_the_fix_and_the_suggested_move() {
     );
     println!("screenshot: {}", png.display());
 }
+
+#[test]
+fn the_live_map_shows_every_emitters_verdict_and_whom_the_move_is_for() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("web-two");
+    std::fs::create_dir_all(&dir).unwrap();
+    let whole = dir.join("two.nmea");
+    let made = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .args([
+            "simulate",
+            "--condition",
+            "two-emitters",
+            "--force",
+            "--out",
+        ])
+        .arg(&whole)
+        .output()
+        .expect("run foxhunt simulate");
+    assert!(made.status.success(), "{made:?}");
+    // 100 bearings: emitter 1 (CEP50 77 m) is good enough, emitter 2 (137 m) is not.
+    let text = std::fs::read_to_string(&whole).unwrap();
+    let part: String = text.lines().take(200).map(|l| format!("{l}\n")).collect();
+    let capture = dir.join("two-part.nmea");
+    std::fs::write(&capture, part).unwrap();
+    let osm = dir.join("grid.osm");
+    grid_osm(&osm);
+    let (mut child, url) = serve(&capture, &osm);
+    let out = browser(&dir, &["--dump-dom"], &url);
+    let _ = child.kill();
+    let _ = child.wait();
+    let dom = String::from_utf8_lossy(&out.stdout);
+    assert!(dom.contains("data-ended=\"1\""), "{dom}");
+    assert!(dom.contains("data-emitters=\"2\""), "two emitters:\n{dom}");
+    assert!(
+        dom.contains("data-emitter=\"1\" data-good=\"true\"")
+            && dom.contains("data-emitter=\"2\" data-good=\"false\""),
+        "each emitter's verdict:\n{dom}"
+    );
+    assert!(
+        dom.contains("data-for=\"2\"") && dom.contains("for emitter 2<"),
+        "the move is for emitter 2:\n{dom}"
+    );
+}

@@ -54,16 +54,25 @@ function render(st) {
   for (const r of st.rays) L.polyline(r, { color: "#ff7f0e", weight: 1, opacity: 0.5 }).addTo(layers);
   const bounds = L.latLngBounds(st.route.length ? st.route : []);
   let fix = "";
+  const verdicts = (st.advice && st.advice.emitters) || [];
+  const served = (st.advice && st.advice.for_emitters) || [];
   st.emitters.forEach((e, i) => {
-    L.polygon(e.ellipse, { color: "#d62728", weight: 2, fillOpacity: 0.1 }).addTo(layers);
+    // The emitters the move is for are drawn heavier; each says its own verdict.
+    const v = verdicts[i];
+    const isFor = served.includes(i + 1);
+    L.polygon(e.ellipse, { color: "#d62728", weight: isFor ? 3 : 1.5, fillOpacity: 0.1 }).addTo(layers);
     L.circleMarker(e.at, { radius: 6, color: "#d62728", fillOpacity: 1 }).addTo(layers)
-      .bindTooltip(`emitter ${i + 1}`);
+      .bindTooltip(`emitter ${i + 1}${isFor ? " (the move is for it)" : ""}`);
     bounds.extend(e.at);
-    fix += `<div class="emitter">Emitter ${i + 1}${e.freq_mhz ? ` (${fmt(e.freq_mhz, 3)} MHz)` : ""}: `
+    const verdict = !v ? ""
+      : v.good_enough ? `<br><span class="good">good enough</span>`
+      : `<br><span class="why">${v.reason_text}</span> <small>(missing: ${v.missing.join(", ")})</small>`;
+    fix += `<div class="emitter" data-emitter="${i + 1}" data-good="${v ? v.good_enough : ""}">`
+      + `Emitter ${i + 1}${e.freq_mhz ? ` (${fmt(e.freq_mhz, 3)} MHz)` : ""}: `
       + `${fmt(e.at[0], 5)}, ${fmt(e.at[1], 5)}<br>CEP50 <b>${fmt(e.cep50_m, 0)} m</b>, `
       + `${fmt(100 * e.confidence, 0)} % ellipse; ${e.used} bearings`
       + `${e.consistent ? "" : ", <span class=why>inconsistent</span>"}; `
-      + `offset ${fmt(e.offset_deg[0], 1)} ± ${fmt(e.offset_deg[1], 1)}°</div>`;
+      + `offset ${fmt(e.offset_deg[0], 1)} ± ${fmt(e.offset_deg[1], 1)}°${verdict}</div>`;
   });
   st.others.forEach((o, i) => {
     L.polygon(o.ellipse, { color: "#9467bd", weight: 1.5, dashArray: "4 3", fillOpacity: 0.05 }).addTo(layers);
@@ -79,12 +88,16 @@ function render(st) {
     L.circleMarker(a.waypoint_ll, { radius: 5, color: "#2ca02c", fillOpacity: 1 }).addTo(layers);
     if (a.turn_ll) L.circleMarker(a.turn_ll, { radius: 7, color: "#2ca02c", fill: false }).addTo(layers);
     bounds.extend(a.waypoint_ll);
+    const several = (a.emitters || []).length > 1;
+    const names = (a.for_emitters || []).join(", ");
+    const plural = (a.for_emitters || []).length > 1 ? "s" : "";
     const verdict = a.good_enough
-      ? `<div class="good">Good enough: stop</div>`
-      : `<div class="why">${a.reason_text}</div><small>missing: ${a.missing.join(", ")}</small><br>`;
+      ? `<div class="good">Good enough: stop${several ? " (every emitter)" : ""}</div>`
+      : (several ? `<div class="for">for emitter${plural} ${names}</div>` : "")
+        + `<div class="why">${a.reason_text}</div><small>missing: ${a.missing.join(", ")}</small><br>`;
     text("advice", `<div class="move">${a.line}</div>${verdict}`
       + `<small>predicted CEP50 in ${a.on_roads ? "road" : "free-heading"} plan: ${fmt(a.predicted_cep50_m, 0)} m</small>`,
-      { "data-reason": a.reason, "data-heading": fmt(a.heading_deg, 0) });
+      { "data-reason": a.reason, "data-heading": fmt(a.heading_deg, 0), "data-for": names });
   } else {
     text("advice", st.advice_error || "none yet");
   }

@@ -15,7 +15,17 @@
 //! - `Goal`: the soonest (in seconds or in metres driven, [`Cost`]) that the predicted CEP50
 //!   falls below a target radius, and where no sequence reaches it, the smallest predicted
 //!   CEP50 at the horizon. With depth 1 it is greedy; with a horizon of minutes it is the
-//!   look-ahead.
+//!   look-ahead. A goal the bound meets before moving plans D-optimal instead.
+//!
+//! Several emitters at once ([`plan_for`]): the vehicle drives one way, so one move serves
+//! them all. Their hypotheses are not pooled into one average: a geometric mean over every
+//! emitter's points would call the goal met while one emitter is still far above the target
+//! and another far below. Each emitter's points are averaged alone (its own predicted CEP50,
+//! from bearings of its own noise), the goal is met when *every* emitter's is below the target,
+//! and short of that a sequence scores the mean over emitters of -ln max(CEP50, target): an
+//! emitter already below the target earns nothing more, so the move goes to those still short.
+//! The D- and A-optimal scores are the mean over emitters of each emitter's mean. With one
+//! emitter every score is [`plan`]'s.
 //!
 //! Cost: (candidate sequences) x (samples per leg) x (hypotheses) updates of 3 x 3 (about 60
 //! flops each), plus the objective (a 2 x 2 eigen-decomposition) per leaf.
@@ -28,6 +38,20 @@ use core::f32::consts::{PI, TAU};
 pub const MAX_DEPTH: usize = 8;
 /// Sample points of one leg at most.
 pub const MAX_SAMPLES: usize = 16;
+/// Emitters one [`plan_for`] serves at most.
+pub const MAX_EMITTERS: usize = 4;
+/// Beliefs one [`plan_for`] holds at most (every emitter's hypotheses).
+pub const MAX_BELIEFS: usize = MAX_EMITTERS * MAX_POINTS;
+
+/// One emitter of a plan for several ([`plan_for`]): how many of the beliefs, in order, are
+/// its hypotheses, and the noise of its bearings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Emitter {
+    /// Its hypotheses' beliefs (> 0), the next ones of the slice.
+    pub hypotheses: usize,
+    /// Its bearings' noise, radians (> 0).
+    pub sigma: f32,
+}
 
 /// A stretch of driving.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -113,7 +137,7 @@ pub struct PlanOptions {
     pub horizon_s: f32,
     /// Bearings per second.
     pub rate_hz: f32,
-    /// Bearing noise, radians.
+    /// Bearing noise, radians ([`plan`]; [`plan_for`] takes each emitter's own).
     pub sigma: f32,
     /// Distance between sample points of a leg, metres.
     pub sample_m: f32,
@@ -153,7 +177,7 @@ pub struct Choice<S> {
     /// Goal only: seconds from now at which the best sequence reaches the target, if it does.
     pub reached_s: Option<f32>,
     /// The predicted CEP50 at the end of the best sequence, metres (geometric mean over the
-    /// hypotheses).
+    /// hypotheses; for several emitters, the largest of theirs).
     pub cep50_m: f32,
     /// Candidate sequences scored.
     pub sequences: u32,
@@ -177,6 +201,51 @@ fn mean_cep(beliefs: &[Belief]) -> f32 {
             .sum::<f32>()
             / n,
     )
+}
+
+/// Each emitter's beliefs of `beliefs` and its noise (slices that [`check_emitters`] found to
+/// fit).
+fn groups<'b>(
+    beliefs: &'b [Belief],
+    emitters: &'b [Emitter],
+) -> impl Iterator<Item = (&'b [Belief], f32)> + 'b {
+    let mut start = 0;
+    emitters.iter().filter_map(move |e| {
+        let g = beliefs.get(start..start + e.hypotheses);
+        start += e.hypotheses;
+        g.map(|g| (g, e.sigma))
+    })
+}
+
+/// [`groups`], mutably.
+fn groups_mut<'b>(
+    mut beliefs: &'b mut [Belief],
+    emitters: &'b [Emitter],
+) -> impl Iterator<Item = (&'b mut [Belief], f32)> + 'b {
+    emitters.iter().filter_map(move |e| {
+        let rest = core::mem::take(&mut beliefs);
+        let (g, tail) = rest.split_at_mut_checked(e.hypotheses)?;
+        beliefs = tail;
+        Some((g, e.sigma))
+    })
+}
+
+/// The largest of the emitters' predicted CEP50 (each the geometric mean over its
+/// hypotheses); NaN if any is, so that no goal is met on bad numbers.
+fn worst_cep(beliefs: &[Belief], emitters: &[Emitter]) -> f32 {
+    groups(beliefs, emitters)
+        .map(|(g, _)| mean_cep(g))
+        .fold(0.0, |m, c| if c > m || c.is_nan() { c } else { m })
+}
+
+/// The mean over emitters of `f` of each emitter's beliefs.
+fn per_emitter(
+    beliefs: &[Belief],
+    emitters: &[Emitter],
+    mut f: impl FnMut(&[Belief]) -> f32,
+) -> f32 {
+    let n = emitters.len().max(1) as f32;
+    groups(beliefs, emitters).map(|(g, _)| f(g)).sum::<f32>() / n
 }
 
 /// What a sequence has cost so far.
@@ -206,6 +275,7 @@ impl Spent {
 struct Search<'a, R: Reach> {
     reach: &'a R,
     options: PlanOptions,
+    emitters: &'a [Emitter],
     start: &'a [Belief],
     best: Option<Choice<R::State>>,
     sequences: u32,
@@ -213,7 +283,7 @@ struct Search<'a, R: Reach> {
 
 impl<R: Reach> Search<'_, R> {
     /// Add a leg's bearings to the beliefs; the share of the leg after which the target was
-    /// first met, if it was.
+    /// first met (by every emitter), if it was.
     fn drive(&self, beliefs: &mut [Belief], leg: &Leg) -> Option<f32> {
         let n = libm::ceilf(leg.length() / self.options.sample_m).clamp(1.0, MAX_SAMPLES as f32);
         let count = leg.seconds * self.options.rate_hz / n;
@@ -228,12 +298,14 @@ impl<R: Reach> Search<'_, R> {
                 leg.from[0] + t * (leg.to[0] - leg.from[0]),
                 leg.from[1] + t * (leg.to[1] - leg.from[1]),
             ];
-            for b in beliefs.iter_mut() {
-                b.observe(at, self.options.sigma, count);
+            for (g, sigma) in groups_mut(beliefs, self.emitters) {
+                for b in g.iter_mut() {
+                    b.observe(at, sigma, count);
+                }
             }
             if let Some(tm) = target
                 && met.is_none()
-                && mean_cep(beliefs) < tm
+                && worst_cep(beliefs, self.emitters) < tm
             {
                 met = Some((i as f32 + 1.0) / n);
             }
@@ -241,37 +313,51 @@ impl<R: Reach> Search<'_, R> {
         met
     }
 
-    /// `reached`: the (seconds, metres) from now at which the target is met, if it is.
+    /// `reached`: what the sequence had cost when the target was met, if it was.
     fn outcome(&self, beliefs: &[Belief], reached: Option<Spent>) -> Outcome {
-        let n = beliefs.len().max(1) as f32;
-        let cep50_m = mean_cep(beliefs);
+        let emitters = self.emitters;
+        let cep50_m = worst_cep(beliefs, emitters);
         let score = match self.options.objective {
             Objective::DOptimal => {
-                self.start
-                    .iter()
-                    .zip(beliefs)
-                    .map(|(a, b)| a.log_det() - b.log_det())
-                    .sum::<f32>()
-                    / n
+                let start = self.start;
+                let mut k = 0;
+                per_emitter(beliefs, emitters, |g| {
+                    let a = start.get(k..k + g.len()).unwrap_or(&[]);
+                    k += g.len();
+                    a.iter()
+                        .zip(g)
+                        .map(|(a, b)| a.log_det() - b.log_det())
+                        .sum::<f32>()
+                        / g.len().max(1) as f32
+                })
             }
             Objective::AOptimal => {
-                self.start
-                    .iter()
-                    .zip(beliefs)
-                    .map(|(a, b)| 1.0 - b.trace() / a.trace().max(f32::MIN_POSITIVE))
-                    .sum::<f32>()
-                    / n
+                let start = self.start;
+                let mut k = 0;
+                per_emitter(beliefs, emitters, |g| {
+                    let a = start.get(k..k + g.len()).unwrap_or(&[]);
+                    k += g.len();
+                    a.iter()
+                        .zip(g)
+                        .map(|(a, b)| 1.0 - b.trace() / a.trace().max(f32::MIN_POSITIVE))
+                        .sum::<f32>()
+                        / g.len().max(1) as f32
+                })
             }
             // Reaching beats not reaching (scores near 1e6 against below 100); sooner is
-            // better. Short of the target, the smaller final CEP50 wins; between sequences that
-            // reach it at the same sample, too (its weight keeps it under a second).
-            Objective::Goal { cost, .. } => {
-                let info = -libm::logf(cep50_m.max(1e-3));
-                match reached {
-                    Some(r) => 1e6 - r.cost(cost) + 0.05 * info,
-                    None => info,
+            // better. Short of the target, the smaller final CEP50s win, each counted down to
+            // the target only; between sequences that reach it at the same sample, the smaller
+            // CEP50s too (their weight keeps it under a second).
+            Objective::Goal { target_m, cost } => match reached {
+                Some(r) => {
+                    let info =
+                        per_emitter(beliefs, emitters, |g| -libm::logf(mean_cep(g).max(1e-3)));
+                    1e6 - r.cost(cost) + 0.05 * info
                 }
-            }
+                None => per_emitter(beliefs, emitters, |g| {
+                    -libm::logf(mean_cep(g).max(target_m).max(1e-3))
+                }),
+            },
         };
         Outcome {
             score,
@@ -282,10 +368,10 @@ impl<R: Reach> Search<'_, R> {
 
     /// Walk on from `state` with `beliefs` after `spent` and `depth` legs; the best outcome
     /// below.
-    fn walk(
+    fn walk<const N: usize>(
         &mut self,
         state: &R::State,
-        beliefs: &[Belief; MAX_POINTS],
+        beliefs: &[Belief; N],
         len: usize,
         spent: Spent,
         depth: usize,
@@ -343,28 +429,49 @@ impl<R: Reach> Search<'_, R> {
     }
 }
 
-/// The first move of the best sequence from `state`, the beliefs (one per hypothesis, see
-/// [`super::belief::beliefs`]) updated along each. `Err(TooFewMeasurements)` without a belief
-/// or a move.
-pub fn plan<R: Reach>(
+/// `Ok` when `emitters` split `len` beliefs (held in `capacity`): at least one, at most
+/// [`MAX_EMITTERS`], each with a hypothesis and a usable noise, together exactly `len`.
+fn check_emitters(emitters: &[Emitter], len: usize, capacity: usize) -> Result<(), Error> {
+    if emitters.is_empty() || len == 0 {
+        return Err(Error::TooFewMeasurements);
+    }
+    let total = emitters.iter().map(|e| e.hypotheses).sum::<usize>();
+    let usable = emitters
+        .iter()
+        .all(|e| e.hypotheses > 0 && e.sigma > 0.0 && e.sigma.is_finite());
+    if usable && emitters.len() <= MAX_EMITTERS && total == len && len <= capacity {
+        Ok(())
+    } else {
+        Err(Error::OutOfRange)
+    }
+}
+
+/// The search from `state` over `beliefs` (held in a copy of `N`), split by `emitters`.
+fn search<R: Reach, const N: usize>(
     beliefs: &[Belief],
+    emitters: &[Emitter],
     state: R::State,
     reach: &R,
     options: PlanOptions,
 ) -> Result<Choice<R::State>, Error> {
     options.check()?;
-    let len = beliefs.len().min(MAX_POINTS);
     let Some(first) = beliefs.first() else {
         return Err(Error::TooFewMeasurements);
     };
-    let mut start = [*first; MAX_POINTS];
-    start[..len].copy_from_slice(&beliefs[..len]);
+    check_emitters(emitters, beliefs.len(), N)?;
+    let len = beliefs.len();
+    let mut start = [*first; N];
+    start
+        .get_mut(..len)
+        .ok_or(Error::OutOfRange)?
+        .copy_from_slice(beliefs);
+    let begun = start.get(..len).ok_or(Error::OutOfRange)?;
     // A goal met before moving ranks every sequence by its first sample alone (the cheapest
     // wins, however little it teaches). The bound can be met while the fix is not yet
     // believed (an emitter near the track: the bound at the point fix is tiny, its honest
     // ellipse is not), so the plan then learns the most instead: D-optimal over the horizon.
     let met_already = matches!(options.objective, Objective::Goal { target_m, .. }
-        if mean_cep(&start[..len]) < target_m);
+        if worst_cep(begun, emitters) < target_m);
     let searched = if met_already {
         PlanOptions {
             objective: Objective::DOptimal,
@@ -376,7 +483,8 @@ pub fn plan<R: Reach>(
     let mut search = Search {
         reach,
         options: searched,
-        start: &start[..len],
+        emitters,
+        start: begun,
         best: None,
         sequences: 0,
     };
@@ -390,6 +498,39 @@ pub fn plan<R: Reach>(
             ..c
         })
         .ok_or(Error::TooFewMeasurements)
+}
+
+/// The first move of the best sequence from `state`, the beliefs (one per hypothesis, see
+/// [`super::belief::beliefs`]; at most [`MAX_POINTS`] count) updated along each.
+/// `Err(TooFewMeasurements)` without a belief or a move.
+pub fn plan<R: Reach>(
+    beliefs: &[Belief],
+    state: R::State,
+    reach: &R,
+    options: PlanOptions,
+) -> Result<Choice<R::State>, Error> {
+    let beliefs = beliefs.get(..beliefs.len().min(MAX_POINTS)).unwrap_or(&[]);
+    let one = [Emitter {
+        hypotheses: beliefs.len(),
+        sigma: options.sigma,
+    }];
+    search::<R, MAX_POINTS>(beliefs, &one, state, reach, options)
+}
+
+/// [`plan`] for several emitters at once (the module doc says how their scores combine):
+/// `beliefs` holds every emitter's hypotheses in the order of `emitters` (at most
+/// [`MAX_EMITTERS`], [`MAX_BELIEFS`] beliefs in all), each emitter's future bearings of its own
+/// noise (`options.sigma` is not used). The choice's `reached_s` is when every emitter's
+/// predicted CEP50 is below the target, its `cep50_m` the largest of theirs.
+/// `Err(OutOfRange)` when `emitters` do not split `beliefs`.
+pub fn plan_for<R: Reach>(
+    beliefs: &[Belief],
+    emitters: &[Emitter],
+    state: R::State,
+    reach: &R,
+    options: PlanOptions,
+) -> Result<Choice<R::State>, Error> {
+    search::<R, MAX_BELIEFS>(beliefs, emitters, state, reach, options)
 }
 
 /// Free headings in open terrain: legs of a fixed length in `count` evenly spaced directions,
@@ -654,6 +795,126 @@ mod tests {
                 options(Objective::DOptimal, 1)
             )
             .map(|_| ()),
+            Err(Error::TooFewMeasurements)
+        );
+    }
+
+    /// A belief well resolved: the start's emitter after bearings from all round it.
+    fn resolved() -> Belief {
+        let mut b = start(BiasPrior::calibrated(0.0));
+        for k in 0..36 {
+            let a = 10.0 * k as f32 * DEG;
+            b.observe(
+                [500.0 * libm::cosf(a), 3000.0 + 500.0 * libm::sinf(a)],
+                4.0 * DEG,
+                10.0,
+            );
+        }
+        b
+    }
+
+    #[test]
+    fn one_emitter_plans_as_plan_does() {
+        let b = start(BiasPrior::default());
+        for objective in [
+            Objective::DOptimal,
+            Objective::AOptimal,
+            Objective::Goal {
+                target_m: 100.0,
+                cost: Cost::Time,
+            },
+        ] {
+            let o = options(objective, 2);
+            let one = [Emitter {
+                hypotheses: 1,
+                sigma: o.sigma,
+            }];
+            let p = plan(&[b], pose(), &FreeHeadings::default(), o).unwrap();
+            let q = plan_for(&[b], &one, pose(), &FreeHeadings::default(), o).unwrap();
+            assert_eq!(p, q);
+        }
+    }
+
+    #[test]
+    fn several_emitters_reach_the_goal_only_together() {
+        let tight = resolved();
+        let wide = start(BiasPrior::default());
+        assert!(
+            tight.cep50() < 30.0 && wide.cep50() > 300.0,
+            "{} {}",
+            tight.cep50(),
+            wide.cep50()
+        );
+        let goal = options(
+            Objective::Goal {
+                target_m: 100.0,
+                cost: Cost::Time,
+            },
+            1,
+        );
+        // Pooled as one emitter's hypotheses, the geometric mean is below the target at the
+        // first sample (a third of the 20 s leg): the goal "met" while the wide emitter is
+        // several times the target.
+        let pooled = plan(&[tight, wide], pose(), &FreeHeadings::default(), goal).unwrap();
+        assert!(
+            pooled.reached_s.is_some_and(|t| t < 7.0) && pooled.cep50_m < 100.0,
+            "{pooled:?}"
+        );
+        let two = [
+            Emitter {
+                hypotheses: 1,
+                sigma: goal.sigma,
+            },
+            Emitter {
+                hypotheses: 1,
+                sigma: goal.sigma,
+            },
+        ];
+        let c = plan_for(&[tight, wide], &two, pose(), &FreeHeadings::default(), goal).unwrap();
+        assert!(c.reached_s.is_none(), "{c:?}");
+        assert!(c.cep50_m > 100.0, "the worst emitter's CEP50: {c:?}");
+        // The resolved emitter earns nothing more: the move is the wide one's own.
+        let alone = plan(&[wide], pose(), &FreeHeadings::default(), goal).unwrap();
+        assert_eq!(c.leg, alone.leg, "{c:?} {alone:?}");
+        assert!((c.cep50_m - alone.cep50_m).abs() < 1e-3 * alone.cep50_m);
+    }
+
+    #[test]
+    fn emitters_that_do_not_split_the_beliefs_are_refused() {
+        let b = start(BiasPrior::default());
+        let o = options(Objective::DOptimal, 1);
+        let e = |hypotheses: usize, sigma: f32| Emitter { hypotheses, sigma };
+        let free = FreeHeadings::default();
+        for emitters in [
+            &[e(2, o.sigma)][..],
+            &[e(1, o.sigma), e(0, o.sigma)][..],
+            &[e(1, f32::NAN)][..],
+            &[e(1, 0.0)][..],
+        ] {
+            assert_eq!(
+                plan_for(&[b], emitters, pose(), &free, o).map(|_| ()),
+                Err(Error::OutOfRange),
+                "{emitters:?}"
+            );
+        }
+        let many = [b; MAX_EMITTERS + 1];
+        let each = [e(1, o.sigma); MAX_EMITTERS + 1];
+        assert_eq!(
+            plan_for(&many, &each, pose(), &free, o).map(|_| ()),
+            Err(Error::OutOfRange)
+        );
+        assert!(
+            plan_for(
+                &many[..MAX_EMITTERS],
+                &each[..MAX_EMITTERS],
+                pose(),
+                &free,
+                o
+            )
+            .is_ok()
+        );
+        assert_eq!(
+            plan_for(&[], &[], pose(), &free, o).map(|_| ()),
             Err(Error::TooFewMeasurements)
         );
     }

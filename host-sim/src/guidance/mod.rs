@@ -20,7 +20,9 @@ pub mod reach;
 use crate::roads::RoadGraph;
 use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::guidance::belief::{Belief, Hypotheses, MAX_POINTS, beliefs};
-use foxhunt_core::guidance::plan::{Cost, FreeHeadings, Leg, Objective, PlanOptions, Pose, plan};
+use foxhunt_core::guidance::plan::{
+    Cost, Emitter, FreeHeadings, Leg, MAX_EMITTERS, Objective, PlanOptions, Pose, plan_for,
+};
 use foxhunt_core::guidance::stop::{FixQuality, Reason, StopRule, Verdict, verdict};
 use foxhunt_core::model::bearing::wrap;
 use foxhunt_core::{Bearing, Error};
@@ -262,24 +264,72 @@ pub fn advise(
     roads: Option<&RoadGraph>,
     o: &GuidanceOptions,
 ) -> Result<Advice, String> {
-    let sigma = median_sigma(s.bearings).ok_or("no usable bearing yet")?;
-    let verdict = match s.fix {
-        Some(f) => Some(
-            verdict(
-                f.position,
-                s.bearings,
-                s.prior,
-                FixQuality {
-                    consistent: f.consistent,
-                    effective: f.effective,
-                },
-                &o.stop,
-            )
-            .map_err(|e| format!("stop rule: {e}"))?,
-        ),
-        None => None,
+    median_sigma(s.bearings).ok_or("no usable bearing yet")?;
+    let verdict = stop_verdict(s, o)?;
+    advise_move(std::slice::from_ref(s), verdict, roads, o).map(|(a, _)| a)
+}
+
+/// The stop rule at the situation's fix (`None` without a fix).
+pub fn stop_verdict(s: &Situation<'_>, o: &GuidanceOptions) -> Result<Option<Verdict>, String> {
+    let Some(f) = s.fix else {
+        return Ok(None);
     };
-    let (b, n) = situation_beliefs(s).map_err(|e| format!("guidance: {e}"))?;
+    verdict(
+        f.position,
+        s.bearings,
+        s.prior,
+        FixQuality {
+            consistent: f.consistent,
+            effective: f.effective,
+        },
+        &o.stop,
+    )
+    .map(Some)
+    .map_err(|e| format!("stop rule: {e}"))
+}
+
+/// The one move that serves every emitter of `served` (each its own channel's bearings and
+/// fix; the vehicle, its heading and the offset prior are the first's), the goal reached when
+/// every one's predicted CEP50 is below the target ([`plan_for`]), the first
+/// [`MAX_EMITTERS`] that give a belief counted; with `verdict` (the one its reason is read
+/// from). An emitter whose bearings give no belief is left out; with none left, the first
+/// one's error. Also: which of `served` the move counted (their indices).
+pub fn advise_move(
+    served: &[Situation<'_>],
+    verdict: Option<Verdict>,
+    roads: Option<&RoadGraph>,
+    o: &GuidanceOptions,
+) -> Result<(Advice, Vec<usize>), String> {
+    let s = served.first().ok_or("no emitter to advise for")?;
+    let mut pooled = Vec::new();
+    let mut emitters: Vec<Emitter> = Vec::new();
+    let mut counted = Vec::new();
+    let mut failed = None;
+    for (i, e) in served.iter().enumerate() {
+        if emitters.len() == MAX_EMITTERS {
+            break;
+        }
+        let Some(sigma) = median_sigma(e.bearings) else {
+            failed.get_or_insert_with(|| "no usable bearing yet".to_string());
+            continue;
+        };
+        match situation_beliefs(e) {
+            Ok((b, n)) => {
+                pooled.extend_from_slice(b.get(..n).unwrap_or(&[]));
+                emitters.push(Emitter {
+                    hypotheses: n,
+                    sigma,
+                });
+                counted.push(i);
+            }
+            Err(err) => {
+                failed.get_or_insert_with(|| format!("guidance: {err}"));
+            }
+        }
+    }
+    let Some(sigma) = emitters.first().map(|e| e.sigma) else {
+        return Err(failed.unwrap_or_else(|| "no usable bearing yet".into()));
+    };
     let heading = s
         .heading
         .or_else(|| track_heading(s.bearings))
@@ -303,9 +353,10 @@ pub fn advise(
     let on = roads.and_then(|g| reach::join(g, s.vehicle, Some(heading)).map(|at| (g, at)));
     match on {
         Some((g, at)) => {
-            let c = plan(&b[..n], at, &Roads(g), options).map_err(|e| format!("guidance: {e}"))?;
+            let c = plan_for(&pooled, &emitters, at, &Roads(g), options)
+                .map_err(|e| format!("guidance: {e}"))?;
             let (kind, angle_deg) = turn_kind(heading, &c.leg);
-            Ok(Advice {
+            let a = Advice {
                 heading: c.leg.heading(),
                 waypoint: c.leg.to,
                 turn: Some(Turn {
@@ -319,7 +370,8 @@ pub fn advise(
                 predicted_cep50_m: c.cep50_m,
                 reached_s: c.reached_s,
                 on_roads: true,
-            })
+            };
+            Ok((a, counted))
         }
         None => {
             let free = FreeHeadings {
@@ -332,8 +384,9 @@ pub fn advise(
                 position: s.vehicle,
                 heading,
             };
-            let c = plan(&b[..n], pose, &free, options).map_err(|e| format!("guidance: {e}"))?;
-            Ok(Advice {
+            let c = plan_for(&pooled, &emitters, pose, &free, options)
+                .map_err(|e| format!("guidance: {e}"))?;
+            let a = Advice {
                 heading: c.leg.heading(),
                 waypoint: c.leg.to,
                 turn: None,
@@ -342,9 +395,29 @@ pub fn advise(
                 predicted_cep50_m: c.cep50_m,
                 reached_s: c.reached_s,
                 on_roads: false,
-            })
+            };
+            Ok((a, counted))
         }
     }
+}
+
+/// What a verdict says is missing (`precision`, `consistency`, `bearings`; without a fix,
+/// `fix`).
+pub fn missing_names(verdict: Option<&Verdict>) -> Vec<&'static str> {
+    verdict
+        .map(|v| {
+            let m = v.missing;
+            [
+                (m.precision, "precision"),
+                (m.consistency, "consistency"),
+                (m.bearings, "bearings"),
+            ]
+            .into_iter()
+            .filter(|(on, _)| *on)
+            .map(|(_, n)| n)
+            .collect()
+        })
+        .unwrap_or_else(|| vec!["fix"])
 }
 
 /// The advice as `--json` and the live map carry it (stable field names).
@@ -382,21 +455,7 @@ pub struct AdviceReport {
 impl Advice {
     /// The report form.
     pub fn report(&self) -> AdviceReport {
-        let missing = self
-            .verdict
-            .map(|v| {
-                let m = v.missing;
-                [
-                    (m.precision, "precision"),
-                    (m.consistency, "consistency"),
-                    (m.bearings, "bearings"),
-                ]
-                .into_iter()
-                .filter(|(on, _)| *on)
-                .map(|(_, n)| n)
-                .collect()
-            })
-            .unwrap_or_else(|| vec!["fix"]);
+        let missing = missing_names(self.verdict.as_ref());
         let heading_deg = azimuth_deg(self.heading);
         AdviceReport {
             heading_deg,
@@ -426,8 +485,19 @@ impl Advice {
         if r.good_enough {
             return "good enough: stop".into();
         }
+        format!(
+            "{}: {} (missing: {})",
+            self.move_to(to),
+            r.reason_text,
+            r.missing.join(", ")
+        )
+    }
+
+    /// The move alone in words ("head 45 deg (NE) to ...", or the next junction's turn).
+    pub fn move_to(&self, to: Option<&str>) -> String {
+        let heading_deg = azimuth_deg(self.heading);
         let to = to.map(|t| format!(" to {t}")).unwrap_or_default();
-        let mv = match self.turn {
+        match self.turn {
             Some(t) => format!(
                 "at the next junction {} ({:+.0} deg), then head {} deg ({}){to}",
                 match t.kind {
@@ -437,20 +507,15 @@ impl Advice {
                     TurnKind::UTurn => "turn back",
                 },
                 t.angle_deg,
-                whole_degrees(r.heading_deg),
-                r.compass
+                whole_degrees(heading_deg),
+                compass(heading_deg)
             ),
             None => format!(
                 "head {} deg ({}){to}",
-                whole_degrees(r.heading_deg),
-                r.compass
+                whole_degrees(heading_deg),
+                compass(heading_deg)
             ),
-        };
-        format!(
-            "{mv}: {} (missing: {})",
-            r.reason_text,
-            r.missing.join(", ")
-        )
+        }
     }
 }
 

@@ -53,6 +53,10 @@ pub struct MapAdvice {
     pub vehicle_ll: LL,
     /// The next turn's place, on roads.
     pub turn_ll: Option<LL>,
+    /// Each emitter's verdict, in the order of the map's emitters.
+    pub emitters: Vec<crate::guidance::guide::VerdictReport>,
+    /// The emitters the move is for (numbered from 1; empty when every one is good enough).
+    pub for_emitters: Vec<usize>,
     /// The advice in one line.
     pub line: String,
 }
@@ -169,10 +173,11 @@ pub fn build(
         .map(|b| ll(&frame, b.vehicle))
         .collect();
     let report = fix(d);
-    let emitter = report
+    let sources: Vec<Source> = report
         .as_ref()
-        .ok()
-        .and_then(|r| r.emitters().first().copied());
+        .map(|r| r.emitters().to_vec())
+        .unwrap_or_default();
+    let emitter = sources.first().copied();
     let reach = emitter
         .map(|e| {
             let v = bearings.last().map(|b| b.vehicle).unwrap_or([0.0; 2]);
@@ -211,14 +216,17 @@ pub fn build(
         st.advice_error = Some("no bearing yet".into());
         return st;
     };
-    match guide.advise(d, emitter.as_ref(), &LocateOptions::default()) {
-        Ok(a) => {
+    match guide.advise_every(d, &sources, &LocateOptions::default()) {
+        Ok(g) => {
+            let a = g.advice;
             st.advice = Some(MapAdvice {
                 report: a.report(),
                 waypoint_ll: ll(&frame, a.waypoint),
                 vehicle_ll: ll(&frame, vehicle),
                 turn_ll: a.turn.map(|t| ll(&frame, t.at)),
-                line: a.line(),
+                line: g.line_to(None),
+                emitters: g.emitters,
+                for_emitters: g.for_emitters,
             })
         }
         Err(e) => st.advice_error = Some(e),
