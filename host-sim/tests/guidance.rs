@@ -1,11 +1,19 @@
 //! The closed-loop guidance benchmark at a CI size (the README's figures come from
 //! `foxhunt bench --scenario guidance`, 100 runs per row).
 
-use foxhunt_sim::guidance::bench::{Set, measure, rows};
+use foxhunt_sim::guidance::bench::{Row, Set, measure, rows};
 use foxhunt_sim::guidance::networks::Network;
 use foxhunt_sim::montecarlo::Progress;
 
 const RUNS: usize = 30;
+
+/// The median distance to the goal of policy `m` (infinite if not reached).
+fn distance_km(r: &[Row], m: &str) -> f64 {
+    r.iter()
+        .find(|x| x.method == m)
+        .and_then(|x| x.distance_km)
+        .unwrap_or(f64::INFINITY)
+}
 
 #[test]
 fn open_terrain_guided_policies_need_well_under_homings_distance() {
@@ -14,12 +22,7 @@ fn open_terrain_guided_policies_need_well_under_homings_distance() {
         offset: false,
     };
     let r = rows(&measure(&[set], RUNS, 1, &Progress::new(0, false)));
-    let distance = |m: &str| {
-        r.iter()
-            .find(|x| x.method == m)
-            .and_then(|x| x.distance_km)
-            .unwrap_or(f64::INFINITY)
-    };
+    let distance = |m: &str| distance_km(&r, m);
     let homing = distance("homing");
     let best = ["perpendicular", "greedy-d", "greedy-a", "lookahead"]
         .iter()
@@ -61,12 +64,7 @@ fn on_the_highway_the_road_aware_look_ahead_beats_greedy_forced_onto_roads() {
         offset: false,
     };
     let r = rows(&measure(&[set], RUNS, 1, &Progress::new(0, false)));
-    let distance = |m: &str| {
-        r.iter()
-            .find(|x| x.method == m)
-            .and_then(|x| x.distance_km)
-            .unwrap_or(f64::INFINITY)
-    };
+    let distance = |m: &str| distance_km(&r, m);
     let (look, greedy) = (distance("lookahead"), distance("greedy-d"));
     println!("highway, {RUNS} runs: lookahead {look} km, greedy-d {greedy} km");
     // 100 runs give 2.25 against 2.77 km (the look-ahead shorter in 67 paired runs, longer in

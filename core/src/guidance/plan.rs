@@ -313,37 +313,26 @@ impl<R: Reach> Search<'_, R> {
         met
     }
 
+    /// The mean over emitters of each emitter's mean `gain(start, now)` over its hypotheses.
+    fn gain(&self, beliefs: &[Belief], gain: impl Fn(&Belief, &Belief) -> f32) -> f32 {
+        let start = self.start;
+        let mut k = 0;
+        per_emitter(beliefs, self.emitters, |g| {
+            let a = start.get(k..k + g.len()).unwrap_or(&[]);
+            k += g.len();
+            a.iter().zip(g).map(|(a, b)| gain(a, b)).sum::<f32>() / g.len().max(1) as f32
+        })
+    }
+
     /// `reached`: what the sequence had cost when the target was met, if it was.
     fn outcome(&self, beliefs: &[Belief], reached: Option<Spent>) -> Outcome {
         let emitters = self.emitters;
         let cep50_m = worst_cep(beliefs, emitters);
         let score = match self.options.objective {
-            Objective::DOptimal => {
-                let start = self.start;
-                let mut k = 0;
-                per_emitter(beliefs, emitters, |g| {
-                    let a = start.get(k..k + g.len()).unwrap_or(&[]);
-                    k += g.len();
-                    a.iter()
-                        .zip(g)
-                        .map(|(a, b)| a.log_det() - b.log_det())
-                        .sum::<f32>()
-                        / g.len().max(1) as f32
-                })
-            }
-            Objective::AOptimal => {
-                let start = self.start;
-                let mut k = 0;
-                per_emitter(beliefs, emitters, |g| {
-                    let a = start.get(k..k + g.len()).unwrap_or(&[]);
-                    k += g.len();
-                    a.iter()
-                        .zip(g)
-                        .map(|(a, b)| 1.0 - b.trace() / a.trace().max(f32::MIN_POSITIVE))
-                        .sum::<f32>()
-                        / g.len().max(1) as f32
-                })
-            }
+            Objective::DOptimal => self.gain(beliefs, |a, b| a.log_det() - b.log_det()),
+            Objective::AOptimal => self.gain(beliefs, |a, b| {
+                1.0 - b.trace() / a.trace().max(f32::MIN_POSITIVE)
+            }),
             // Reaching beats not reaching (scores near 1e6 against below 100); sooner is
             // better. Short of the target, the smaller final CEP50s win, each counted down to
             // the target only; between sequences that reach it at the same sample, the smaller

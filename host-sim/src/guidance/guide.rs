@@ -214,16 +214,7 @@ impl Guide {
         fix: Option<&Source>,
         o: &LocateOptions,
     ) -> Result<Advice, String> {
-        let vehicle = d
-            .bearings()
-            .last()
-            .map(|b| b.vehicle)
-            .ok_or("no bearing yet")?;
-        let all: Vec<Bearing> = match o.sigma_deg {
-            Some(s) => d.bearings_with_sigma(s.to_radians()),
-            None => d.bearings().copied().collect(),
-        };
-        let heading = track_heading(&all);
+        let (vehicle, all, heading) = drive_so_far(d, o)?;
         let channel: Vec<Bearing> = match fix {
             Some(f) => channel(d, &all, f, o),
             None => all,
@@ -273,16 +264,7 @@ impl Guide {
                 for_emitters,
             });
         }
-        let vehicle = d
-            .bearings()
-            .last()
-            .map(|b| b.vehicle)
-            .ok_or("no bearing yet")?;
-        let all: Vec<Bearing> = match o.sigma_deg {
-            Some(s) => d.bearings_with_sigma(s.to_radians()),
-            None => d.bearings().copied().collect(),
-        };
-        let heading = track_heading(&all);
+        let (vehicle, all, heading) = drive_so_far(d, o)?;
         let prior = o.offset.unwrap_or_default();
         let options = self.options;
         let channels: Vec<Vec<Bearing>> = emitters.iter().map(|f| channel(d, &all, f, o)).collect();
@@ -421,6 +403,25 @@ fn claimed(mut v: Verdict, f: &Source, o: &GuidanceOptions) -> Verdict {
         v.good_enough = false;
     }
     v
+}
+
+/// Where the vehicle is, every bearing so far (at `o`'s sigma if it sets one) and the track's
+/// heading.
+type SoFar = ([f32; 2], Vec<Bearing>, Option<f32>);
+
+/// [`SoFar`] of the drive `d`.
+fn drive_so_far(d: &Decoded, o: &LocateOptions) -> Result<SoFar, String> {
+    let vehicle = d
+        .bearings()
+        .last()
+        .map(|b| b.vehicle)
+        .ok_or("no bearing yet")?;
+    let all: Vec<Bearing> = match o.sigma_deg {
+        Some(s) => d.bearings_with_sigma(s.to_radians()),
+        None => d.bearings().copied().collect(),
+    };
+    let heading = track_heading(&all);
+    Ok((vehicle, all, heading))
 }
 
 /// How much noisier the fix found the bearings than they say: its noise over their median
