@@ -13,7 +13,9 @@
 //! The bearings' line may be a KrakenSDR's web page ([`crate::kraken_http`]: its new whole
 //! records are the line's bytes), and positions and headings may come from gpsd beside it
 //! ([`crate::gpsd`]: its reports become sentences pushed into the same bridge between the
-//! line's chunks). Either way only new bearings make an update line.
+//! line's chunks). Either way only new bearings make an update line, or a new `$PFOXF` of a DF
+//! unit running foxhunt's firmware: every line (`--json`: `unit`, also when there is no fix
+//! yet) carries what the unit said ([`crate::unit`]).
 
 use crate::capture::{Decoded, Decoder};
 use crate::gpsd::{GpsdAddress, Report, Watch};
@@ -176,7 +178,7 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<Decoded,
     let rx = reader(&o.source, o.gpsd.as_ref())?;
     let mut dec = Decoder::new(BridgeConfig::default(), o.keep_track);
     let mut last_byte = Instant::now();
-    let mut reported = 0usize;
+    let mut reported = (0usize, 0u32);
     let mut ended = false;
     while !ended {
         // Block for the first chunk (or the idle timeout), then take all that is waiting.
@@ -213,8 +215,9 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<Decoded,
             // Bearings still waiting for a later fix are placed with the fixes there are.
             dec.end();
         }
-        let n = dec.decoded.observations.len();
-        if n > reported {
+        // New bearings, or a new fix sentence of a DF unit (its user port carries no bearings).
+        let n = (dec.decoded.observations.len(), dec.decoded.unit.fixes);
+        if n != reported {
             reported = n;
             dec.snapshot();
             let line = match (locate_guided(&dec.decoded, &o.locate, guide), o.json) {

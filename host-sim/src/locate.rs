@@ -291,18 +291,27 @@ pub struct NoFix {
     /// Why there is no advice either.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub advice_error: Option<String>,
+    /// What a DF unit running foxhunt's firmware said, as in [`LocateReport::unit`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub unit: Option<UnitReport>,
 }
 
 impl NoFix {
     /// One line for a live update.
     pub fn line(&self) -> String {
         format!(
-            "{} bearings: no fix yet: {}{}",
+            "{} bearings: no fix yet: {}{}{}",
             self.used,
             self.error,
-            advice_suffix(self.advice.as_ref(), self.advice_error.as_deref())
+            advice_suffix(self.advice.as_ref(), self.advice_error.as_deref()),
+            unit_suffix(self.unit.as_ref())
         )
     }
+}
+
+/// `; DF unit (...): ...` for a one-line update, when a DF unit spoke.
+fn unit_suffix(u: Option<&UnitReport>) -> String {
+    u.map(|u| format!("; {}", u.line())).unwrap_or_default()
 }
 
 /// `; ADVICE` (or `; no advice: WHY`) for a one-line update.
@@ -344,6 +353,7 @@ pub fn locate_guided(
                 error,
                 advice_error: advice.as_ref().err().cloned(),
                 advice: advice.ok(),
+                unit: d.unit.report(),
             }))
         }
     }
@@ -930,10 +940,15 @@ impl LocateReport {
             })
             .collect();
         format!(
-            "{} bearings: {}{}",
+            "{} bearings: {}{}{}",
             self.used,
-            fixes.join("; "),
-            advice_suffix(self.advice.as_ref(), self.advice_error.as_deref())
+            if fixes.is_empty() {
+                "no emitter".to_string()
+            } else {
+                fixes.join("; ")
+            },
+            advice_suffix(self.advice.as_ref(), self.advice_error.as_deref()),
+            unit_suffix(self.unit.as_ref())
         )
     }
 }

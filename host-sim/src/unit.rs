@@ -22,6 +22,8 @@ pub struct UnitLog {
     pub link: Option<LinkSentence>,
     /// Unit sentences with a missing or malformed field.
     pub malformed: u32,
+    /// Unit sentences taken, good or malformed: a live view updates when it grows.
+    pub sentences: u32,
 }
 
 impl UnitLog {
@@ -30,7 +32,14 @@ impl UnitLog {
         if !body.starts_with("PFOX") || body.starts_with("PFOXB") || body.starts_with("PFOXC") {
             return false;
         }
-        match UnitSentence::parse(body) {
+        let parsed = UnitSentence::parse(body);
+        if !matches!(
+            parsed,
+            Err(foxhunt_bridge::telemetry::TelemetryError::Unsupported)
+        ) {
+            self.sentences = self.sentences.saturating_add(1);
+        }
+        match parsed {
             Ok(UnitSentence::Fix(f)) => {
                 self.fixes = self.fixes.saturating_add(1);
                 self.last = Some(f);
@@ -202,6 +211,7 @@ mod tests {
         let r = log.report().unwrap();
         assert_eq!(r.fixes, 2);
         assert_eq!(r.malformed, 1);
+        assert_eq!(log.sentences, 3, "two fixes and the broken one");
         assert_eq!(r.status.as_deref(), Some("A"));
         assert_eq!(r.latest_status.as_deref(), Some("S"));
         assert!((r.lat.unwrap() - (47.0 + 0.446054 / 60.0)).abs() < 1e-9);

@@ -6,6 +6,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+mod common;
+
 /// A fresh scratch folder for one test.
 fn scratch(name: &str) -> PathBuf {
     static N: AtomicUsize = AtomicUsize::new(0);
@@ -692,6 +694,76 @@ fn standard_input_streams_fixes_as_bytes_arrive() {
 }
 
 #[test]
+fn live_lines_carry_what_the_df_unit_said_also_before_a_fix() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .args(["locate", "-", "--json"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run foxhunt");
+    let (tx, rx) = std::sync::mpsc::channel();
+    let stdout = child.stdout.take().expect("stdout");
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines() {
+            if tx.send(line.expect("line")).is_err() {
+                return;
+            }
+        }
+    });
+    let wait = |rx: &std::sync::mpsc::Receiver<String>| -> serde_json::Value {
+        // A guard against a hang, not a timing assertion.
+        let l = rx
+            .recv_timeout(std::time::Duration::from_secs(60))
+            .expect("an update");
+        serde_json::from_str(&l).expect("JSON")
+    };
+    let drive = std::fs::read_to_string(capture("aoa-drive.nmea")).expect("sample");
+    // The first three records: two bearings placed, too few for a fix.
+    let start: String = drive.lines().take(9).map(|l| format!("{l}\n")).collect();
+    let mut stdin = child.stdin.take().expect("stdin");
+    stdin.write_all(start.as_bytes()).expect("write");
+    stdin.flush().expect("flush");
+    let first = wait(&rx);
+    assert!(
+        first["error"].is_string() && first["unit"].is_null(),
+        "{first}"
+    );
+    // Then the unit's own sentences: no new bearing, yet every new fix of the unit is news.
+    let said = unit_output();
+    stdin.write_all(&said).expect("write");
+    stdin.flush().expect("flush");
+    let second = wait(&rx);
+    assert!(second["error"].is_string(), "still no host fix: {second}");
+    assert!(second["unit"]["fixes"].as_u64() > Some(0), "{second}");
+    drop(stdin);
+    assert!(child.wait().expect("foxhunt ends").success());
+    let last = rx
+        .iter()
+        .last()
+        .map_or(second, |l| serde_json::from_str(&l).expect("JSON"));
+    let text = String::from_utf8_lossy(&said).into_owned();
+    let valid = text
+        .lines()
+        .rev()
+        .find(|l| l.starts_with("$PFOXF") && l.contains(",A*"))
+        .expect("the unit sent a valid fix");
+    let cep50: f64 = valid
+        .split(',')
+        .nth(9)
+        .and_then(|c| c.parse().ok())
+        .expect("cep50");
+    let u = &last["unit"];
+    assert_eq!(u["status"], "A", "{last}");
+    // The sentence carries one decimal; the report an f32 of it.
+    assert!(
+        (u["cep50_m"].as_f64().expect("cep50") - cep50).abs() < 0.05,
+        "unit CEP50 {} against the sentence's {cep50}: {last}",
+        u["cep50_m"]
+    );
+}
+
+#[test]
 fn locate_memory_is_bounded_by_the_bearings_not_the_file() {
     // A capture of about 20 MB: the 60-bearing drive's GGA/RMC padded with 40 000 GSV-like
     // sentences per bearing (not kept), so the bytes grow and the bearings do not.
@@ -887,21 +959,9 @@ fn locate_reads_a_serial_line_and_updates_the_fix() {
     assert_eq!(used, expected);
 }
 
-/// The sample drive through the DF unit's own code (the firmware's `Unit`, on the host): the
-/// bytes its user port sends.
+/// The sample drive through the DF unit's own code: the bytes its user port sends.
 fn unit_output() -> Vec<u8> {
-    use foxhunt_bridge::unit::{Port, Unit, UnitConfig};
-    let drive = std::fs::read(capture("aoa-drive.nmea")).expect("sample");
-    let mut unit = Unit::new(UnitConfig::default());
-    let mut out = Vec::new();
-    for line in drive.split_inclusive(|b| *b == b'\n') {
-        let port = Port::of_record(line).unwrap_or(Port::Gps);
-        unit.feed(port, line, &mut |s| {
-            out.extend_from_slice(s);
-            true
-        });
-    }
-    out
+    common::unit_output(&std::fs::read(capture("aoa-drive.nmea")).expect("sample"))
 }
 
 #[test]

@@ -188,3 +188,74 @@ fn the_live_map_shows_every_emitters_verdict_and_whom_the_move_is_for() {
         "the move is for emitter 2:\n{dom}"
     );
 }
+
+/// `$BODY*CS\r\n`: a sentence whose checksum holds, whatever its fields say.
+fn sentence(body: &str) -> String {
+    let cs = body.bytes().fold(0u8, |a, b| a ^ b);
+    format!("${body}*{cs:02X}\r\n")
+}
+
+#[test]
+fn the_live_map_shows_the_df_units_own_fix_beside_the_hosts() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("web-unit");
+    std::fs::create_dir_all(&dir).unwrap();
+    let sample =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../serial-bridge/captures/aoa-drive.nmea");
+    let text = std::fs::read_to_string(sample).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let half = lines[..lines.len() * 11 / 20].join("\n") + "\n";
+    // The drive's first half, then what the DF unit said about the same bearings, with unit
+    // sentences that pass their checksum but not their fields (each must be counted and
+    // ignored), and one that fails its checksum (the stream's loss, not the unit's).
+    let said = String::from_utf8(common::unit_output(half.as_bytes())).expect("ASCII");
+    let last = said
+        .lines()
+        .rev()
+        .find(|l| l.starts_with("$PFOXF") && l.contains(",A*"))
+        .expect("the unit sent a valid fix");
+    let cep50 = last.split(',').nth(9).expect("the CEP50 field").to_string();
+    let broken = [
+        "PFOXF,broken",
+        "PFOXF,100059.50,9999.000000,N,00800.979846,E,146.2,8.5,54.2,36.5,60,60,1.20,A",
+        "PFOXF,100059.50,4700.446054,N,00800.979846,E,-1.0,8.5,54.2,36.5,60,60,1.20,A",
+        "PFOXS,12,x,0,0,0,0,0,0,P",
+        "PFOXL,1,2",
+    ];
+    let mut capture = half;
+    let (first, rest) = said.split_at(said.len() / 2);
+    capture += first;
+    for b in &broken {
+        capture += &sentence(b);
+    }
+    capture += "$PFOXF,100100.50,,,,,,,,,2,60,1.20,S*00\r\n";
+    capture += rest;
+    let path = dir.join("drive-and-unit.nmea");
+    std::fs::write(&path, capture).unwrap();
+    let osm = dir.join("grid.osm");
+    grid_osm(&osm);
+
+    let (mut child, url) = serve(&path, &osm);
+    let out = browser(&dir, &["--dump-dom"], &url);
+    let _ = child.kill();
+    let _ = child.wait();
+    let dom = String::from_utf8_lossy(&out.stdout);
+    assert!(dom.contains("data-ended=\"1\""), "{dom}");
+    // The host's own fix is still there.
+    assert!(dom.contains("data-emitters=\"1\""), "{dom}");
+    // The unit's latest valid fix, with the CEP50 it sent, and the malformed ones counted.
+    assert!(
+        dom.contains(&format!("data-cep50=\"{cep50}\"")),
+        "the unit's CEP50 {cep50} m (from {last}) not on the page:\n{dom}"
+    );
+    assert!(
+        dom.contains("data-status=\"A\"") && dom.contains(&format!("CEP50 <b>{cep50} m</b>")),
+        "{dom}"
+    );
+    assert!(
+        dom.contains(&format!("data-malformed=\"{}\"", broken.len())),
+        "{} malformed unit sentences:\n{dom}",
+        broken.len()
+    );
+    // Its marker (a diamond, not the emitters' discs) is on the map.
+    assert!(dom.contains("unit-fix"), "no unit marker:\n{dom}");
+}

@@ -47,6 +47,36 @@ function drawHistory(h) {
   svg.innerHTML = s;
 }
 
+// The DF unit's own fix ($PFOXF), as the unit said it: a diamond (the host's emitters are
+// discs) with its 95 % ellipse dotted, and its numbers in the panel.
+function drawUnit(u, bounds) {
+  if (!u) { text("unit", "none in the input", { "data-unit": "0" }); return; }
+  if (u.at) {
+    if (u.ellipse.length) {
+      L.polygon(u.ellipse, { color: "#17becf", weight: 2, dashArray: "2 4", fillOpacity: 0.08 }).addTo(layers);
+    }
+    const icon = L.divIcon({ className: "unit-fix", html: "<div></div>", iconSize: [14, 14] });
+    L.marker(u.at, { icon, keyboard: false }).addTo(layers).bindTooltip("the DF unit's own fix");
+    bounds.extend(u.at);
+  }
+  const where = u.at
+    ? `${fmt(u.at[0], 5)}, ${fmt(u.at[1], 5)}<br>CEP50 <b>${fmt(u.cep50_m, 1)} m</b>, 95 % ellipse `
+      + `${fmt(u.major_m, 0)} × ${fmt(u.minor_m, 0)} m at ${fmt(u.orientation_deg, 0)}°`
+    : "no position";
+  const when = u.time ? `<br>at ${u.time} UTC (${u.status_text})` : "";
+  const used = u.used !== null ? `; ${u.used} of ${u.window} bearings, sigma ${fmt(u.sigma_deg, 2)}°` : "";
+  const lost = u.latest_status ? `<br><span class="why">latest status ${u.latest_status}</span>` : "";
+  const health = u.rejected !== null ? `<br><small>unit rejected ${u.rejected} records, lost ${u.lost_bytes} bytes</small>` : "";
+  const bad = u.malformed ? `<br><small class="why">${u.malformed} unit sentences malformed (ignored)</small>` : "";
+  text("unit", `<div class="unit">DF unit: ${where}${when}${used}${lost}${health}${bad}</div>`
+    + `<small>${u.fixes} fix sentences</small>`, {
+    "data-unit": "1",
+    "data-cep50": u.at ? fmt(u.cep50_m, 1) : "",
+    "data-status": u.status || "",
+    "data-malformed": u.malformed,
+  });
+}
+
 function render(st) {
   layers.clearLayers();
   text("status", `update ${st.update}, ${st.bearings} bearings${st.done ? ", input ended" : ""}`);
@@ -81,6 +111,7 @@ function render(st) {
       + `CEP50 ${fmt(o.cep50_m, 0)} m, ${o.used} bearings</div>`;
   });
   text("fix", fix || (st.fix_error || "no fix yet"), { "data-emitters": st.emitters.length });
+  drawUnit(st.unit, bounds);
   const a = st.advice;
   if (a) {
     const path = a.turn_ll ? [a.vehicle_ll, a.turn_ll, a.waypoint_ll] : [a.vehicle_ll, a.waypoint_ll];

@@ -54,8 +54,10 @@ pub struct Args {
     /// reason (widen-angle, get-closer, calibration-leg, more-bearings, check-unit,
     /// good-enough) and reason_text, good_enough, missing (precision, consistency, bearings;
     /// fix before one), bound_cep50_m, offset_known_cep50_m, predicted_cep50_m, reached_s,
-    /// on_roads, line; `advice_error` says why there is none. No fix yet: {used, error,
-    /// advice}.
+    /// on_roads, line; `advice_error` says why there is none; `unit`, when the input carries
+    /// a DF unit's $PFOXF/$PFOXS/$PFOXL sentences, what the unit said (its fix, ellipse,
+    /// status, health; live: a new unit fix is an update too). No fix yet: {used, error,
+    /// advice, unit}.
     #[arg(long)]
     pub json: bool,
     /// Write PREFIX.geojson, PREFIX.kml and PREFIX.svg.

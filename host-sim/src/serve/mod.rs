@@ -3,7 +3,8 @@
 //! The page (host-sim/web, built into the binary) is static: Leaflet (vendored, with its
 //! licence) draws what the server sends. One thread decodes the input (a capture replayed in
 //! chunks, or standard input as it arrives), recomputes the field pipeline's fix and the
-//! guidance advice after every chunk with new bearings, and hands the state to the HTTP server
+//! guidance advice after every chunk with new bearings (or new sentences of a DF unit, whose
+//! own fix is drawn beside the host's), and hands the state to the HTTP server
 //! (axum on tokio), which pushes it to every open page as a server-sent event. Roads from an
 //! OpenStreetMap extract are the basemap, so the map works offline; online tiles are optional
 //! (`--tiles`, a URL template the page passes to Leaflet).
@@ -153,9 +154,10 @@ fn feed(
     let mut dec = Decoder::new(BridgeConfig::default(), false);
     let mut update = 0u64;
     let mut history: Vec<[f64; 2]> = Vec::new();
-    let mut reported = 0usize;
+    let mut reported = (0usize, 0u32);
     let mut publish = |dec: &mut Decoder, end: bool| {
-        let n = dec.decoded.observations.len();
+        // New bearings, or a DF unit's new sentences (its user port carries no bearings).
+        let n = (dec.decoded.observations.len(), dec.decoded.unit.sentences);
         if n == reported && !end {
             return;
         }

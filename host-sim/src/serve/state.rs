@@ -1,13 +1,16 @@
 //! What the live map shows at one moment, built from the bearings decoded so far: the route,
 //! the latest bearing rays, every emitter and other source of the field pipeline with its
-//! ellipse, the guidance advice and the CEP50 history. Everything is in latitude and longitude
+//! ellipse, the guidance advice, the CEP50 history and, when the input carries a DF unit's own
+//! sentences, the unit's fix as the unit said it. Everything is in latitude and longitude
 //! (the page draws, it does not compute).
 
 use crate::capture::Decoded;
 use crate::guidance::guide::Guide;
 use crate::locate::{LocateOptions, geodetic};
 use crate::runs::Pipeline;
+use crate::unit::UnitReport;
 use foxhunt_bridge::geo::LocalFrame;
+use foxhunt_bridge::nmea::LatLon;
 use foxhunt_core::fix::ellipse::Ellipse;
 use foxhunt_core::fix::locate::{ChannelOutcome, LocateConfig, NoEmitter, Source};
 use serde::Serialize;
@@ -61,6 +64,20 @@ pub struct MapAdvice {
     pub line: String,
 }
 
+/// The DF unit's own fix (its latest `$PFOXF` with a position), beside the host's.
+#[derive(Debug, Clone, Serialize)]
+pub struct MapUnit {
+    /// What the unit said, as `locate --json` reports it under `unit`.
+    #[serde(flatten)]
+    pub report: UnitReport,
+    /// Its position, when the fix shown has one.
+    pub at: Option<LL>,
+    /// Its 95 % ellipse (closed ring; empty without a position or when too large to draw).
+    pub ellipse: Vec<LL>,
+    /// The report in one line.
+    pub line: String,
+}
+
 /// One update of the live map (the `/state` body and every server-sent event).
 #[derive(Debug, Clone, Serialize, Default)]
 pub struct MapState {
@@ -84,6 +101,8 @@ pub struct MapState {
     pub advice: Option<MapAdvice>,
     /// Why there is no advice, when there is none.
     pub advice_error: Option<String>,
+    /// The DF unit's own fix, when the input carries its sentences.
+    pub unit: Option<MapUnit>,
     /// (bearings, CEP50 m) of every update with a fix.
     pub history: Vec<[f64; 2]>,
     /// The input has ended.
@@ -126,6 +145,54 @@ fn map_source(frame: &LocalFrame, s: &Source) -> MapSource {
     }
 }
 
+/// Largest unit ellipse drawn, metres: a sentence may say anything that parses, and far
+/// beyond a hunt's scale the tangent plane no longer holds the ring (the panel still says it).
+const UNIT_ELLIPSE_MAX_M: f32 = 500_000.0;
+
+/// The ring of an ellipse of semi-axes `major`, `minor` metres, the major axis `orientation`
+/// degrees clockwise from north, around `at`; empty when it cannot be drawn.
+fn unit_ring(at: LatLon, major: f32, minor: f32, orientation_deg: f32) -> Vec<LL> {
+    // Also refuses NaN (the parser gives none, but the page must never get one).
+    if !(major.max(minor) <= UNIT_ELLIPSE_MAX_M && orientation_deg.is_finite()) {
+        return Vec::new();
+    }
+    let Ok(frame) = LocalFrame::new(at, 0.0) else {
+        return Vec::new();
+    };
+    let o = f64::from(orientation_deg).to_radians();
+    // East, north of the major axis and of the minor one.
+    let (u, v) = ([o.sin(), o.cos()], [o.cos(), -o.sin()]);
+    let (a, b) = (f64::from(major), f64::from(minor));
+    (0..=72)
+        .map(|k| {
+            let t = f64::from(k) * std::f64::consts::TAU / 72.0;
+            let (x, y) = (a * t.cos(), b * t.sin());
+            let g = frame
+                .to_geodetic([x * u[0] + y * v[0], x * u[1] + y * v[1]])
+                .ok()?;
+            Some([g.lat, g.lon])
+        })
+        .collect::<Option<Vec<LL>>>()
+        .unwrap_or_default()
+}
+
+fn map_unit(report: UnitReport) -> MapUnit {
+    let at = match (report.lat, report.lon) {
+        (Some(lat), Some(lon)) if lat.is_finite() && lon.is_finite() => Some([lat, lon]),
+        _ => None,
+    };
+    let ellipse = match (at, report.major_m, report.minor_m, report.orientation_deg) {
+        (Some([lat, lon]), Some(a), Some(b), Some(o)) => unit_ring(LatLon { lat, lon }, a, b, o),
+        _ => Vec::new(),
+    };
+    MapUnit {
+        line: report.line(),
+        at,
+        ellipse,
+        report,
+    }
+}
+
 /// The field pipeline on the observations, as `foxhunt locate` runs it.
 fn fix(d: &Decoded) -> Result<Pipeline, String> {
     crate::runs::pipeline(&d.observations, &LocateConfig::default(), 1).map_err(|e| e.to_string())
@@ -158,6 +225,7 @@ pub fn build(
         bearings: bearings.len(),
         history: history.to_vec(),
         done,
+        unit: d.unit.report().map(map_unit),
         ..MapState::default()
     };
     let Some(frame) = d.frame else {
@@ -232,4 +300,42 @@ pub fn build(
         Err(e) => st.advice_error = Some(e),
     }
     st
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_units_ellipse_points_along_its_orientation() {
+        let at = LatLon {
+            lat: 47.0,
+            lon: 8.0,
+        };
+        let ring = unit_ring(at, 400.0, 20.0, 90.0);
+        assert_eq!(ring.len(), 73);
+        // t = 0 lies on the major axis: 400 m east (90 deg clockwise from north).
+        let frame = LocalFrame::new(at, 0.0).unwrap();
+        let en = frame
+            .to_local(LatLon {
+                lat: ring[0][0],
+                lon: ring[0][1],
+            })
+            .unwrap();
+        assert!(
+            (en[0] - 400.0).abs() < 0.01 && en[1].abs() < 0.01,
+            "t = 0 at {en:?}"
+        );
+    }
+
+    #[test]
+    fn an_ellipse_beyond_drawing_is_left_undrawn() {
+        let at = LatLon {
+            lat: 47.0,
+            lon: 8.0,
+        };
+        assert!(unit_ring(at, 1.0e12, 1.0, 0.0).is_empty());
+        assert!(unit_ring(at, f32::NAN, 1.0, 0.0).is_empty());
+        assert!(unit_ring(at, 10.0, 1.0, f32::INFINITY).is_empty());
+    }
 }

@@ -1,6 +1,24 @@
 //! Test fixtures shared by the integration tests.
+// Each test file compiles this module alone and uses only some of the fixtures.
+#![allow(dead_code)]
 
 use std::path::Path;
+
+/// A drive's capture through the DF unit's own code (the firmware's `Unit`, on the host): the
+/// bytes its user port sends (its `$PFOXF` fixes, `$PFOXS` and `$PFOXL` health).
+pub fn unit_output(drive: &[u8]) -> Vec<u8> {
+    use foxhunt_bridge::unit::{Port, Unit, UnitConfig};
+    let mut unit = Unit::new(UnitConfig::default());
+    let mut out = Vec::new();
+    for line in drive.split_inclusive(|b| *b == b'\n') {
+        let port = Port::of_record(line).unwrap_or(Port::Gps);
+        unit.feed(port, line, &mut |s| {
+            out.extend_from_slice(s);
+            true
+        });
+    }
+    out
+}
 
 /// An OSM XML street grid of about 300 m around the sample drive's area (origin 47 N, 8 E).
 pub fn grid_osm(path: &Path) {
