@@ -664,15 +664,7 @@ fn standard_input_streams_fixes_as_bytes_arrive() {
     // while standard input is still open.
     stdin.write_all(&bytes[..bytes.len() / 2]).expect("write");
     stdin.flush().expect("flush");
-    let (tx, rx) = std::sync::mpsc::channel();
-    let stdout = child.stdout.take().expect("stdout");
-    std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines() {
-            if tx.send(line.expect("line")).is_err() {
-                return;
-            }
-        }
-    });
+    let rx = common::line_reader(&mut child);
     // A guard against a hang, not a timing assertion.
     let first = rx
         .recv_timeout(std::time::Duration::from_secs(60))
@@ -702,15 +694,7 @@ fn live_lines_carry_what_the_df_unit_said_also_before_a_fix() {
         .stderr(Stdio::piped())
         .spawn()
         .expect("run foxhunt");
-    let (tx, rx) = std::sync::mpsc::channel();
-    let stdout = child.stdout.take().expect("stdout");
-    std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines() {
-            if tx.send(line.expect("line")).is_err() {
-                return;
-            }
-        }
-    });
+    let rx = common::line_reader(&mut child);
     let wait = |rx: &std::sync::mpsc::Receiver<String>| -> serde_json::Value {
         // A guard against a hang, not a timing assertion.
         let l = rx
@@ -895,16 +879,7 @@ fn locate_reads_a_serial_line_and_updates_the_fix() {
         .stderr(Stdio::piped())
         .spawn()
         .expect("run foxhunt");
-    let (tx, rx) = std::sync::mpsc::channel();
-    let stdout = child.stdout.take().expect("stdout");
-    std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines() {
-            let Ok(line) = line else { return };
-            if tx.send(line).is_err() {
-                return;
-            }
-        }
-    });
+    let rx = common::line_reader(&mut child);
     // Write only once foxhunt holds the line open (its /proc fd table names the device):
     // before that the pseudo-terminal refuses the bytes. The deadline guards against a hang.
     let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);

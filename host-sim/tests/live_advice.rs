@@ -2,10 +2,9 @@
 //! "good enough" once the stop rule holds (and not before), the same as `--json` fields, and
 //! with `--roads` the next road turn.
 
-use std::io::{BufRead, BufReader, Write};
+use std::io::Write;
 use std::path::PathBuf;
 use std::process::{Command, Output, Stdio};
-use std::sync::mpsc;
 use std::time::Duration;
 
 mod common;
@@ -32,16 +31,7 @@ fn live(args: &[&str]) -> Vec<String> {
         .stderr(Stdio::piped())
         .spawn()
         .expect("run foxhunt");
-    let (tx, rx) = mpsc::channel();
-    let stdout = child.stdout.take().expect("stdout");
-    std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines() {
-            let Ok(line) = line else { return };
-            if tx.send(line).is_err() {
-                return;
-            }
-        }
-    });
+    let rx = common::line_reader(&mut child);
     let bytes = std::fs::read(capture("aoa-drive.nmea")).expect("capture");
     let sentences: Vec<&[u8]> = bytes.split_inclusive(|b| *b == b'\n').collect();
     let mut stdin = child.stdin.take().expect("stdin");

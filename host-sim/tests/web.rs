@@ -80,6 +80,15 @@ fn browser(dir: &Path, what: &[&str], url: &str) -> std::process::Output {
         .expect("run chromium")
 }
 
+/// The page's DOM once `capture` (with the streets of `osm`) has been served to the end.
+fn page_dom(dir: &Path, capture: &Path, osm: &Path) -> String {
+    let (mut child, url) = serve(capture, osm);
+    let out = browser(dir, &["--dump-dom"], &url);
+    let _ = child.kill();
+    let _ = child.wait();
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
 #[test]
 fn the_live_map_shows_the_fix_and_the_suggested_move() {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("web");
@@ -95,11 +104,7 @@ fn the_live_map_shows_the_fix_and_the_suggested_move() {
     let osm = dir.join("grid.osm");
     grid_osm(&osm);
 
-    let (mut child, url) = serve(&capture, &osm);
-    let out = browser(&dir, &["--dump-dom"], &url);
-    let _ = child.kill();
-    let _ = child.wait();
-    let dom = String::from_utf8_lossy(&out.stdout);
+    let dom = page_dom(&dir, &capture, &osm);
     assert!(
         dom.contains("data-ended=\"1\""),
         "the page did not hear that the input ended:\n{dom}"
@@ -171,11 +176,7 @@ fn the_live_map_shows_every_emitters_verdict_and_whom_the_move_is_for() {
     std::fs::write(&capture, part).unwrap();
     let osm = dir.join("grid.osm");
     grid_osm(&osm);
-    let (mut child, url) = serve(&capture, &osm);
-    let out = browser(&dir, &["--dump-dom"], &url);
-    let _ = child.kill();
-    let _ = child.wait();
-    let dom = String::from_utf8_lossy(&out.stdout);
+    let dom = page_dom(&dir, &capture, &osm);
     assert!(dom.contains("data-ended=\"1\""), "{dom}");
     assert!(dom.contains("data-emitters=\"2\""), "two emitters:\n{dom}");
     assert!(
@@ -234,11 +235,7 @@ fn the_live_map_shows_the_df_units_own_fix_beside_the_hosts() {
     let osm = dir.join("grid.osm");
     grid_osm(&osm);
 
-    let (mut child, url) = serve(&path, &osm);
-    let out = browser(&dir, &["--dump-dom"], &url);
-    let _ = child.kill();
-    let _ = child.wait();
-    let dom = String::from_utf8_lossy(&out.stdout);
+    let dom = page_dom(&dir, &path, &osm);
     assert!(dom.contains("data-ended=\"1\""), "{dom}");
     // The host's own fix is still there.
     assert!(dom.contains("data-emitters=\"1\""), "{dom}");

@@ -2,7 +2,10 @@
 // Each test file compiles this module alone and uses only some of the fixtures.
 #![allow(dead_code)]
 
+use std::io::{BufRead, BufReader};
 use std::path::Path;
+use std::process::Child;
+use std::sync::mpsc::{Receiver, channel};
 
 /// A drive's capture through the DF unit's own code (the firmware's `Unit`, on the host): the
 /// bytes its user port sends (its `$PFOXF` fixes, `$PFOXS` and `$PFOXL` health).
@@ -54,4 +57,20 @@ pub fn grid_osm(path: &Path) {
     }
     s += "</osm>\n";
     std::fs::write(path, s).expect("write the extract");
+}
+
+/// The lines of `child`'s standard output as they come, read on a thread of their own (a live
+/// command prints while its input is still open).
+pub fn line_reader(child: &mut Child) -> Receiver<String> {
+    let (tx, rx) = channel();
+    let stdout = child.stdout.take().expect("stdout piped");
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines() {
+            let Ok(line) = line else { return };
+            if tx.send(line).is_err() {
+                return;
+            }
+        }
+    });
+    rx
 }
