@@ -273,11 +273,13 @@ pub fn run(set: Set, policy: Policy, g: Option<&RoadGraph>, run: usize, seed: u6
     let mut leg: Option<(Move, f32)> = None; // the move and the seconds driven on it
     // The unit's first bearing is in before the vehicle moves off: the first move is a
     // decision too (at a highway exit it is two kilometres of driving).
-    let mut bearings: Vec<Bearing> = vec![Bearing {
-        vehicle: pos,
-        theta: wrap(predicted(&s.emitter, &pos) + s.offset + s.sigma * random::normal(&mut noise)),
+    // What the unit reports at `at`: the true bearing, its offset and noise.
+    let mut observe = |at: [f32; 2]| Bearing {
+        vehicle: at,
+        theta: wrap(predicted(&s.emitter, &at) + s.offset + s.sigma * random::normal(&mut noise)),
         sigma: s.sigma,
-    }];
+    };
+    let mut bearings: Vec<Bearing> = vec![observe(pos)];
     let mut last_fix: Option<BiasedFix> = None;
     let mut out = RunResult {
         distance_m: None,
@@ -353,14 +355,7 @@ pub fn run(set: Set, policy: Policy, g: Option<&RoadGraph>, run: usize, seed: u6
             }
         }
         t += 1;
-        let sigma = s.sigma;
-        bearings.push(Bearing {
-            vehicle: pos,
-            theta: wrap(
-                predicted(&s.emitter, &pos) + s.offset + sigma * random::normal(&mut noise),
-            ),
-            sigma,
-        });
+        bearings.push(observe(pos));
         if !t.is_multiple_of(FIX_EVERY_S) {
             continue;
         }
