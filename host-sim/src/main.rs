@@ -1,9 +1,9 @@
 //! The `foxhunt` command: its subcommands and their dispatch. Every subcommand's options and
-//! work live in `foxhunt_sim::cmd`.
+//! work live in `foxhunt_sim::commands`.
 
 use clap::{Parser, Subcommand};
-use foxhunt_sim::cmd;
-use foxhunt_sim::io::{Out, Stop, note};
+use foxhunt_sim::commands;
+use foxhunt_sim::outputs::terminal::{Out, Stop, note};
 use std::process::ExitCode;
 
 /// Find radio transmitters from bearings: fixes of recorded and live drives, indoor RSSI
@@ -42,7 +42,7 @@ enum Command {
     ///   foxhunt locate --kraken http://192.168.1.20:8081     # a KrakenSDR on the network
     ///   foxhunt locate /dev/ttyUSB0 --baud 4800 --roads area.osm.pbf --target-cep50-m 50
     #[command(verbatim_doc_comment)]
-    Locate(cmd::locate::Args),
+    Locate(commands::locate::Args),
     /// Track a ZigBee node indoors from a coordinator's capture (AF_INCOMING_MSG frames).
     ///
     /// The anchors file (TOML) gives each anchor's short address and position, and the
@@ -52,7 +52,7 @@ enum Command {
     ///   foxhunt track serial-bridge/captures/rssi-sim.znp --anchors serial-bridge/captures/rssi-sim.anchors.toml
     ///   foxhunt track node.cap --anchors lab.toml --json --svg track.svg
     #[command(verbatim_doc_comment)]
-    Track(cmd::track::Args),
+    Track(commands::track::Args),
     /// Every decoded frame of a capture as a JSON line, then the counters.
     ///
     /// Kinds: gga, rmc, pfoxb, af_incoming_msg, mt (other MT frames), nmea (other sentences);
@@ -61,7 +61,7 @@ enum Command {
     /// Example:
     ///   foxhunt frames drive.nmea | grep pfoxb
     #[command(verbatim_doc_comment)]
-    Frames(cmd::frames::Args),
+    Frames(commands::frames::Args),
     /// Write a capture as the radios would send it (a drive in a DF unit's format; for
     /// rssi-sim and rssi-lab, AF_INCOMING_MSG frames and an anchors file).
     ///
@@ -79,7 +79,7 @@ enum Command {
     ///   foxhunt simulate --scenario-file my.toml --origin 53.35,-6.26 --out my.nmea
     ///   foxhunt simulate --scenario rssi-sim --out lab.znp --anchors-out lab.toml
     #[command(verbatim_doc_comment)]
-    Simulate(cmd::simulate::Args),
+    Simulate(commands::simulate::Args),
     /// Monte Carlo benchmark of every method on a scenario, against the CRLB (or PCRB).
     ///
     /// Bearing scenarios: aoa-afsa, aoa-firefly, aoa-pf-vs-kf, aoa-drive, aoa-afsa-wild.
@@ -92,7 +92,7 @@ enum Command {
     ///   foxhunt bench --scenario rssi-sim --runs 20 --particles 80
     ///   foxhunt bench --scenario-file my.toml --json
     #[command(verbatim_doc_comment)]
-    Bench(cmd::bench::Args),
+    Bench(commands::bench::Args),
     /// Speed: the bootstrap SIR against the same filter in numpy (filterpy), how every
     /// filter's step time grows with N (100 to 100 000), and with --scale `locate` on large
     /// captures. Single thread; markdown tables.
@@ -100,7 +100,7 @@ enum Command {
     /// Installs numpy, scipy and filterpy from PyPI into target/peer-venv on first use.
     /// Example: foxhunt perf --runs 20 --scale
     #[command(verbatim_doc_comment)]
-    Perf(cmd::perf::Args),
+    Perf(commands::perf::Args),
     /// A live map in the browser: route, bearings, every emitter and other source with its
     /// ellipse, the suggested move and the CEP50 history, pushed as the input is decoded.
     ///
@@ -112,20 +112,20 @@ enum Command {
     ///   foxhunt serve serial-bridge/captures/aoa-drive.nmea      # then open http://127.0.0.1:8080/
     ///   cat /dev/ttyUSB0 | foxhunt serve - --roads area.osm.pbf
     #[command(verbatim_doc_comment)]
-    Serve(cmd::serve::Args),
+    Serve(commands::serve::Args),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let mut out = Out::new();
     let result = match &cli.command {
-        Command::Locate(a) => cmd::locate::run(a, &mut out),
-        Command::Track(a) => cmd::track::run(a, &mut out),
-        Command::Frames(a) => cmd::frames::run(a, &mut out),
-        Command::Simulate(a) => cmd::simulate::run(a),
-        Command::Bench(a) => cmd::bench::run(a, &mut out),
-        Command::Perf(a) => cmd::perf::run(a, &mut out),
-        Command::Serve(a) => cmd::serve::run(a),
+        Command::Locate(a) => commands::locate::run(a, &mut out),
+        Command::Track(a) => commands::track::run(a, &mut out),
+        Command::Frames(a) => commands::frames::run(a, &mut out),
+        Command::Simulate(a) => commands::simulate::run(a),
+        Command::Bench(a) => commands::bench::run(a, &mut out),
+        Command::Perf(a) => commands::perf::run(a, &mut out),
+        Command::Serve(a) => commands::serve::run(a),
     }
     .and_then(|()| out.flush());
     match result {

@@ -8,10 +8,10 @@ use foxhunt_bridge::bridge::BridgeConfig;
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_core::fix::bias::{BiasPrior, crlb};
 use foxhunt_core::linalg::inverse2;
-use foxhunt_sim::capture::decode;
+use foxhunt_sim::inputs::capture::decode;
 use foxhunt_sim::locate::{LocateOptions, locate};
-use foxhunt_sim::scenario::Scenario;
-use foxhunt_sim::simulate::{CaptureFormat, CaptureOptions, drive_capture};
+use foxhunt_sim::runs::scenario::Scenario;
+use foxhunt_sim::runs::simulate::{CaptureFormat, CaptureOptions, drive_capture};
 
 /// The fix's Mahalanobis distance from the truth, the bearings used, and the frames and
 /// bearings rejected.

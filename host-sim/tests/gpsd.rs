@@ -9,8 +9,8 @@
 use foxhunt_bridge::agrelo::Agrelo;
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::{LatLon, write_sentence};
-use foxhunt_sim::scenario::Scenario;
-use foxhunt_sim::simulate::{CaptureFormat, CaptureOptions, drive_capture};
+use foxhunt_sim::runs::scenario::Scenario;
+use foxhunt_sim::runs::simulate::{CaptureFormat, CaptureOptions, drive_capture};
 use std::io::{BufRead, BufReader, Write};
 use std::net::TcpStream;
 use std::process::{Child, Command, Stdio};

@@ -1,9 +1,9 @@
 //! The closed-loop guidance benchmark at a CI size (the README's figures come from
 //! `foxhunt bench --scenario guidance`, 100 runs per row).
 
-use foxhunt_sim::guidance::bench::{Row, Set, measure, rows};
-use foxhunt_sim::guidance::networks::Network;
-use foxhunt_sim::montecarlo::Progress;
+use foxhunt_sim::runs::guidance::bench::{Row, Set, measure, rows};
+use foxhunt_sim::runs::guidance::networks::Network;
+use foxhunt_sim::runs::montecarlo::Progress;
 
 const RUNS: usize = 30;
 

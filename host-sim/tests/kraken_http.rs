@@ -3,10 +3,10 @@
 //! half-written ones and records repeated from the page before. Every record must count
 //! once: the live fix equals the fix of the same records read from a file.
 
-use foxhunt_sim::capture::decode;
+use foxhunt_sim::inputs::capture::decode;
 use foxhunt_sim::locate::{LocateOptions, locate};
-use foxhunt_sim::scenario::Scenario;
-use foxhunt_sim::simulate::{CaptureFormat, CaptureOptions, drive_capture};
+use foxhunt_sim::runs::scenario::Scenario;
+use foxhunt_sim::runs::simulate::{CaptureFormat, CaptureOptions, drive_capture};
 use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
 use std::sync::Arc;

@@ -3,9 +3,9 @@
 #![deny(missing_docs)]
 
 use foxhunt_core::Method;
-use foxhunt_sim::montecarlo::{Progress, bench};
-use foxhunt_sim::report::Row;
-use foxhunt_sim::scenario::Scenario;
+use foxhunt_sim::outputs::tables::Row;
+use foxhunt_sim::runs::montecarlo::{Progress, bench};
+use foxhunt_sim::runs::scenario::Scenario;
 
 /// The bench rows of canonical scenario `name` for `methods` (and their equal-cost rows), over
 /// `runs` seeded runs (`None`: the scenario's own count) at its particle counts.

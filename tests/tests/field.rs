@@ -24,7 +24,9 @@ use foxhunt_core::{
     BiasedBearingEkf, BiasedEmitter, Filter, Firefly, Gaussian, GaussianUniform, ParticleSet, Sir,
     SirConfig, StaticEmitter, random,
 };
-use foxhunt_sim::field::{Condition, FieldDrive, Summary, judge, measure, run_locate, simulate};
+use foxhunt_sim::runs::field::{
+    Condition, FieldDrive, Summary, judge, measure, run_locate, simulate,
+};
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 use std::sync::OnceLock;
@@ -530,14 +532,14 @@ fn field_drives_written_as_bytes_locate_as_the_bearings_do() {
     // the command finds what the pipeline finds on the bearings (the ghost as another source,
     // one emitter per frequency), each emitter inside its own ellipse.
     use foxhunt_bridge::nmea::LatLon;
-    use foxhunt_sim::capture::decode;
+    use foxhunt_sim::inputs::capture::decode;
     use foxhunt_sim::locate::{LocateOptions, locate};
     let origin = LatLon {
         lat: 47.0,
         lon: 8.0,
     };
     for (c, emitters, others) in [(Condition::Multipath, 1, 1), (Condition::TwoEmitters, 2, 0)] {
-        let (bytes, truths) = foxhunt_sim::field::capture(c, 0, origin).expect("capture");
+        let (bytes, truths) = foxhunt_sim::runs::field::capture(c, 0, origin).expect("capture");
         let d = decode(&bytes, Default::default(), false);
         let l = locate(&d, &LocateOptions::default()).expect("a fix");
         let r = &l.report;

@@ -4,10 +4,10 @@
 
 use foxhunt_core::fix::bias::{BiasPrior, crlb};
 use foxhunt_core::linalg::inverse2;
-use foxhunt_sim::capture::decode;
+use foxhunt_sim::inputs::capture::decode;
 use foxhunt_sim::locate::{LocateOptions, locate};
-use foxhunt_sim::scenario::Scenario;
-use foxhunt_sim::simulate::{CaptureOptions, drive_capture};
+use foxhunt_sim::runs::scenario::Scenario;
+use foxhunt_sim::runs::simulate::{CaptureOptions, drive_capture};
 
 fn mahalanobis(name: &str, options: CaptureOptions) -> (f32, u32) {
     let scenario = Scenario::named(name).expect("scenario");
@@ -84,7 +84,7 @@ fn the_reported_ellipse_is_honest_over_many_drives() {
 
 #[test]
 fn indoor_capture_is_tracked_through_the_bytes() {
-    use foxhunt_sim::indoor::{simulate_capture, track};
+    use foxhunt_sim::track::indoor::{simulate_capture, track};
     let (bytes, anchors, truth) = simulate_capture("rssi-sim", 0).expect("capture");
     let t = track(&bytes, &anchors, 1).expect("track");
     assert_eq!(t.points.len(), truth.len());
@@ -115,7 +115,7 @@ fn the_bundled_captures_are_what_simulate_writes_today() {
     let written = drive_capture(&drive, &CaptureOptions::default()).expect("capture");
     assert!(written == read("aoa-drive.nmea"), "aoa-drive.nmea is stale");
     let (bytes, anchors, _) =
-        foxhunt_sim::indoor::simulate_capture("rssi-sim", 0).expect("capture");
+        foxhunt_sim::track::indoor::simulate_capture("rssi-sim", 0).expect("capture");
     assert!(bytes == read("rssi-sim.znp"), "rssi-sim.znp is stale");
     let text = anchors.to_toml("rssi-sim").expect("toml");
     assert_eq!(

@@ -7,8 +7,8 @@
 //! each figure is deterministic. Each assertion prints the observed figure.
 
 use foxhunt_core::Method;
-use foxhunt_sim::runs::bearing_run;
-use foxhunt_sim::scenario::Scenario;
+use foxhunt_sim::runs::run::bearing_run;
+use foxhunt_sim::runs::scenario::Scenario;
 use foxhunt_tests::{error, ratio, row, table};
 
 #[test]

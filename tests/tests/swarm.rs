@@ -75,9 +75,12 @@ fn aoa_pf_vs_kf_table() {
 #[test]
 fn rssi_sim_table() {
     // The full 50 runs at N = 50: two of the rows sit within 15 % of each other.
-    let mut s = foxhunt_sim::scenario::Scenario::named("rssi-sim").expect("scenario");
+    let mut s = foxhunt_sim::runs::scenario::Scenario::named("rssi-sim").expect("scenario");
     s.particles = vec![50];
-    let r = foxhunt_sim::montecarlo::bench(&s, &foxhunt_sim::montecarlo::Progress::new(0, false));
+    let r = foxhunt_sim::runs::montecarlo::bench(
+        &s,
+        &foxhunt_sim::runs::montecarlo::Progress::new(0, false),
+    );
     let e = |m| error(&r, m);
     // The bar: our SIR at N = 50 <= seed 003's PF figure, 1.25 m.
     assert!(e("sir-wide") <= 1.25, "sir-wide {}", e("sir-wide"));
@@ -135,7 +138,7 @@ fn ungm_table() {
 
 #[test]
 fn every_method_of_every_table_is_one_registry_name() {
-    for s in foxhunt_sim::scenario::Scenario::all() {
+    for s in foxhunt_sim::runs::scenario::Scenario::all() {
         for m in &s.methods {
             assert_eq!(Method::from_name(m.name()), Some(*m), "{}", s.name);
         }
@@ -176,10 +179,10 @@ fn every_scenario_gives_finite_rows_at_every_compiled_count() {
     // particles, AFSA above its u16 fish index). Never a null row passed off as a result.
     // The runs are shortened (12 bearings, 6 tracking steps): what is checked is that every
     // method is built and answers at every count, not its accuracy.
-    use foxhunt_sim::montecarlo::{Progress, bench};
-    use foxhunt_sim::scenario::ScenarioModel;
+    use foxhunt_sim::runs::montecarlo::{Progress, bench};
+    use foxhunt_sim::runs::scenario::ScenarioModel;
     for n in foxhunt_core::PARTICLE_COUNTS {
-        for mut s in foxhunt_sim::scenario::Scenario::all() {
+        for mut s in foxhunt_sim::runs::scenario::Scenario::all() {
             s.runs = 1;
             s.particles = vec![n];
             match &mut s.model {

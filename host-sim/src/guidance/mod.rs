@@ -11,13 +11,10 @@
 //! is assumed able to drive any direction (open terrain), which on a real road network it is
 //! not: give `--roads` there.
 
-pub mod bench;
 pub mod guide;
-pub mod networks;
-pub mod policy;
 pub mod reach;
 
-use crate::roads::RoadGraph;
+use crate::inputs::roads::RoadGraph;
 use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::guidance::belief::{Belief, Hypotheses, MAX_POINTS, beliefs};
 use foxhunt_core::guidance::plan::{

@@ -2,7 +2,7 @@
 //! the vehicle came by (a U-turn only at a dead end), each leg the straight chord between two
 //! graph nodes driven at the road's speed.
 
-use crate::roads::RoadGraph;
+use crate::inputs::roads::RoadGraph;
 use foxhunt_core::guidance::plan::{Leg, Reach};
 use foxhunt_core::model::bearing::wrap;
 

@@ -1,0 +1,176 @@
+//! `foxhunt bench`: Monte Carlo of every method of a scenario's table against its bound.
+
+use crate::outputs::tables as report;
+use crate::outputs::terminal::{Out, Outcome};
+use crate::runs::field::Condition;
+use crate::runs::montecarlo::{Progress, bench, total_runs};
+use crate::runs::scenario::{NAMES, Scenario, ScenarioModel};
+use foxhunt_core::PARTICLE_COUNTS;
+use std::path::PathBuf;
+
+/// Options of `foxhunt bench`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Canonical scenario name, `all`, or the field conditions: `field` (every one) or
+    /// `field/NAME` (bias-2deg, bias-4deg, bias-4deg-L600, multipath, two-emitters,
+    /// correlated-5hz, pure-noise, few-bearings, distant-10km, long-20km-47n, long-20km-70n,
+    /// wild-15pct-2deg, aoa-afsa-wild, aoa-afsa, aoa-drive).
+    #[arg(long, default_value = "aoa-afsa", conflicts_with = "scenario_file")]
+    pub scenario: String,
+    /// A scenario file (TOML; see the README).
+    #[arg(long)]
+    pub scenario_file: Option<PathBuf>,
+    /// Monte Carlo runs (at least 1; default: the scenario's).
+    #[arg(long)]
+    pub runs: Option<usize>,
+    /// Particles, one of the compiled counts 50, 80, 100, 200, 500, 1000, 2000, 5000, 10000,
+    /// 100000 (default: the scenario's table).
+    #[arg(long)]
+    pub particles: Option<usize>,
+    /// Print JSON (an array of rows with stable field names).
+    #[arg(long, conflicts_with = "markdown")]
+    pub json: bool,
+    /// Print a Markdown table.
+    #[arg(long)]
+    pub markdown: bool,
+    /// No progress on stderr.
+    #[arg(long)]
+    pub quiet: bool,
+    /// When stderr is not a terminal, a progress line at most every this many seconds.
+    #[arg(long, default_value_t = 5.0)]
+    pub progress_secs: f64,
+}
+
+/// The scenarios `a` asks for, with its overrides applied and checked.
+pub fn scenarios(a: &Args) -> Result<Vec<Scenario>, String> {
+    let mut list = match &a.scenario_file {
+        Some(path) => vec![Scenario::load(path)?],
+        None if a.scenario == "all" => Scenario::all(),
+        None => vec![Scenario::named(&a.scenario).ok_or_else(|| {
+            format!(
+                "unknown scenario `{}`; known: all, {}",
+                a.scenario,
+                NAMES.join(", ")
+            )
+        })?],
+    };
+    if a.runs == Some(0) {
+        return Err("--runs must be at least 1, not 0".into());
+    }
+    if let Some(n) = a.particles
+        && !PARTICLE_COUNTS.contains(&n)
+    {
+        return Err(format!(
+            "--particles {n} is not a compiled size; use one of {PARTICLE_COUNTS:?}"
+        ));
+    }
+    for s in list.iter_mut() {
+        if let Some(r) = a.runs {
+            s.runs = r;
+        }
+        if let Some(n) = a.particles {
+            s.particles = vec![n];
+        }
+        s.validate()?;
+    }
+    Ok(list)
+}
+
+/// One line per scenario saying what is run.
+fn header(s: &Scenario) -> String {
+    let counts: Vec<String> = s.particles.iter().map(|n| n.to_string()).collect();
+    let what = match &s.model {
+        ScenarioModel::Bearing(d) => format!(
+            "emitter ({}, {}) m, {} bearings, sigma {:.3} deg, wild {:.0} %; bound = CRLB",
+            d.emitter[0],
+            d.emitter[1],
+            d.route.len(),
+            d.sigma().to_degrees(),
+            100.0 * d.wild_fraction
+        ),
+        _ => format!("{} steps; bound = posterior CRB", s.steps()),
+    };
+    format!(
+        "{}: {what}; N = {}, {} runs, seed {}",
+        s.name,
+        counts.join(", "),
+        s.runs,
+        s.seed
+    )
+}
+
+/// The field conditions `a` asks for, if it asks for them.
+fn field_conditions(a: &Args) -> Result<Option<Vec<Condition>>, String> {
+    if a.scenario_file.is_some() {
+        return Ok(None);
+    }
+    match a.scenario.strip_prefix("field") {
+        Some("") => Ok(Some(Condition::ALL.to_vec())),
+        Some(rest) => {
+            let name = rest.strip_prefix('/').unwrap_or(rest);
+            let c = crate::runs::field::condition(name).ok_or_else(|| {
+                let names: Vec<&str> = Condition::ALL.iter().map(|c| c.name()).collect();
+                format!(
+                    "unknown field condition `{name}`; known: {}",
+                    names.join(", ")
+                )
+            })?;
+            Ok(Some(vec![c]))
+        }
+        None => Ok(None),
+    }
+}
+
+/// Print bench rows as `a` asks.
+fn print(a: &Args, rows: &[crate::outputs::tables::Row], out: &mut Out) -> Outcome {
+    if a.json {
+        let text = serde_json::to_string_pretty(rows).map_err(|e| e.to_string())?;
+        out.line(&text)
+    } else if a.markdown {
+        out.text(&report::markdown(rows))
+    } else {
+        out.text(&report::table(rows))
+    }
+}
+
+/// Run `foxhunt bench`.
+pub fn run(a: &Args, out: &mut Out) -> Outcome {
+    if let Some(conditions) = field_conditions(a)? {
+        if a.runs == Some(0) {
+            return Err("--runs must be at least 1, not 0".into());
+        }
+        if a.particles.is_some() {
+            return Err("--particles does not apply to the field conditions (N = 1000)".into());
+        }
+        let rows = crate::runs::field::bench(&conditions, a.runs.unwrap_or(100));
+        return print(a, &rows, out);
+    }
+    if a.scenario_file.is_none() && a.scenario.starts_with("guidance") {
+        return crate::runs::guidance::bench::bench(
+            &a.scenario,
+            a.runs,
+            a.json,
+            a.markdown,
+            a.quiet,
+            out,
+        );
+    }
+    let list = scenarios(a)?;
+    if !(a.progress_secs >= 0.0 && a.progress_secs.is_finite()) {
+        return Err(format!(
+            "--progress-secs must be a number of seconds >= 0, not {}",
+            a.progress_secs
+        )
+        .into());
+    }
+    let every = std::time::Duration::from_secs_f64(a.progress_secs);
+    let progress = Progress::every(list.iter().map(total_runs).sum(), !a.quiet, every);
+    let rows: Vec<_> = list.iter().flat_map(|s| bench(s, &progress)).collect();
+    progress.finish();
+    if !a.json && !a.markdown {
+        for s in &list {
+            out.line(&header(s))?;
+        }
+    }
+    print(a, &rows, out)
+}

@@ -1,0 +1,329 @@
+//! `foxhunt locate`: the fix of a recorded drive, of a live serial line or of standard input,
+//! with its maps.
+
+use super::{GuidanceArgs, method};
+use crate::estimate::options::{LocateOptions, PARTICLES};
+use crate::inputs::calibration::Calibration;
+use crate::inputs::capture::{Decoded, Decoder};
+use crate::inputs::files::{Source, stream};
+use crate::inputs::gpsd::GpsdAddress;
+use crate::inputs::kraken_http::KrakenUrl;
+use crate::locate::live::{LiveOptions, LiveSource};
+use crate::locate::report::Located;
+use crate::locate::{locate, locate_guided};
+use crate::outputs::files::Outputs;
+use crate::outputs::maps;
+use crate::outputs::terminal::{Out, Outcome, Stop, note};
+use foxhunt_bridge::BridgeConfig;
+use foxhunt_core::Method;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+/// The bundled sample drive (`foxhunt simulate --scenario aoa-drive --out
+/// serial-bridge/captures/aoa-drive.nmea`).
+pub const SAMPLE_DRIVE: &[u8] = include_bytes!("../../../serial-bridge/captures/aoa-drive.nmea");
+
+/// Options of `foxhunt locate`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Capture files (read in order as one stream), `-` for standard input (read live), or
+    /// none for the bundled sample drive.
+    pub captures: Vec<PathBuf>,
+    /// Fix method, by its registry name: ml-robust (every emitter, offsets and consistency
+    /// checked), or one emitter by ml, ml-huber, sir, sir-robust, gpf, ekf, afsa-pf, ...
+    #[arg(long, default_value = "ml-robust", value_parser = method)]
+    pub method: Method,
+    /// Bearings whose frequencies lie within this many MHz share a channel (one emitter
+    /// each).
+    #[arg(long, default_value_t = 0.05)]
+    pub channel_width_mhz: f32,
+    /// Measure the DF unit's mounting offset on a drive past a transmitter at LAT,LON (decimal
+    /// degrees) and save it to --calibration FILE, instead of locating.
+    #[arg(long, allow_hyphen_values = true, requires = "calibration")]
+    pub calibrate: Option<String>,
+    /// A calibration file: with --calibrate where to save it; otherwise the offset to apply.
+    #[arg(long)]
+    pub calibration: Option<PathBuf>,
+    /// Particles of sequential methods (a compiled count).
+    #[arg(long, default_value_t = PARTICLES)]
+    pub particles: usize,
+    /// Bearing noise of the DF unit, degrees, in (0, 90) (default: estimated from the
+    /// residuals).
+    #[arg(long, allow_hyphen_values = true)]
+    pub sigma_deg: Option<f32>,
+    /// Print one JSON object (stable field names); live: one per update. Its `advice` (the
+    /// first emitter's; before a fix, from the bearings alone): heading_deg (clockwise from
+    /// north), compass, target {lat, lon} (the point to drive to), turn (with --roads: kind
+    /// straight/left/right/u-turn, angle_deg, at east/north m) and turn_at {lat, lon},
+    /// reason (widen-angle, get-closer, calibration-leg, more-bearings, check-unit,
+    /// good-enough) and reason_text, good_enough, missing (precision, consistency, bearings;
+    /// fix before one), bound_cep50_m, offset_known_cep50_m, predicted_cep50_m, reached_s,
+    /// on_roads, line; `advice_error` says why there is none; `unit`, when the input carries
+    /// a DF unit's $PFOXF/$PFOXS/$PFOXL sentences, what the unit said (its fix, ellipse,
+    /// status, health; live: a new unit fix is an update too). No fix yet: {used, error,
+    /// advice, unit}.
+    #[arg(long)]
+    pub json: bool,
+    /// Write PREFIX.geojson, PREFIX.kml and PREFIX.svg.
+    #[arg(long, value_name = "PREFIX")]
+    pub maps: Option<PathBuf>,
+    /// Write the emitter, ellipse, track and bearing rays as GeoJSON.
+    #[arg(long)]
+    pub geojson: Option<PathBuf>,
+    /// Write the same as KML.
+    #[arg(long)]
+    pub kml: Option<PathBuf>,
+    /// Draw the track, bearing rays, the method's particles, ellipse and emitter as SVG.
+    #[arg(long)]
+    pub svg: Option<PathBuf>,
+    /// Seed of the particle methods.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Read the one CAPTURE as a serial device at this baud rate, updating the fix as bytes
+    /// arrive (4800 is NMEA 0183's usual rate).
+    #[arg(long)]
+    pub baud: Option<u32>,
+    /// Live: stop after this many seconds without a byte (`inf`: until the line closes, the
+    /// default).
+    #[arg(long, allow_hyphen_values = true)]
+    pub quiet_exit: Option<f64>,
+    /// Print `stats: bearings N, seconds S, peak_bytes B` on stderr at the end.
+    #[arg(long)]
+    pub stats: bool,
+    /// Live: positions (TPV) and heading (ATT) from a running gpsd, while the bearings come
+    /// from the serial device (--baud) or standard input (-): `--gpsd` for localhost:2947,
+    /// or `--gpsd=HOST[:PORT]`.
+    #[arg(
+        long,
+        value_name = "HOST[:PORT]",
+        num_args = 0..=1,
+        require_equals = true,
+        default_missing_value = ""
+    )]
+    pub gpsd: Option<String>,
+    /// The roads and the stop rule's target of the advice.
+    #[command(flatten)]
+    pub guidance: GuidanceArgs,
+    /// Live: poll a KrakenSDR about twice a second, `http://HOST:8081` (its DOA_value.html,
+    /// else doa.xml) or the URL of either page; no CAPTURE.
+    #[arg(long, value_name = "URL")]
+    pub kraken: Option<String>,
+}
+
+/// Where the maps go: (path, named on the command line).
+fn map_paths(a: &Args) -> [Option<PathBuf>; 3] {
+    let from_prefix = |ext: &str| {
+        a.maps.as_ref().map(|p| {
+            let mut s = p.as_os_str().to_owned();
+            s.push(format!(".{ext}"));
+            PathBuf::from(s)
+        })
+    };
+    [
+        a.geojson.clone().or_else(|| from_prefix("geojson")),
+        a.kml.clone().or_else(|| from_prefix("kml")),
+        a.svg.clone().or_else(|| from_prefix("svg")),
+    ]
+}
+
+/// How the captures are read.
+enum Input {
+    Sample,
+    Files(Vec<Source>),
+    Live(LiveSource),
+    /// A live line of bearings with gpsd beside it.
+    Gpsd(LiveSource, GpsdAddress),
+    /// A KrakenSDR's web page (and perhaps gpsd).
+    Kraken(KrakenUrl, Option<GpsdAddress>),
+}
+
+fn input(a: &Args) -> Result<Input, String> {
+    let gpsd = a.gpsd.as_deref().map(GpsdAddress::parse).transpose()?;
+    if let Some(url) = &a.kraken {
+        if !a.captures.is_empty() || a.baud.is_some() {
+            return Err("--kraken reads the unit's web page: give no CAPTURE and no --baud".into());
+        }
+        return Ok(Input::Kraken(KrakenUrl::parse(url)?, gpsd));
+    }
+    if let Some(g) = gpsd {
+        return match line_input(a)? {
+            Input::Live(source) => Ok(Input::Gpsd(source, g)),
+            _ => Err(
+                "--gpsd gives positions beside a live line of bearings: a serial device \
+                      with --baud, or - for standard input"
+                    .into(),
+            ),
+        };
+    }
+    line_input(a)
+}
+
+fn line_input(a: &Args) -> Result<Input, String> {
+    match (a.baud, a.captures.as_slice()) {
+        (Some(baud), [path]) => Ok(Input::Live(LiveSource::Serial {
+            path: path.to_string_lossy().into_owned(),
+            baud,
+        })),
+        (Some(_), _) => Err("--baud reads one serial device: give exactly one path".into()),
+        (None, []) => Ok(Input::Sample),
+        (None, [one]) if one.as_os_str() == "-" => Ok(Input::Live(LiveSource::Stdin)),
+        (None, many) if many.iter().any(|p| p.as_os_str() == "-") => {
+            Err("standard input (-) is read live: give it alone".into())
+        }
+        (None, many) => Ok(Input::Files(
+            many.iter().map(|p| Source::from_path(p)).collect(),
+        )),
+    }
+}
+
+fn quiet_exit(a: &Args) -> Result<Option<Duration>, String> {
+    match a.quiet_exit {
+        None => Ok(None),
+        Some(s) if s == f64::INFINITY => Ok(None),
+        Some(s) if s >= 0.0 && s.is_finite() => Ok(Some(Duration::from_secs_f64(s))),
+        Some(s) => Err(format!(
+            "--quiet-exit wants a number of seconds >= 0 (or inf), not {s}"
+        )),
+    }
+}
+
+/// Peak resident memory of this process, bytes (Linux; 0 where unknown).
+fn peak_bytes() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find_map(|l| l.strip_prefix("VmHWM:"))
+                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
+        })
+        .map_or(0, |kb| kb * 1024)
+}
+
+/// Run `foxhunt locate`.
+pub fn run(a: &Args, out: &mut Out) -> Outcome {
+    let started = Instant::now();
+    let calibrating = a.calibrate.is_some();
+    let offset = match (&a.calibration, calibrating) {
+        (Some(f), false) => Some(Calibration::load(f)?.prior()),
+        _ => None,
+    };
+    let options = LocateOptions {
+        method: a.method,
+        particles: a.particles,
+        sigma_deg: a.sigma_deg,
+        seed: a.seed,
+        offset,
+        channel_width_mhz: a.channel_width_mhz,
+    };
+    options.check()?;
+    let quiet = quiet_exit(a)?;
+    let input = input(a)?;
+    let live = matches!(input, Input::Live(_) | Input::Gpsd(..) | Input::Kraken(..));
+    if calibrating && live {
+        return Err("--calibrate reads a recorded drive, not a live line".into());
+    }
+    if quiet.is_some() && !live {
+        return Err("--quiet-exit applies to a live line (--baud, or -)".into());
+    }
+    // Refuse every output that would destroy an input before reading anything.
+    let mut inputs: Vec<&Path> = a.captures.iter().map(PathBuf::as_path).collect();
+    if !calibrating {
+        inputs.extend(a.calibration.as_deref());
+    }
+    let outputs = Outputs::new(inputs, false);
+    let paths = map_paths(a);
+    for p in paths.iter().flatten() {
+        outputs.check(p, true)?;
+    }
+    if let (Some(f), true) = (&a.calibration, calibrating) {
+        outputs.check(f, true)?;
+    }
+    let keep_track = paths.iter().any(Option::is_some);
+    let mut guide = a.guidance.guide()?;
+    let decoded = match input {
+        Input::Sample => {
+            let mut dec = Decoder::new(BridgeConfig::default(), keep_track);
+            dec.feed(SAMPLE_DRIVE);
+            dec.finish()
+        }
+        Input::Files(sources) => {
+            let mut dec = Decoder::new(BridgeConfig::default(), keep_track);
+            stream(&sources, |b| dec.feed(b))?;
+            dec.finish()
+        }
+        Input::Live(_) | Input::Gpsd(..) | Input::Kraken(..) => {
+            let (source, gpsd) = match input {
+                Input::Gpsd(source, g) => (source, Some(g)),
+                Input::Kraken(url, g) => (LiveSource::Kraken(url), g),
+                Input::Live(source) => (source, None),
+                Input::Sample | Input::Files(_) => (LiveSource::Stdin, None),
+            };
+            let o = LiveOptions {
+                source,
+                gpsd,
+                quiet_exit: quiet,
+                locate: options,
+                json: a.json,
+                keep_track,
+            };
+            let d = crate::locate::live::run(&o, &mut guide, out)?;
+            // The live updates were the output; a final fix goes only to the maps.
+            if keep_track && let Ok(l) = locate(&d, &options) {
+                write_maps(&l, &d, &paths, &outputs)?;
+            }
+            return finish(a, &d, started);
+        }
+    };
+    if let (Some(target), Some(file)) = (&a.calibrate, &a.calibration) {
+        let c = Calibration::measure(&decoded, target)?;
+        outputs.write(file, c.to_toml().as_bytes(), true)?;
+        let text = if a.json {
+            serde_json::to_string(&c).map_err(|e| e.to_string())?
+        } else {
+            c.text()
+        };
+        out.line(text.trim_end())?;
+        return finish(a, &decoded, started);
+    }
+    let l = locate_guided(&decoded, &options, &mut guide).map_err(|e| e.error)?;
+    write_maps(&l, &decoded, &paths, &outputs)?;
+    if a.json {
+        let text = serde_json::to_string(&l.report).map_err(|e| e.to_string())?;
+        out.line(&text)?;
+    } else {
+        out.text(&l.report.text())?;
+    }
+    out.flush()?;
+    finish(a, &decoded, started)
+}
+
+fn write_maps(
+    l: &Located,
+    d: &Decoded,
+    paths: &[Option<PathBuf>; 3],
+    outputs: &Outputs,
+) -> Result<(), Stop> {
+    let [geojson, kml, svg] = paths;
+    if let Some(p) = geojson {
+        outputs.write(p, maps::geojson(l, d).to_string().as_bytes(), true)?;
+    }
+    if let Some(p) = kml {
+        outputs.write(p, maps::kml(l, d).as_bytes(), true)?;
+    }
+    if let Some(p) = svg {
+        outputs.write(p, maps::svg(l, d).as_bytes(), true)?;
+    }
+    Ok(())
+}
+
+fn finish(a: &Args, d: &Decoded, started: Instant) -> Outcome {
+    if a.stats {
+        note(&format!(
+            "stats: bearings {}, seconds {:.3}, peak_bytes {}",
+            d.observations.len(),
+            started.elapsed().as_secs_f64(),
+            peak_bytes()
+        ));
+    }
+    Ok(())
+}

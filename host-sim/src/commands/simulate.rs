@@ -1,0 +1,256 @@
+//! `foxhunt simulate`: a capture byte for byte as the radios would send it.
+
+use crate::outputs::files::Outputs;
+use crate::outputs::terminal::{Outcome, note};
+use crate::runs::scenario::{NAMES, Scenario, ScenarioModel};
+use crate::runs::simulate::{CaptureFormat, CaptureOptions, drive_capture};
+use crate::track::indoor::simulate_capture;
+use foxhunt_bridge::nmea::{Date, LatLon, UtcTime};
+use std::path::PathBuf;
+
+/// Options of `foxhunt simulate`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Canonical scenario name (a drive, or rssi-sim / rssi-lab for an indoor capture).
+    #[arg(long, default_value = "aoa-drive", conflicts_with = "scenario_file")]
+    pub scenario: String,
+    /// A scenario file (TOML).
+    #[arg(long)]
+    pub scenario_file: Option<PathBuf>,
+    /// A field condition instead (see `bench --scenario field`): bias-2deg, multipath,
+    /// two-emitters, correlated-5hz, pure-noise, few-bearings, ...; GGA fixes and $PFOXB
+    /// bearings carrying their own position and frequency.
+    #[arg(long, conflicts_with_all = ["scenario_file", "format", "wild", "bias_deg"])]
+    pub condition: Option<String>,
+    /// Where to write the capture.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// RSSI scenarios: where to write the anchors file (default: OUT with the extension
+    /// `.anchors.toml`, which must not exist yet unless --force).
+    #[arg(long)]
+    pub anchors_out: Option<PathBuf>,
+    /// Overwrite a file the command line did not name (the default anchors file).
+    #[arg(long)]
+    pub force: bool,
+    /// Latitude,longitude where the route's first point lies (the capture's local origin),
+    /// decimal degrees (default 47.0,8.0).
+    #[arg(long, allow_hyphen_values = true)]
+    pub origin: Option<String>,
+    /// Which Monte Carlo run's noise to write.
+    #[arg(long, default_value_t = 0)]
+    pub run: usize,
+    /// Drives: UTC time of the first fix, HH:MM:SS (default 10:00:00).
+    #[arg(long)]
+    pub start: Option<String>,
+    /// Drives: UTC date of the first fix, YYYY-MM-DD (default 2026-06-01).
+    #[arg(long)]
+    pub date: Option<String>,
+    /// Drives: share of wild bearings, uniform over the circle (default: the scenario's).
+    #[arg(long)]
+    pub wild: Option<f32>,
+    /// Drives: a constant bias on every bearing, degrees (a mounting offset).
+    #[arg(long, allow_hyphen_values = true)]
+    pub bias_deg: Option<f32>,
+    /// Drives: share of bytes corrupted after writing (0.01 = 1 %).
+    #[arg(long)]
+    pub corrupt: Option<f32>,
+    /// Drives: share of bytes dropped after writing.
+    #[arg(long)]
+    pub drop: Option<f32>,
+    /// Drives: the DF unit's record format: pfoxb (GGA + RMC + $PFOXB, the default), agrelo
+    /// (GGA + RMC + HDT + %BBB/Q relative bearings), kraken-csv or kraken-xml (KrakenSDR
+    /// records with their own position and heading).
+    #[arg(long)]
+    pub format: Option<String>,
+}
+
+fn format(text: &str) -> Result<CaptureFormat, String> {
+    CaptureFormat::from_name(text).ok_or_else(|| {
+        let names: Vec<&str> = CaptureFormat::ALL.iter().map(|f| f.name()).collect();
+        format!("--format `{text}` is not one of {}", names.join(", "))
+    })
+}
+
+fn start(text: &str) -> Result<UtcTime, String> {
+    let bad = || format!("--start wants HH:MM:SS (UTC), not `{text}`");
+    let parts: Vec<u32> = text
+        .split(':')
+        .map(|p| p.parse().map_err(|_| bad()))
+        .collect::<Result<_, _>>()?;
+    match parts.as_slice() {
+        [h, m, s] if *h < 24 && *m < 60 && *s < 60 => Ok(UtcTime {
+            ms_of_day: ((h * 60 + m) * 60 + s) * 1000,
+        }),
+        _ => Err(bad()),
+    }
+}
+
+fn date(text: &str) -> Result<Date, String> {
+    let bad = || format!("--date wants YYYY-MM-DD, not `{text}`");
+    let parts: Vec<&str> = text.split('-').collect();
+    let [y, m, d] = parts.as_slice() else {
+        return Err(bad());
+    };
+    let (y, m, d): (u16, u8, u8) = (
+        y.parse().map_err(|_| bad())?,
+        m.parse().map_err(|_| bad())?,
+        d.parse().map_err(|_| bad())?,
+    );
+    let month = time::Month::try_from(m).map_err(|_| bad())?;
+    time::Date::from_calendar_date(i32::from(y), month, d).map_err(|_| bad())?;
+    if !(1980..2080).contains(&y) {
+        return Err(format!(
+            "--date must lie in 1980-2079 (RMC writes two-digit years), not {y}"
+        ));
+    }
+    Ok(Date {
+        year: y,
+        month: m,
+        day: d,
+    })
+}
+
+fn origin(text: &str) -> Result<LatLon, String> {
+    let bad = || format!("--origin wants LAT,LON in decimal degrees, not `{text}`");
+    let (lat, lon) = text.split_once(',').ok_or_else(bad)?;
+    let p = LatLon {
+        lat: lat.trim().parse().map_err(|_| bad())?,
+        lon: lon.trim().parse().map_err(|_| bad())?,
+    };
+    if p.lat.abs() <= 90.0 && p.lon.abs() <= 180.0 {
+        Ok(p)
+    } else {
+        Err(format!(
+            "--origin must be a latitude in [-90, 90] and a longitude in [-180, 180], not `{text}`"
+        ))
+    }
+}
+
+/// Run `foxhunt simulate`.
+pub fn run(a: &Args) -> Outcome {
+    if let Some(name) = &a.condition {
+        return field(a, name);
+    }
+    let scenario = match &a.scenario_file {
+        Some(path) => Scenario::load(path)?,
+        None => Scenario::named(&a.scenario).ok_or_else(|| {
+            format!(
+                "unknown scenario `{}`; known: {}",
+                a.scenario,
+                NAMES.join(", ")
+            )
+        })?,
+    };
+    let inputs = a.scenario_file.iter().map(PathBuf::as_path);
+    let outputs = Outputs::new(inputs, a.force);
+    outputs.check(&a.out, true)?;
+    match &scenario.model {
+        ScenarioModel::Rssi { .. } => {
+            let drive_only = [
+                ("wild", a.wild.is_some()),
+                ("bias-deg", a.bias_deg.is_some()),
+                ("corrupt", a.corrupt.is_some()),
+                ("drop", a.drop.is_some()),
+                ("origin", a.origin.is_some()),
+                ("start", a.start.is_some()),
+                ("date", a.date.is_some()),
+                ("format", a.format.is_some()),
+            ];
+            if let Some((name, _)) = drive_only.iter().find(|(_, given)| *given) {
+                return Err(format!(
+                    "--{name} applies to drives, not to the indoor scenario `{}`",
+                    scenario.name
+                )
+                .into());
+            }
+            let named = a.anchors_out.is_some();
+            let anchors_path = a
+                .anchors_out
+                .clone()
+                .unwrap_or_else(|| a.out.with_extension("anchors.toml"));
+            if anchors_path == a.out {
+                return Err("the anchors file and the capture cannot be one file".into());
+            }
+            outputs.check(&anchors_path, named)?;
+            let (bytes, anchors, _) = simulate_capture(&scenario.name, a.run)?;
+            let text = anchors.to_toml(&scenario.name)?;
+            outputs.write(&a.out, &bytes, true)?;
+            outputs.write(&anchors_path, text.as_bytes(), named)?;
+        }
+        ScenarioModel::Ungm { .. } => {
+            return Err(format!(
+                "`{}` is a benchmark without a radio: nothing to capture",
+                scenario.name
+            )
+            .into());
+        }
+        ScenarioModel::Bearing(d) => {
+            let mut o = CaptureOptions {
+                run: a.run,
+                wild_fraction: a.wild,
+                bias_deg: a.bias_deg.unwrap_or(0.0),
+                corrupt_fraction: a.corrupt.unwrap_or(0.0),
+                drop_fraction: a.drop.unwrap_or(0.0),
+                ..CaptureOptions::default()
+            };
+            if let Some(text) = &a.origin {
+                o.origin = origin(text)?;
+            }
+            if let Some(text) = &a.start {
+                o.start = start(text)?;
+            }
+            if let Some(text) = &a.date {
+                o.date = date(text)?;
+            }
+            if let Some(text) = &a.format {
+                o.format = format(text)?;
+            }
+            let bytes = drive_capture(&scenario, &o)?;
+            outputs.write(&a.out, &bytes, true)?;
+            note(&format!(
+                "{} bytes, {} {} bearings; the route's first point at {:.6},{:.6}",
+                bytes.len(),
+                d.route.len(),
+                o.format.name(),
+                o.origin.lat,
+                o.origin.lon
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `simulate --condition NAME`: one run of a field condition as a capture.
+fn field(a: &Args, name: &str) -> Outcome {
+    let c = crate::runs::field::condition(name).ok_or_else(|| {
+        let names: Vec<&str> = crate::runs::field::Condition::ALL
+            .iter()
+            .map(|c| c.name())
+            .collect();
+        format!(
+            "unknown field condition `{name}`; known: {}",
+            names.join(", ")
+        )
+    })?;
+    let origin = match &a.origin {
+        Some(text) => origin(text)?,
+        None => crate::runs::simulate::DEFAULT_ORIGIN,
+    };
+    let outputs = Outputs::new(std::iter::empty(), a.force);
+    let (bytes, truths) = crate::runs::field::capture(c, a.run, origin)?;
+    outputs.write(&a.out, &bytes, true)?;
+    let at: Vec<String> = truths
+        .iter()
+        .map(|t| format!("({:.0}, {:.0}) m", t.position[0], t.position[1]))
+        .collect();
+    note(&format!(
+        "{} bytes; emitters at {} from the route's first point",
+        bytes.len(),
+        if at.is_empty() {
+            "none".into()
+        } else {
+            at.join(", ")
+        }
+    ));
+    Ok(())
+}

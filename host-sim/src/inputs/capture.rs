@@ -1,0 +1,214 @@
+//! A capture's bytes decoded for a fix: the bridge fed chunk by chunk (the same code as the
+//! firmware), keeping the bearings as observations (32 bytes each: memory grows with the
+//! bearings kept, never with the capture), the vehicle track only when a map asks for it, and
+//! every record's refusals attributed to its kind so an error can say which records failed.
+
+use foxhunt_bridge::Frame;
+use foxhunt_bridge::bridge::{
+    BearingKind, BridgeConfig, BridgeCounters, Event, Receiver, VehicleFix,
+};
+use foxhunt_bridge::geo::LocalFrame;
+use foxhunt_bridge::stream::StreamCounters;
+use foxhunt_core::Bearing;
+use foxhunt_core::fix::locate::Observation;
+
+/// The DF source of a record kind: each kind of unit has its own mounting offset.
+fn source(kind: BearingKind) -> u8 {
+    match kind {
+        BearingKind::Pfoxb => 0,
+        BearingKind::Agrelo => 1,
+        BearingKind::KrakenCsv => 2,
+        BearingKind::KrakenXml => 3,
+    }
+}
+
+/// Sentences and records of one kind seen in a capture, and how many the bridge refused as
+/// malformed.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct KindTally {
+    /// Seen.
+    pub seen: u32,
+    /// Refused with a bad or out-of-range field.
+    pub malformed: u32,
+    /// Saying the receiver has no fix (GPS only).
+    pub no_fix: u32,
+}
+
+/// Everything decoded from a capture.
+#[derive(Debug, Clone, Default)]
+pub struct Decoded {
+    /// The bearings in the local frame, with their times, frequencies and DF sources.
+    pub observations: Vec<Observation>,
+    /// Bridge time of the first bearing, ms (the origin of the observations' times).
+    pub first_ms: Option<i64>,
+    /// The vehicle's fixes, kept only when a map asks for them.
+    pub track: Vec<VehicleFix>,
+    /// Vehicle fixes seen.
+    pub fixes: u64,
+    /// The local frame, if any fix arrived.
+    pub frame: Option<LocalFrame>,
+    /// Stream counters.
+    pub stream: StreamCounters,
+    /// Bridge counters.
+    pub bridge: BridgeCounters,
+    /// GPS position sentences seen.
+    pub gps: KindTally,
+    /// Bearing records seen.
+    pub bearing_records: KindTally,
+    /// What a DF unit running foxhunt's firmware said (its own sentences in the capture).
+    pub unit: crate::inputs::unit::UnitLog,
+}
+
+/// Whether a frame carries a GPS position, a bearing, or something else.
+enum Kind {
+    Gps,
+    Bearing,
+    Other,
+}
+
+fn kind(f: &Frame<'_>) -> Kind {
+    match f {
+        Frame::Nmea(text) => match text.get(2..5) {
+            _ if text.starts_with('P') => {
+                if text.starts_with("PFOXB") {
+                    Kind::Bearing
+                } else {
+                    Kind::Other
+                }
+            }
+            Some("GGA" | "RMC" | "GLL" | "GNS") => Kind::Gps,
+            _ => Kind::Other,
+        },
+        Frame::Agrelo(_) | Frame::KrakenCsv(_) | Frame::KrakenXml(_) => Kind::Bearing,
+        Frame::Mt(_) => Kind::Other,
+    }
+}
+
+/// The bridge fed byte by byte or chunk by chunk, keeping what a fix needs.
+pub struct Decoder {
+    rx: Receiver<0>,
+    /// What has been decoded so far.
+    pub decoded: Decoded,
+    keep_track: bool,
+}
+
+impl Decoder {
+    /// A decoder; `keep_track` keeps every vehicle fix (for maps).
+    pub fn new(config: BridgeConfig, keep_track: bool) -> Self {
+        Self {
+            rx: Receiver::new(config, []),
+            decoded: Decoded::default(),
+            keep_track,
+        }
+    }
+
+    /// Feed bytes as they arrive.
+    pub fn feed(&mut self, bytes: &[u8]) {
+        let (demux, bridge) = (&mut self.rx.demux, &mut self.rx.bridge);
+        let (d, keep) = (&mut self.decoded, self.keep_track);
+        demux.feed(bytes, &mut |f| push(bridge, &f, d, keep));
+    }
+
+    /// The line went quiet: settle frames waiting on look-ahead.
+    pub fn idle(&mut self) {
+        self.rx.demux.idle();
+        let (d, keep) = (&mut self.decoded, self.keep_track);
+        while let Some(f) = self.rx.demux.next_frame() {
+            push(&mut self.rx.bridge, &f, d, keep);
+        }
+        self.snapshot();
+    }
+
+    /// End of the stream: frames still buffered are delivered and bearings waiting for a
+    /// later fix are placed with the fixes there are. Idempotent.
+    pub fn end(&mut self) {
+        let (demux, bridge) = (&mut self.rx.demux, &mut self.rx.bridge);
+        let (d, keep) = (&mut self.decoded, self.keep_track);
+        demux.finish_into(&mut |f| push(bridge, &f, d, keep));
+        bridge.finish(&mut |e| absorb(d, e, keep));
+        self.snapshot();
+    }
+
+    /// End of the stream: everything decoded.
+    pub fn finish(mut self) -> Decoded {
+        self.end();
+        self.decoded
+    }
+
+    /// Take one NMEA sentence body (no `$`, checksum or line end) as if it had come on the
+    /// line: how gpsd's positions and headings reach the bridge, between the line's bytes.
+    pub fn push_sentence(&mut self, body: &str) {
+        let (d, keep) = (&mut self.decoded, self.keep_track);
+        push(&mut self.rx.bridge, &Frame::Nmea(body), d, keep);
+    }
+
+    /// Bring the frame and counters up to date (before a fix is computed mid-stream).
+    pub fn snapshot(&mut self) {
+        self.decoded.frame = self.rx.bridge.local_frame().copied();
+        let (s, b) = self.rx.counters();
+        self.decoded.stream = *s;
+        self.decoded.bridge = *b;
+    }
+}
+
+fn absorb(d: &mut Decoded, e: Event, keep_track: bool) {
+    match e {
+        Event::Bearing(b) => {
+            let t0 = *d.first_ms.get_or_insert(b.time_ms);
+            d.observations.push(Observation {
+                bearing: b.bearing,
+                time_s: (b.time_ms - t0) as f32 / 1000.0,
+                freq_mhz: (b.freq_mhz > 0.0).then_some(b.freq_mhz as f32),
+                source: source(b.kind),
+            });
+        }
+        Event::Fix(f) => {
+            d.fixes += 1;
+            if keep_track {
+                d.track.push(f);
+            }
+        }
+        Event::Rssi(_) => {}
+    }
+}
+
+/// One frame into the bridge, its refusals attributed to its kind.
+fn push(bridge: &mut foxhunt_bridge::Bridge<0>, f: &Frame<'_>, d: &mut Decoded, keep_track: bool) {
+    if let Frame::Nmea(text) = f
+        && d.unit.push(text)
+    {
+        return;
+    }
+    let before = *bridge.counters();
+    bridge.push(f, &mut |e| absorb(d, e, keep_track));
+    let after = bridge.counters();
+    let malformed =
+        (after.bad_field - before.bad_field) + (after.bad_position - before.bad_position);
+    let tally = match kind(f) {
+        Kind::Gps => &mut d.gps,
+        Kind::Bearing => &mut d.bearing_records,
+        Kind::Other => return,
+    };
+    tally.seen += 1;
+    tally.malformed += malformed;
+    tally.no_fix += after.no_fix_sentences - before.no_fix_sentences;
+}
+
+/// Decode whole captures (bytes as a UART delivered them).
+pub fn decode(bytes: &[u8], config: BridgeConfig, keep_track: bool) -> Decoded {
+    let mut dec = Decoder::new(config, keep_track);
+    dec.feed(bytes);
+    dec.finish()
+}
+
+impl Decoded {
+    /// The bearings alone.
+    pub fn bearings(&self) -> impl ExactSizeIterator<Item = &Bearing> + Clone {
+        self.observations.iter().map(|o| &o.bearing)
+    }
+
+    /// The bearings as a list, each with noise `sigma` (radians).
+    pub fn bearings_with_sigma(&self, sigma: f32) -> Vec<Bearing> {
+        self.bearings().map(|b| Bearing { sigma, ..*b }).collect()
+    }
+}

@@ -1,0 +1,11 @@
+//! What comes in: capture files and live lines decoded through the bridge, positions from
+//! gpsd, a KrakenSDR's web pages, a DF unit's own sentences, and the side files (calibration,
+//! roads).
+
+pub mod calibration;
+pub mod capture;
+pub mod files;
+pub mod gpsd;
+pub mod kraken_http;
+pub mod roads;
+pub mod unit;

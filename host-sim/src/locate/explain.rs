@@ -1,0 +1,131 @@
+//! Why a capture gives no fix, in words a user can act on.
+
+use crate::inputs::capture::Decoded;
+use foxhunt_core::fix::locate::NoEmitter;
+use foxhunt_core::{Bearing, Error};
+
+/// Why a capture gives no position for the vehicle, in words a user can act on.
+pub(crate) fn no_vehicle_position(d: &Decoded) -> String {
+    let g = d.gps;
+    if g.seen == 0 {
+        let bad = d.stream.bad_checksum + d.stream.malformed;
+        return if bad > 0 {
+            format!(
+                "no GPS fix: no GGA/RMC/GLL/GNS sentence decoded ({bad} sentences failed their \
+                 checksum or framing)"
+            )
+        } else {
+            "no GPS fix: the capture holds no GGA/RMC/GLL/GNS sentence, so bearings cannot be \
+             placed"
+                .into()
+        };
+    }
+    format!(
+        "no GPS fix: {} position sentences, {} saying the receiver has no fix, {} with a \
+         malformed or out-of-range field",
+        g.seen, g.no_fix, g.malformed
+    )
+}
+
+/// Why a capture with a vehicle track gives no usable bearing.
+pub(crate) fn no_bearing(d: &Decoded) -> String {
+    let (r, b) = (d.bearing_records, &d.bridge);
+    if r.seen == 0 {
+        return "no bearing record in the capture (no $PFOXB, Agrelo or KrakenSDR record)".into();
+    }
+    let mut why = Vec::new();
+    let mut reason = |n: u32, text: &str| {
+        if n > 0 {
+            why.push(format!("{n} {text}"));
+        }
+    };
+    reason(r.malformed, "with a malformed or out-of-range field");
+    reason(b.low_quality, "at or below the quality gate");
+    reason(b.no_heading, "relative with no heading to turn them by");
+    reason(b.no_bearing, "saying the DF unit had no bearing");
+    reason(b.no_fix, "before any GPS fix");
+    reason(
+        b.stale_fix,
+        "with no GPS fix within the allowed gap of their time",
+    );
+    reason(b.late, "older than the GPS fixes kept");
+    reason(
+        b.turning,
+        "taken while the vehicle turned faster than the yaw-rate gate",
+    );
+    format!(
+        "no usable bearing: of {} bearing records, {}",
+        r.seen,
+        if why.is_empty() {
+            "none reached the bridge".into()
+        } else {
+            why.join(", ")
+        }
+    )
+}
+
+/// Whether nearly all of at least five bearings point away from where their lines cross (the
+/// pseudo-linear fix, which treats a bearing as an undirected line): the sign of a reversed or
+/// mirrored DF convention. Fewer, or a mixed picture, is a geometry problem instead.
+fn points_away(bearings: &[Bearing]) -> bool {
+    let Ok(f) = foxhunt_core::fix::ple::ple(bearings) else {
+        return false;
+    };
+    let away = bearings
+        .iter()
+        .filter(|b| b.residual(&f.position).cos() < 0.0)
+        .count();
+    bearings.len() >= 5 && 10 * away >= 9 * bearings.len()
+}
+
+/// Why the bearings give no fix, in words a user can act on.
+pub fn explain(e: Error, bearings: &[Bearing]) -> String {
+    match e {
+        Error::TooFewMeasurements if bearings.len() == 1 => {
+            "only one usable bearing: a fix needs at least two bearings from different places"
+                .into()
+        }
+        Error::TooFewMeasurements => "too few usable bearings for a fix".into(),
+        Error::ParallelBearings => "all bearings are parallel: they never cross, so the range is \
+             unknown; drive across the line of bearing"
+            .into(),
+        Error::StationaryVehicle => {
+            "the vehicle never moved: bearings from one place give a direction, not a position"
+                .into()
+        }
+        _ if points_away(bearings) => "the bearings point away from where their lines cross \
+             (they meet behind the vehicle): is the DF unit's angle convention reversed (180 \
+             degrees) or mirrored?"
+            .into(),
+        Error::ShallowCrossing => {
+            "the bearings cross too shallowly for a fix; drive further across the line of bearing"
+                .into()
+        }
+        Error::DegenerateGeometry => "the bearings do not pin down a point (their information is \
+             singular); drive across the line of bearing"
+            .into(),
+        Error::BehindVehicle => "the bearings meet behind the vehicle: no emitter there".into(),
+        e => format!("no fix: {e}"),
+    }
+}
+
+/// Why a channel of `n` bearings has no consistent emitter, in words.
+pub(crate) fn no_emitter(why: NoEmitter, n: u32, bearings: &[Bearing]) -> String {
+    match why {
+        NoEmitter::TooFew if n <= 1 => {
+            explain(Error::TooFewMeasurements, bearings.get(..1).unwrap_or(&[]))
+        }
+        NoEmitter::NoConsensus => "no consistent emitter: no point has more bearings agreeing \
+             than chance would give (noise, or bearings of nothing)"
+            .into(),
+        NoEmitter::TooNoisy => {
+            "no consistent emitter: the bearings scatter by more than 10 degrees about any point"
+                .into()
+        }
+        NoEmitter::TooFew => format!(
+            "no consistent emitter: {n} bearings are too few to estimate their noise and check \
+             the fit (at least 5 that cross well)"
+        ),
+        NoEmitter::Geometry(e) => format!("no consistent emitter: {}", explain(e, bearings)),
+    }
+}

@@ -1,0 +1,235 @@
+//! `foxhunt locate` on a live line (a serial device, or standard input fed by `cat
+//! /dev/ttyUSB0 | foxhunt locate -`): the fix is updated as the bytes arrive.
+//!
+//! A reader thread hands the bytes over in chunks as the line delivers them; the decoder takes
+//! every chunk already waiting, then, if new bearings arrived, recomputes the fix and prints
+//! one line (a JSON object with `--json`): the fix, or why there is none yet (`{"used": n,
+//! "error": "..."}`), with the guidance advice (where to drive next and why, or "good enough"
+//! when the stop rule holds; [`crate::guidance::guide`]). A slow line gets an update per bearing; a fast pipe
+//! gets one per batch, so a replayed hour of bearings costs a few solves, not one per bearing.
+//! When no byte comes for 100 ms the demultiplexer is told the line is idle (a frame waiting
+//! on look-ahead is delivered), and `--quiet-exit` counts from the last byte.
+//!
+//! The bearings' line may be a KrakenSDR's web page ([`crate::kraken_http`]: its new whole
+//! records are the line's bytes), and positions and headings may come from gpsd beside it
+//! ([`crate::gpsd`]: its reports become sentences pushed into the same bridge between the
+//! line's chunks). Either way only new bearings make an update line, or a new `$PFOXF` of a DF
+//! unit running foxhunt's firmware: every line (`--json`: `unit`, also when there is no fix
+//! yet) carries what the unit said ([`crate::unit`]).
+
+use crate::estimate::options::LocateOptions;
+use crate::guidance::guide::Guide;
+use crate::inputs::capture::{Decoded, Decoder};
+use crate::inputs::gpsd::{GpsdAddress, Report, Watch};
+use crate::inputs::kraken_http::KrakenUrl;
+use crate::locate::locate_guided;
+use crate::outputs::terminal::{Out, Stop, note};
+use foxhunt_bridge::BridgeConfig;
+use std::io::{ErrorKind, Read};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+/// Where live bytes come from.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum LiveSource {
+    /// A serial device at a baud rate.
+    Serial {
+        /// Device path.
+        path: String,
+        /// Baud rate.
+        baud: u32,
+    },
+    /// Standard input.
+    Stdin,
+    /// A KrakenSDR's web server, polled.
+    Kraken(KrakenUrl),
+}
+
+/// How to read a live line.
+#[derive(Debug, Clone)]
+pub struct LiveOptions {
+    /// The line.
+    pub source: LiveSource,
+    /// A gpsd giving positions and headings beside the line.
+    pub gpsd: Option<GpsdAddress>,
+    /// Stop after this long without a byte (`None`: read until the line closes).
+    pub quiet_exit: Option<Duration>,
+    /// How fixes are computed.
+    pub locate: LocateOptions,
+    /// Print updates as JSON lines.
+    pub json: bool,
+    /// Keep the vehicle track (for maps at the end).
+    pub keep_track: bool,
+}
+
+/// A read's outcome, sent from the reader thread.
+enum Chunk {
+    Bytes(Vec<u8>),
+    /// Sentence bodies from gpsd.
+    Sentences(Vec<String>),
+    End,
+    Failed(String),
+}
+
+/// How long a read waits before the line counts as idle.
+const IDLE: Duration = Duration::from_millis(100);
+
+/// Start the thread that polls a KrakenSDR: each poll's new records are a chunk.
+fn kraken(url: &KrakenUrl, tx: mpsc::SyncSender<Chunk>) -> Result<(), String> {
+    let url = url.clone();
+    std::thread::Builder::new()
+        .name("foxhunt-kraken".into())
+        .spawn(move || {
+            crate::inputs::kraken_http::poll(
+                &url,
+                |p| p.records.is_empty() || tx.send(Chunk::Bytes(p.records)).is_ok(),
+                note,
+            )
+        })
+        .map(|_| ())
+        .map_err(|e| format!("cannot start the KrakenSDR poller: {e}"))
+}
+
+/// Connect to gpsd (an error now is the command's error) and start the thread that reads it.
+fn gpsd(addr: &GpsdAddress, tx: mpsc::SyncSender<Chunk>) -> Result<(), String> {
+    let watch = Watch::connect(addr)?;
+    let name = addr.to_string();
+    std::thread::Builder::new()
+        .name("foxhunt-gpsd".into())
+        .spawn(move || {
+            let (mut malformed, mut open) = (0u32, true);
+            let r = watch.run(|r| match r {
+                Report::Sentences(v) => {
+                    open = tx.send(Chunk::Sentences(v)).is_ok();
+                    open
+                }
+                Report::Malformed => {
+                    malformed += 1;
+                    true
+                }
+                Report::NoFix | Report::Other => true,
+            });
+            if open {
+                let why = r.err().unwrap_or_else(|| "closed the connection".into());
+                note(&format!(
+                    "gpsd at {name}: {why}; no more positions from it ({malformed} malformed \
+                     reports skipped)"
+                ));
+            }
+        })
+        .map(|_| ())
+        .map_err(|e| format!("cannot start the gpsd reader: {e}"))
+}
+
+/// Start the threads that read the line (and gpsd).
+fn reader(
+    source: &LiveSource,
+    gpsd_at: Option<&GpsdAddress>,
+) -> Result<mpsc::Receiver<Chunk>, String> {
+    let (tx, rx) = mpsc::sync_channel::<Chunk>(16);
+    if let Some(addr) = gpsd_at {
+        gpsd(addr, tx.clone())?;
+    }
+    let (mut port, name): (Box<dyn Read + Send>, String) = match source {
+        LiveSource::Serial { path, baud } => (
+            serialport::new(path, *baud)
+                .timeout(IDLE)
+                .open()
+                .map_err(|e| format!("cannot open {path} at {baud} baud: {e}"))?,
+            path.clone(),
+        ),
+        LiveSource::Stdin => (Box::new(std::io::stdin()), "standard input".into()),
+        LiveSource::Kraken(url) => {
+            kraken(url, tx)?;
+            return Ok(rx);
+        }
+    };
+    std::thread::Builder::new()
+        .name("foxhunt-line".into())
+        .spawn(move || {
+            let mut buf = vec![0u8; 4096];
+            loop {
+                let msg = match port.read(&mut buf) {
+                    Ok(0) => Chunk::End,
+                    Ok(n) => Chunk::Bytes(buf[..n].to_vec()),
+                    Err(e) if matches!(e.kind(), ErrorKind::TimedOut | ErrorKind::WouldBlock) => {
+                        continue;
+                    }
+                    Err(e) if e.kind() == ErrorKind::Interrupted => continue,
+                    // A hung-up pseudo-terminal or unplugged adapter ends the stream.
+                    Err(e) if e.kind() == ErrorKind::BrokenPipe || e.raw_os_error() == Some(5) => {
+                        Chunk::End
+                    }
+                    Err(e) => Chunk::Failed(format!("reading {name}: {e}")),
+                };
+                let last = !matches!(msg, Chunk::Bytes(_));
+                if tx.send(msg).is_err() || last {
+                    return;
+                }
+            }
+        })
+        .map_err(|e| format!("cannot start the reader: {e}"))?;
+    Ok(rx)
+}
+
+/// Read the line until it closes or stays quiet, printing each updated fix and `guide`'s advice
+/// to `out`; what was decoded, for the final report.
+pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<Decoded, Stop> {
+    o.locate.check()?;
+    let rx = reader(&o.source, o.gpsd.as_ref())?;
+    let mut dec = Decoder::new(BridgeConfig::default(), o.keep_track);
+    let mut last_byte = Instant::now();
+    let mut reported = (0usize, 0u32);
+    let mut ended = false;
+    while !ended {
+        // Block for the first chunk (or the idle timeout), then take all that is waiting.
+        let mut next = rx.recv_timeout(IDLE);
+        loop {
+            match next {
+                Ok(Chunk::Bytes(b)) => {
+                    last_byte = Instant::now();
+                    dec.feed(&b);
+                }
+                Ok(Chunk::Sentences(v)) => {
+                    for s in &v {
+                        dec.push_sentence(s);
+                    }
+                }
+                Ok(Chunk::End) | Err(mpsc::RecvTimeoutError::Disconnected) => {
+                    ended = true;
+                    break;
+                }
+                Ok(Chunk::Failed(e)) => return Err(Stop::Error(e)),
+                Err(mpsc::RecvTimeoutError::Timeout) => {
+                    dec.idle();
+                    ended = o.quiet_exit.is_some_and(|q| last_byte.elapsed() >= q);
+                    break;
+                }
+            }
+            next = match rx.try_recv() {
+                Ok(c) => Ok(c),
+                Err(mpsc::TryRecvError::Empty) => break,
+                Err(mpsc::TryRecvError::Disconnected) => Err(mpsc::RecvTimeoutError::Disconnected),
+            };
+        }
+        if ended {
+            // Bearings still waiting for a later fix are placed with the fixes there are.
+            dec.end();
+        }
+        // New bearings, or a new fix sentence of a DF unit (its user port carries no bearings).
+        let n = (dec.decoded.observations.len(), dec.decoded.unit.fixes);
+        if n != reported {
+            reported = n;
+            dec.snapshot();
+            let line = match (locate_guided(&dec.decoded, &o.locate, guide), o.json) {
+                (Ok(l), true) => serde_json::to_string(&l.report).map_err(|e| e.to_string())?,
+                (Ok(l), false) => l.report.update_line(),
+                (Err(e), true) => serde_json::to_string(&e).map_err(|e| e.to_string())?,
+                (Err(e), false) => e.line(),
+            };
+            out.line(&line)?;
+            out.flush()?;
+        }
+    }
+    Ok(dec.finish())
+}

@@ -1,0 +1,206 @@
+//! What `locate` reports (the `--json` object; field names are stable) and what the maps
+//! draw, in latitude and longitude and in the drive's local metres.
+
+use crate::inputs::capture::Decoded;
+use crate::inputs::unit::UnitReport;
+use crate::locate::advice::LocatedAdvice;
+use foxhunt_bridge::geo::LocalFrame;
+use foxhunt_bridge::nmea::LatLon;
+use foxhunt_core::fix::ellipse::Ellipse;
+use foxhunt_core::fix::locate::Source;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// An ellipse in a report: semi-axes and the major axis' direction.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct EllipseReport {
+    /// Semi-major axis, metres.
+    pub major_m: f32,
+    /// Semi-minor axis, metres.
+    pub minor_m: f32,
+    /// Orientation of the major axis, degrees clockwise from north.
+    pub orientation_deg: f32,
+    /// Probability inside.
+    pub confidence: f32,
+}
+
+impl From<&Ellipse> for EllipseReport {
+    fn from(e: &Ellipse) -> Self {
+        Self {
+            major_m: e.major,
+            minor_m: e.minor,
+            orientation_deg: (90.0 - e.orientation.to_degrees()).rem_euclid(180.0),
+            confidence: e.confidence,
+        }
+    }
+}
+
+/// A latitude and longitude in a report.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct LatLonReport {
+    /// Degrees.
+    pub lat: f64,
+    /// Degrees.
+    pub lon: f64,
+}
+
+/// A located source: an emitter, or another point some bearings agree on (field names are
+/// stable).
+#[derive(Debug, Clone, Serialize)]
+pub struct SourceReport {
+    /// The channel's frequency, MHz (null for bearings without one).
+    pub freq_mhz: Option<f32>,
+    /// Latitude, degrees.
+    pub lat: f64,
+    /// Longitude, degrees.
+    pub lon: f64,
+    /// East of the local origin, metres.
+    pub east_m: f32,
+    /// North of the local origin, metres.
+    pub north_m: f32,
+    /// The confidence ellipse.
+    pub ellipse: EllipseReport,
+    /// Circular error probable (50 %), metres.
+    pub cep50_m: f32,
+    /// The bound at the fix, metres: the bias-aware CRLB (offset estimated) for `ml-robust`,
+    /// the plain CRLB of the geometry otherwise.
+    pub crlb_m: f32,
+    /// The DF unit's mounting offset estimated with the fix, degrees (null: not estimated).
+    pub bias_deg: Option<f32>,
+    /// Its standard deviation, degrees.
+    pub bias_sd_deg: Option<f32>,
+    /// Bearing noise used, degrees.
+    pub sigma_deg: f32,
+    /// Whether `sigma_deg` was estimated from the residuals.
+    pub sigma_estimated: bool,
+    /// Bearings used.
+    pub used: u32,
+    /// Their effective number (correlated bearings count less; null: not estimated).
+    pub effective: Option<f32>,
+    /// Whether the residuals agree with the noise model (null: the method does not check).
+    pub consistent: Option<bool>,
+    /// Seconds of the first and last bearing used, from the first bearing of the capture.
+    pub time_span_s: Option<[f32; 2]>,
+    /// Why an other source is not the emitter (other sources only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub why: Option<&'static str>,
+}
+
+/// One channel and what it came to.
+#[derive(Debug, Clone, Serialize)]
+pub struct ChannelSummary {
+    /// Frequency, MHz (null for bearings without one).
+    pub freq_mhz: Option<f32>,
+    /// Bearings in the channel.
+    pub bearings: u32,
+    /// `emitter`, or why there is none.
+    pub outcome: String,
+}
+
+/// What `locate` found (the `--json` object; field names are stable).
+#[derive(Debug, Clone, Serialize)]
+pub struct LocateReport {
+    /// The estimator (the registry's name).
+    pub method: &'static str,
+    /// One emitter per channel that has one.
+    pub emitters: Vec<SourceReport>,
+    /// Other points bearings agree on (reflections, second transmitters on a channel).
+    pub other_sources: Vec<SourceReport>,
+    /// Every channel and its outcome.
+    pub channels: Vec<ChannelSummary>,
+    /// Bearings decoded.
+    pub used: u32,
+    /// Measurements and frames rejected, by reason.
+    pub rejected: BTreeMap<&'static str, u32>,
+    /// The local frame's origin (the first vehicle fix; without one, the unit's fix).
+    pub origin: LatLonReport,
+    /// Where to drive next and whether to stop, for every emitter (absent until a
+    /// [`crate::guidance::guide::Guide`] has advised).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub advice: Option<LocatedAdvice>,
+    /// Why there is no advice, when guidance was asked and gave none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub advice_error: Option<String>,
+    /// What a DF unit running foxhunt's firmware said about its own fix, when the capture
+    /// holds its sentences.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub unit: Option<UnitReport>,
+}
+
+/// A source as the maps draw it, in local metres.
+#[derive(Debug, Clone, Copy)]
+pub struct Drawn {
+    /// Position.
+    pub position: [f32; 2],
+    /// Its ellipse.
+    pub ellipse: Ellipse,
+    /// An other source, not an emitter.
+    pub other: bool,
+}
+
+/// A fix: the report and what the maps draw.
+#[derive(Debug, Clone)]
+pub struct Located {
+    /// The report.
+    pub report: LocateReport,
+    /// Every source, emitters first.
+    pub drawn: Vec<Drawn>,
+    /// The method's particles (empty for batch fixes, the EKF and the pipeline).
+    pub cloud: Vec<[f32; 2]>,
+    /// The field pipeline's emitters (in the report's order), which guidance starts from
+    /// (empty for the other methods: the stop rule wants a fix whose consistency and
+    /// independent bearings were checked).
+    pub emitters: Vec<Source>,
+}
+
+/// No fix yet, as a live update reports it (`--json`: `used`, `error` and the advice made from
+/// the bearings alone).
+#[derive(Debug, Clone, Serialize)]
+pub struct NoFix {
+    /// Bearings decoded.
+    pub used: u32,
+    /// Why there is no fix.
+    pub error: String,
+    /// Where to drive (across the line of bearing) before there is a fix.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub advice: Option<LocatedAdvice>,
+    /// Why there is no advice either.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub advice_error: Option<String>,
+    /// What a DF unit running foxhunt's firmware said, as in [`LocateReport::unit`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub unit: Option<UnitReport>,
+}
+
+/// Rejections by reason, every reason listed (zero included) so scripts can rely on the keys.
+pub fn rejections(d: &Decoded) -> BTreeMap<&'static str, u32> {
+    let (s, b) = (&d.stream, &d.bridge);
+    BTreeMap::from([
+        ("bad_checksum", s.bad_checksum + s.bad_fcs),
+        ("malformed", s.malformed + b.bad_field + b.short_mt),
+        ("too_long", s.too_long),
+        ("overlapping_frame", s.overlapping),
+        ("truncated", s.truncated),
+        ("garbage_bytes", s.garbage_bytes),
+        ("gps_no_fix", b.no_fix_sentences),
+        ("bad_position", b.bad_position),
+        ("low_quality", b.low_quality),
+        ("no_heading", b.no_heading),
+        ("no_bearing", b.no_bearing),
+        ("no_fix", b.no_fix),
+        ("stale_fix", b.stale_fix),
+        ("late", b.late),
+        ("turning", b.turning),
+        ("outlier", 0),
+        ("repeated", 0),
+        ("time_backwards", 0),
+        ("no_consistent_emitter", 0),
+    ])
+}
+
+/// The geodetic position of local metres `p` in `frame` (the origin when out of range).
+pub fn geodetic(frame: &LocalFrame, p: [f32; 2]) -> LatLon {
+    frame
+        .to_geodetic([f64::from(p[0]), f64::from(p[1])])
+        .unwrap_or(frame.origin)
+}

@@ -1,0 +1,11 @@
+//! What goes out: the terminal's words and standard output, files written only where asked,
+//! benchmark tables, maps (GeoJSON, KML, SVG), the decoded frames, and the live map served to
+//! a browser.
+
+pub mod files;
+pub mod frames;
+pub mod maps;
+pub mod serve;
+pub mod tables;
+pub mod terminal;
+pub mod text;

@@ -1,0 +1,343 @@
+//! What the live map shows at one moment, built from the bearings decoded so far: the route,
+//! the latest bearing rays, every emitter and other source of the field pipeline with its
+//! ellipse, the guidance advice, the CEP50 history and, when the input carries a DF unit's own
+//! sentences, the unit's fix as the unit said it. Everything is in latitude and longitude
+//! (the page draws, it does not compute).
+
+use crate::estimate::Pipeline;
+use crate::estimate::options::LocateOptions;
+use crate::guidance::guide::Guide;
+use crate::inputs::capture::Decoded;
+use crate::inputs::unit::UnitReport;
+use crate::locate::report::geodetic;
+use foxhunt_bridge::geo::LocalFrame;
+use foxhunt_bridge::nmea::LatLon;
+use foxhunt_core::fix::ellipse::Ellipse;
+use foxhunt_core::fix::locate::{ChannelOutcome, LocateConfig, NoEmitter, Source};
+use serde::Serialize;
+
+/// Route points sent at most (the route is thinned evenly beyond).
+const ROUTE_POINTS: usize = 2000;
+/// Latest bearings drawn as rays.
+const RAYS: usize = 40;
+
+/// A latitude, longitude pair as Leaflet takes it.
+pub type LL = [f64; 2];
+
+/// A located source on the map.
+#[derive(Debug, Clone, Serialize)]
+pub struct MapSource {
+    /// Position.
+    pub at: LL,
+    /// Its ellipse (closed ring).
+    pub ellipse: Vec<LL>,
+    /// Confidence of the ellipse.
+    pub confidence: f32,
+    /// CEP50, metres.
+    pub cep50_m: f32,
+    /// Channel frequency, MHz.
+    pub freq_mhz: Option<f32>,
+    /// Bearings it holds.
+    pub used: u32,
+    /// Residuals consistent with the noise model.
+    pub consistent: bool,
+    /// The DF unit's offset, degrees, and its sd.
+    pub offset_deg: [f32; 2],
+}
+
+/// The advice on the map.
+#[derive(Debug, Clone, Serialize)]
+pub struct MapAdvice {
+    /// The advice's fields.
+    #[serde(flatten)]
+    pub report: crate::guidance::AdviceReport,
+    /// The point to drive to.
+    pub waypoint_ll: LL,
+    /// Where the vehicle is.
+    pub vehicle_ll: LL,
+    /// The next turn's place, on roads.
+    pub turn_ll: Option<LL>,
+    /// Each emitter's verdict, in the order of the map's emitters.
+    pub emitters: Vec<crate::guidance::guide::VerdictReport>,
+    /// The emitters the move is for (numbered from 1; empty when every one is good enough).
+    pub for_emitters: Vec<usize>,
+    /// The advice in one line.
+    pub line: String,
+}
+
+/// The DF unit's own fix (its latest `$PFOXF` with a position), beside the host's.
+#[derive(Debug, Clone, Serialize)]
+pub struct MapUnit {
+    /// What the unit said, as `locate --json` reports it under `unit`.
+    #[serde(flatten)]
+    pub report: UnitReport,
+    /// Its position, when the fix shown has one.
+    pub at: Option<LL>,
+    /// Its 95 % ellipse (closed ring; empty without a position or when too large to draw).
+    pub ellipse: Vec<LL>,
+    /// The report in one line.
+    pub line: String,
+}
+
+/// One update of the live map (the `/state` body and every server-sent event).
+#[derive(Debug, Clone, Serialize, Default)]
+pub struct MapState {
+    /// Update number (0: nothing yet).
+    pub update: u64,
+    /// Bearings so far.
+    pub bearings: usize,
+    /// The local origin.
+    pub origin: Option<LL>,
+    /// The vehicle's route.
+    pub route: Vec<LL>,
+    /// The latest bearings: from the vehicle to a point along the bearing.
+    pub rays: Vec<[LL; 2]>,
+    /// One emitter per channel.
+    pub emitters: Vec<MapSource>,
+    /// Other sources (reflections, a second transmitter on a channel).
+    pub others: Vec<MapSource>,
+    /// Why there is no fix, when there is none.
+    pub fix_error: Option<String>,
+    /// The suggested move.
+    pub advice: Option<MapAdvice>,
+    /// Why there is no advice, when there is none.
+    pub advice_error: Option<String>,
+    /// The DF unit's own fix, when the input carries its sentences.
+    pub unit: Option<MapUnit>,
+    /// (bearings, CEP50 m) of every update with a fix.
+    pub history: Vec<[f64; 2]>,
+    /// The input has ended.
+    pub done: bool,
+}
+
+fn ll(frame: &LocalFrame, p: [f32; 2]) -> LL {
+    let g = geodetic(frame, p);
+    [g.lat, g.lon]
+}
+
+fn ring(frame: &LocalFrame, s: &Source) -> Vec<LL> {
+    let e: &Ellipse = &s.ellipse;
+    let (c, si) = (e.orientation.cos(), e.orientation.sin());
+    (0..=72)
+        .map(|k| {
+            let t = k as f32 * std::f32::consts::TAU / 72.0;
+            let (a, b) = (e.major * t.cos(), e.minor * t.sin());
+            ll(
+                frame,
+                [
+                    s.position[0] + a * c - b * si,
+                    s.position[1] + a * si + b * c,
+                ],
+            )
+        })
+        .collect()
+}
+
+fn map_source(frame: &LocalFrame, s: &Source) -> MapSource {
+    MapSource {
+        at: ll(frame, s.position),
+        ellipse: ring(frame, s),
+        confidence: s.ellipse.confidence,
+        cep50_m: s.cep50,
+        freq_mhz: s.freq_mhz,
+        used: s.used,
+        consistent: s.consistent,
+        offset_deg: [s.bias.to_degrees(), s.bias_sd.to_degrees()],
+    }
+}
+
+/// Largest unit ellipse drawn, metres: a sentence may say anything that parses, and far
+/// beyond a hunt's scale the tangent plane no longer holds the ring (the panel still says it).
+const UNIT_ELLIPSE_MAX_M: f32 = 500_000.0;
+
+/// The ring of an ellipse of semi-axes `major`, `minor` metres, the major axis `orientation`
+/// degrees clockwise from north, around `at`; empty when it cannot be drawn.
+fn unit_ring(at: LatLon, major: f32, minor: f32, orientation_deg: f32) -> Vec<LL> {
+    // Also refuses NaN (the parser gives none, but the page must never get one).
+    if !(major.max(minor) <= UNIT_ELLIPSE_MAX_M && orientation_deg.is_finite()) {
+        return Vec::new();
+    }
+    let Ok(frame) = LocalFrame::new(at, 0.0) else {
+        return Vec::new();
+    };
+    let o = f64::from(orientation_deg).to_radians();
+    // East, north of the major axis and of the minor one.
+    let (u, v) = ([o.sin(), o.cos()], [o.cos(), -o.sin()]);
+    let (a, b) = (f64::from(major), f64::from(minor));
+    (0..=72)
+        .map(|k| {
+            let t = f64::from(k) * std::f64::consts::TAU / 72.0;
+            let (x, y) = (a * t.cos(), b * t.sin());
+            let g = frame
+                .to_geodetic([x * u[0] + y * v[0], x * u[1] + y * v[1]])
+                .ok()?;
+            Some([g.lat, g.lon])
+        })
+        .collect::<Option<Vec<LL>>>()
+        .unwrap_or_default()
+}
+
+fn map_unit(report: UnitReport) -> MapUnit {
+    let at = match (report.lat, report.lon) {
+        (Some(lat), Some(lon)) if lat.is_finite() && lon.is_finite() => Some([lat, lon]),
+        _ => None,
+    };
+    let ellipse = match (at, report.major_m, report.minor_m, report.orientation_deg) {
+        (Some([lat, lon]), Some(a), Some(b), Some(o)) => unit_ring(LatLon { lat, lon }, a, b, o),
+        _ => Vec::new(),
+    };
+    MapUnit {
+        line: report.line(),
+        at,
+        ellipse,
+        report,
+    }
+}
+
+/// The field pipeline on the observations, as `foxhunt locate` runs it.
+fn fix(d: &Decoded) -> Result<Pipeline, String> {
+    crate::estimate::pipeline(&d.observations, &LocateConfig::default(), 1)
+        .map_err(|e| e.to_string())
+}
+
+fn no_emitter(r: &Pipeline) -> String {
+    match r.channels().first().map(|c| c.outcome) {
+        Some(ChannelOutcome::NoConsistentEmitter(why)) => match why {
+            NoEmitter::NoConsensus => "no point gathers more bearings than luck would".into(),
+            NoEmitter::TooNoisy => "the bearings are too noisy for a fix".into(),
+            NoEmitter::TooFew => "too few bearings for a checked fix".into(),
+            NoEmitter::Geometry(e) => format!("no fix yet: {e}"),
+        },
+        _ => "no bearing yet".into(),
+    }
+}
+
+/// Build the map's state after `update` updates; `history` carries the CEP50 history from
+/// the last state; `guide` advises (with roads: a road turn).
+pub fn build(
+    d: &Decoded,
+    update: u64,
+    history: &[[f64; 2]],
+    guide: &mut Guide,
+    done: bool,
+) -> MapState {
+    let bearings: Vec<foxhunt_core::Bearing> = d.bearings().copied().collect();
+    let mut st = MapState {
+        update,
+        bearings: bearings.len(),
+        history: history.to_vec(),
+        done,
+        unit: d.unit.report().map(map_unit),
+        ..MapState::default()
+    };
+    let Some(frame) = d.frame else {
+        st.fix_error = Some("no GPS fix yet".into());
+        return st;
+    };
+    st.origin = Some([frame.origin.lat, frame.origin.lon]);
+    let stride = bearings.len().div_ceil(ROUTE_POINTS).max(1);
+    st.route = bearings
+        .iter()
+        .step_by(stride)
+        .chain(bearings.last())
+        .map(|b| ll(&frame, b.vehicle))
+        .collect();
+    let report = fix(d);
+    let sources: Vec<Source> = report
+        .as_ref()
+        .map(|r| r.emitters().to_vec())
+        .unwrap_or_default();
+    let emitter = sources.first().copied();
+    let reach = emitter
+        .map(|e| {
+            let v = bearings.last().map(|b| b.vehicle).unwrap_or([0.0; 2]);
+            1.5 * (e.position[0] - v[0]).hypot(e.position[1] - v[1])
+        })
+        .unwrap_or(3000.0)
+        .clamp(500.0, 20_000.0);
+    st.rays = bearings[bearings.len().saturating_sub(RAYS)..]
+        .iter()
+        .map(|b| {
+            let end = [
+                b.vehicle[0] + reach * b.theta.cos(),
+                b.vehicle[1] + reach * b.theta.sin(),
+            ];
+            [ll(&frame, b.vehicle), ll(&frame, end)]
+        })
+        .collect();
+    match &report {
+        Ok(r) => {
+            st.emitters = r.emitters().iter().map(|s| map_source(&frame, s)).collect();
+            st.others = r
+                .others()
+                .iter()
+                .map(|o| map_source(&frame, &o.source))
+                .collect();
+            if st.emitters.is_empty() {
+                st.fix_error = Some(no_emitter(r));
+            }
+        }
+        Err(e) => st.fix_error = Some(e.clone()),
+    }
+    if let Some(e) = emitter {
+        st.history.push([bearings.len() as f64, f64::from(e.cep50)]);
+    }
+    let Some(vehicle) = bearings.last().map(|b| b.vehicle) else {
+        st.advice_error = Some("no bearing yet".into());
+        return st;
+    };
+    match guide.advise_every(d, &sources, &LocateOptions::default()) {
+        Ok(g) => {
+            let a = g.advice;
+            st.advice = Some(MapAdvice {
+                report: a.report(),
+                waypoint_ll: ll(&frame, a.waypoint),
+                vehicle_ll: ll(&frame, vehicle),
+                turn_ll: a.turn.map(|t| ll(&frame, t.at)),
+                line: g.line_to(None),
+                emitters: g.emitters,
+                for_emitters: g.for_emitters,
+            })
+        }
+        Err(e) => st.advice_error = Some(e),
+    }
+    st
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_units_ellipse_points_along_its_orientation() {
+        let at = LatLon {
+            lat: 47.0,
+            lon: 8.0,
+        };
+        let ring = unit_ring(at, 400.0, 20.0, 90.0);
+        assert_eq!(ring.len(), 73);
+        // t = 0 lies on the major axis: 400 m east (90 deg clockwise from north).
+        let frame = LocalFrame::new(at, 0.0).unwrap();
+        let en = frame
+            .to_local(LatLon {
+                lat: ring[0][0],
+                lon: ring[0][1],
+            })
+            .unwrap();
+        assert!(
+            (en[0] - 400.0).abs() < 0.01 && en[1].abs() < 0.01,
+            "t = 0 at {en:?}"
+        );
+    }
+
+    #[test]
+    fn an_ellipse_beyond_drawing_is_left_undrawn() {
+        let at = LatLon {
+            lat: 47.0,
+            lon: 8.0,
+        };
+        assert!(unit_ring(at, 1.0e12, 1.0, 0.0).is_empty());
+        assert!(unit_ring(at, f32::NAN, 1.0, 0.0).is_empty());
+        assert!(unit_ring(at, 10.0, 1.0, f32::INFINITY).is_empty());
+    }
+}

@@ -1,0 +1,88 @@
+//! Standard output and standard error, one way for every command: output that ends quietly
+//! when its reader goes away and fails loudly when the disk is full, and a command's outcome.
+
+use std::io::{ErrorKind, Write};
+
+/// Why a command stopped early.
+#[derive(Debug)]
+pub enum Stop {
+    /// An error to print on one line (exit status 1).
+    Error(String),
+    /// Standard output's reader went away (`foxhunt ... | head`): end quietly, as Unix tools do.
+    Closed,
+}
+
+impl From<String> for Stop {
+    fn from(e: String) -> Self {
+        Stop::Error(e)
+    }
+}
+
+impl From<&str> for Stop {
+    fn from(e: &str) -> Self {
+        Stop::Error(e.to_string())
+    }
+}
+
+/// What every command returns.
+pub type Outcome = Result<(), Stop>;
+
+/// A line on standard error that never panics (a closed stderr loses the note, nothing else).
+pub fn note(line: &str) {
+    let _ = writeln!(std::io::stderr(), "{line}");
+}
+
+/// Standard output for reports: buffered, every error turned into a [`Stop`].
+pub struct Out {
+    inner: std::io::BufWriter<std::io::StdoutLock<'static>>,
+}
+
+impl Default for Out {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Out {
+    /// The process's standard output.
+    pub fn new() -> Self {
+        Self {
+            inner: std::io::BufWriter::new(std::io::stdout().lock()),
+        }
+    }
+
+    /// Write `text` as it is.
+    pub fn text(&mut self, text: &str) -> Outcome {
+        self.inner.write_all(text.as_bytes()).map_err(write_error)
+    }
+
+    /// Write one line.
+    pub fn line(&mut self, line: &str) -> Outcome {
+        self.text(line)?;
+        self.text("\n")
+    }
+
+    /// Push what is buffered to the reader (live updates, and before exit: a full disk shows
+    /// here).
+    pub fn flush(&mut self) -> Outcome {
+        self.inner.flush().map_err(write_error)
+    }
+}
+
+impl Write for Out {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.inner.write(buf)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+/// A write error on standard output as a [`Stop`].
+pub fn write_error(e: std::io::Error) -> Stop {
+    if e.kind() == ErrorKind::BrokenPipe {
+        Stop::Closed
+    } else {
+        Stop::Error(format!("cannot write to standard output: {e}"))
+    }
+}

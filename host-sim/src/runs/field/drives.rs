@@ -1,0 +1,276 @@
+//! The drives of the field conditions: routes, emitters and how each condition's bearings
+//! go wrong.
+
+use super::{Condition, DEG, FieldDrive, Truth, rng};
+use foxhunt_bridge::geo::LocalFrame;
+use foxhunt_bridge::nmea::LatLon;
+use foxhunt_core::fix::locate::Observation;
+use foxhunt_core::model::bearing::{Bearing, predicted, wrap};
+use foxhunt_core::random;
+use rand_xorshift::XorShiftRng;
+use std::f32::consts::PI;
+
+/// The U drive: `n` vehicle positions, 9 km round (0, 1500).
+pub fn u_route(n: usize) -> Vec<[f32; 2]> {
+    (0..n)
+        .map(|k| {
+            let s = 9000.0 * k as f32 / n as f32;
+            if s < 3000.0 {
+                [-1500.0 + s, 0.0]
+            } else if s < 6000.0 {
+                [1500.0, s - 3000.0]
+            } else {
+                [1500.0 - (s - 6000.0), 3000.0]
+            }
+        })
+        .collect()
+}
+
+/// SCENARIOS.md's L600.
+pub fn l600() -> Vec<[f32; 2]> {
+    crate::runs::scenario::route("L600", [0.0, 0.0]).unwrap_or_default()
+}
+
+fn bearing_to(target: [f32; 2], v: [f32; 2], error: f32, stated: f32) -> Bearing {
+    Bearing {
+        vehicle: v,
+        theta: wrap(predicted(&target, &v) + error),
+        sigma: stated,
+    }
+}
+
+/// Observations at 1 s spacing from bearings.
+fn timed(bearings: impl IntoIterator<Item = Bearing>, dt: f32) -> Vec<Observation> {
+    bearings
+        .into_iter()
+        .enumerate()
+        .map(|(k, b)| Observation::new(b, k as f32 * dt))
+        .collect()
+}
+
+const U_EMITTER: [f32; 2] = [0.0, 1500.0];
+
+/// A drive past one emitter: `sigma` noise (stated as `stated`), offset `bias`, a share
+/// `wild` of uniform bearings.
+fn simple(
+    route: &[[f32; 2]],
+    e: [f32; 2],
+    sigma: f32,
+    stated: f32,
+    bias: f32,
+    wild: f32,
+    rng: &mut XorShiftRng,
+) -> FieldDrive {
+    let bearings = route.iter().map(|v| {
+        if random::uniform(rng) < wild {
+            Bearing {
+                vehicle: *v,
+                theta: random::uniform_in(rng, -PI, PI),
+                sigma: stated,
+            }
+        } else {
+            bearing_to(e, *v, bias + sigma * random::normal(rng), stated)
+        }
+    });
+    FieldDrive {
+        observations: timed(bearings.collect::<Vec<_>>(), 1.0),
+        emitters: vec![Truth {
+            position: e,
+            freq_mhz: None,
+        }],
+        ghost: None,
+        bias,
+        sigma,
+    }
+}
+
+/// The 20 km L at `lat`, on the ellipsoid; `turned`: the convergence turned out.
+fn long_drive(lat: f64, turned: bool, rng: &mut XorShiftRng) -> FieldDrive {
+    let origin = LatLon { lat, lon: 10.0 };
+    let sigma = 2.0 * DEG;
+    let Ok(frame) = LocalFrame::new(origin, 0.0) else {
+        return FieldDrive {
+            observations: Vec::new(),
+            emitters: Vec::new(),
+            ghost: None,
+            bias: 0.0,
+            sigma,
+        };
+    };
+    let e = [6000.0f64, 4000.0];
+    let emitter = frame.to_geodetic(e).unwrap_or(origin);
+    let route: Vec<[f64; 2]> = (0..400)
+        .map(|k| {
+            let s = 50.0 * k as f64;
+            if s < 10_000.0 {
+                [s, 0.0]
+            } else {
+                [10_000.0, s - 10_000.0]
+            }
+        })
+        .collect();
+    let bearings: Vec<Bearing> = route
+        .iter()
+        .filter_map(|&v| {
+            let here = frame.to_geodetic(v).ok()?;
+            // The true azimuth at the vehicle: the emitter in the vehicle's own tangent plane.
+            let local = LocalFrame::new(here, 0.0).ok()?;
+            let t = local.to_local(emitter).ok()?;
+            let azimuth = t[0].atan2(t[1]) as f32 + sigma * random::normal(rng);
+            // The vehicle's north in the drive's frame: the convergence of the meridians.
+            let north = local.to_geodetic([0.0, 100.0]).ok()?;
+            let n = frame.to_local(north).ok()?;
+            let convergence = if turned {
+                ((n[0] - v[0]).atan2(n[1] - v[1])) as f32
+            } else {
+                0.0
+            };
+            Some(Bearing {
+                vehicle: [v[0] as f32, v[1] as f32],
+                theta: wrap(PI / 2.0 - (azimuth + convergence)),
+                sigma,
+            })
+        })
+        .collect();
+    FieldDrive {
+        observations: timed(bearings, 5.0),
+        emitters: vec![Truth {
+            position: [e[0] as f32, e[1] as f32],
+            freq_mhz: None,
+        }],
+        ghost: None,
+        bias: 0.0,
+        sigma,
+    }
+}
+
+/// The observations of run `run` of `condition`.
+pub fn simulate(condition: Condition, run: usize) -> FieldDrive {
+    let mut rng = rng(condition, run);
+    let rng = &mut rng;
+    let two = 2.0 * DEG;
+    let aoa = 3.801e-4f32.sqrt();
+    match condition {
+        Condition::Bias2 => simple(&u_route(240), U_EMITTER, two, two, 2.0 * DEG, 0.0, rng),
+        Condition::Bias4 => simple(&u_route(240), U_EMITTER, two, two, 4.0 * DEG, 0.0, rng),
+        Condition::Bias4Short => simple(&l600(), [1200.0, 800.0], aoa, aoa, 4.0 * DEG, 0.0, rng),
+        Condition::Multipath => {
+            let ghost = [900.0, 1800.0];
+            let route = u_route(240);
+            let bearings = route.iter().enumerate().map(|(k, v)| {
+                let target = if (60..120).contains(&k) {
+                    ghost
+                } else {
+                    U_EMITTER
+                };
+                bearing_to(target, *v, two * random::normal(rng), two)
+            });
+            FieldDrive {
+                observations: timed(bearings.collect::<Vec<_>>(), 1.0),
+                emitters: vec![Truth {
+                    position: U_EMITTER,
+                    freq_mhz: None,
+                }],
+                ghost: Some(ghost),
+                bias: 0.0,
+                sigma: two,
+            }
+        }
+        Condition::TwoEmitters => {
+            let a = Truth {
+                position: U_EMITTER,
+                freq_mhz: Some(145.0),
+            };
+            let b = Truth {
+                position: [-700.0, 2200.0],
+                freq_mhz: Some(146.52),
+            };
+            let mut observations = Vec::new();
+            for (k, v) in u_route(240).iter().enumerate() {
+                for (j, t) in [a, b].iter().enumerate() {
+                    let mut o = Observation::new(
+                        bearing_to(t.position, *v, two * random::normal(rng), two),
+                        k as f32 + 0.5 * j as f32,
+                    );
+                    o.freq_mhz = t.freq_mhz;
+                    observations.push(o);
+                }
+            }
+            FieldDrive {
+                observations,
+                emitters: vec![a, b],
+                ghost: None,
+                bias: 0.0,
+                sigma: two,
+            }
+        }
+        Condition::Correlated => {
+            // 9 km at 20 m/s, 5 reports a second: 2250 reports.
+            let route = u_route(2250);
+            let raw_sigma = 6.0 * DEG;
+            let mut window = [0.0f32; 10];
+            for w in window.iter_mut() {
+                *w = raw_sigma * random::normal(rng);
+            }
+            let bearings: Vec<Bearing> = route
+                .iter()
+                .enumerate()
+                .map(|(k, v)| {
+                    window[k % 10] = raw_sigma * random::normal(rng);
+                    let mean = window.iter().sum::<f32>() / 10.0;
+                    bearing_to(U_EMITTER, *v, mean, two)
+                })
+                .collect();
+            FieldDrive {
+                observations: timed(bearings, 0.2),
+                emitters: vec![Truth {
+                    position: U_EMITTER,
+                    freq_mhz: None,
+                }],
+                ghost: None,
+                bias: 0.0,
+                sigma: raw_sigma / 10f32.sqrt(),
+            }
+        }
+        Condition::PureNoise => {
+            let mut d = simple(&u_route(240), U_EMITTER, two, two, 0.0, 1.0, rng);
+            d.emitters.clear();
+            d
+        }
+        Condition::FewBearings => {
+            let n = 3 + run % 8;
+            let full = u_route(240);
+            let route: Vec<[f32; 2]> = (0..n).map(|k| full[(k * 239) / (n - 1)]).collect();
+            simple(&route, U_EMITTER, 3.0 * DEG, two, 0.0, 0.0, rng)
+        }
+        Condition::Distant => simple(&l600(), [8000.0, 6000.0], aoa, aoa, 0.0, 0.0, rng),
+        Condition::Long47 => long_drive(47.0, true, rng),
+        Condition::Long70 => long_drive(70.0, true, rng),
+        Condition::Long70Uncorrected => long_drive(70.0, false, rng),
+        Condition::Wild15 => simple(&l600(), [1200.0, 800.0], two, two, 0.0, 0.15, rng),
+        Condition::AoaAfsaWild | Condition::AoaAfsa | Condition::AoaDrive => {
+            let name = match condition {
+                Condition::AoaAfsaWild => "aoa-afsa-wild",
+                Condition::AoaAfsa => "aoa-afsa",
+                _ => "aoa-drive",
+            };
+            let scenario = crate::runs::scenario::Scenario::named(name);
+            let Some((s, d)) = scenario.as_ref().and_then(|s| Some((s, s.drive()?))) else {
+                return simple(&l600(), [1200.0, 800.0], aoa, aoa, 0.0, 0.0, rng);
+            };
+            // The bench's own runs: the same bearings `foxhunt bench` scores.
+            let mut r = s.rng(run);
+            let bearings = d.simulate(&mut r);
+            FieldDrive {
+                observations: timed(bearings, 1.0),
+                emitters: vec![Truth {
+                    position: d.emitter,
+                    freq_mhz: None,
+                }],
+                ghost: None,
+                bias: 0.0,
+                sigma: d.sigma(),
+            }
+        }
+    }
+}

@@ -1,0 +1,420 @@
+//! Indoor RSSI tracking from a ZigBee coordinator's capture: `foxhunt track`.
+//!
+//! AF_INCOMING_MSG frames carry each anchor's link quality; an anchors file says where each
+//! short address sits. Readings are grouped into epochs, one reading per anchor: a second
+//! reading from an anchor already heard starts the next epoch (unit-free, so it works
+//! whatever the receiver's timestamp ticks are). Each epoch is one step of the constant-
+//! velocity tracker, run by the registry's `sir-wide` (the bench's tracking SIR, N = 1000).
+
+use crate::estimate::Steps;
+use foxhunt_bridge::bridge::{Bridge, BridgeConfig, Event, RssiReading};
+use foxhunt_bridge::mt::{AfIncomingMsg, LinkQualityMap};
+use foxhunt_core::estimator::with_particle_filter;
+use foxhunt_core::{Estimate, Method, ParticleSet, PathLoss, RssiMeasurement, RssiTracker, random};
+use rand_core::SeedableRng;
+use rand_xorshift::XorShiftRng;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeSet;
+use std::fmt::Write;
+
+/// Particles of the tracker.
+pub const PARTICLES: usize = 1000;
+
+/// One anchor of the anchors file.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Anchor {
+    /// ZigBee short address (TOML takes 0x1a2b).
+    pub addr: u16,
+    /// East, metres.
+    pub x: f32,
+    /// North, metres.
+    pub y: f32,
+}
+
+/// The log-distance path loss of the anchors file.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PathLossEntry {
+    /// RSSI at the reference distance, dBm.
+    pub p0_dbm: f32,
+    /// Reference distance, metres.
+    pub d0_m: f32,
+    /// Path-loss exponent.
+    pub eta: f32,
+}
+
+fn default_dt() -> f32 {
+    0.5
+}
+fn default_sigma() -> f32 {
+    0.5
+}
+fn default_q() -> [f32; 4] {
+    [0.5, 1.0, 0.5, 1.0]
+}
+fn default_path_loss() -> PathLossEntry {
+    PathLossEntry {
+        p0_dbm: -37.8,
+        d0_m: 1.0,
+        eta: 2.3,
+    }
+}
+
+/// The anchors file (TOML).
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct AnchorsFile {
+    /// The room, [width, depth] metres from (0, 0), if the node stays inside it.
+    pub room: Option<[f32; 2]>,
+    /// Seconds per epoch.
+    #[serde(default = "default_dt")]
+    pub dt_s: f32,
+    /// RSSI noise, dB.
+    #[serde(default = "default_sigma")]
+    pub sigma_db: f32,
+    /// Process noise [x, vx, y, vy] of the constant-velocity model.
+    #[serde(default = "default_q")]
+    pub process_q: [f32; 4],
+    /// Path loss.
+    #[serde(default = "default_path_loss")]
+    pub path_loss: PathLossEntry,
+    /// The anchors.
+    pub anchor: Vec<Anchor>,
+}
+
+impl AnchorsFile {
+    /// Parse and check an anchors file: every number finite, every scale positive, the
+    /// error naming the key.
+    pub fn from_toml(text: &str) -> Result<Self, String> {
+        let f: Self = crate::inputs::files::parse_toml(text)?;
+        if !(3..=6).contains(&f.anchor.len()) {
+            return Err(format!("give 3 to 6 anchors, not {}", f.anchor.len()));
+        }
+        let addrs: BTreeSet<u16> = f.anchor.iter().map(|a| a.addr).collect();
+        if addrs.len() != f.anchor.len() {
+            return Err("two anchors share an address".into());
+        }
+        for a in &f.anchor {
+            if !(a.x.is_finite() && a.y.is_finite()) {
+                return Err(format!(
+                    "anchor 0x{:04x}: position ({}, {}) must be finite",
+                    a.addr, a.x, a.y
+                ));
+            }
+        }
+        let positive = |key: &str, v: f32| {
+            if v > 0.0 && v.is_finite() {
+                Ok(())
+            } else {
+                Err(format!("`{key}` must be a finite positive number, not {v}"))
+            }
+        };
+        positive("dt_s", f.dt_s)?;
+        positive("sigma_db", f.sigma_db)?;
+        positive("path_loss.d0_m", f.path_loss.d0_m)?;
+        positive("path_loss.eta", f.path_loss.eta)?;
+        if !f.path_loss.p0_dbm.is_finite() {
+            return Err(format!(
+                "`path_loss.p0_dbm` must be finite, not {}",
+                f.path_loss.p0_dbm
+            ));
+        }
+        for q in f.process_q {
+            positive("process_q", q)?;
+        }
+        if let Some([w, d]) = f.room {
+            positive("room", w)?;
+            positive("room", d)?;
+        }
+        Ok(f)
+    }
+
+    /// The file's text as `foxhunt simulate --scenario NAME` writes it.
+    pub fn to_toml(&self, scenario: &str) -> Result<String, String> {
+        Ok(format!(
+            "# Anchors of `foxhunt simulate --scenario {scenario}`: short address (0x0101 works as\n\
+             # well as 257), position in metres; room, epoch, noise and path loss of the model.\n{}",
+            toml::to_string(self).map_err(|e| e.to_string())?
+        ))
+    }
+
+    /// An anchors file from disk; errors name the file.
+    pub fn load(path: &std::path::Path) -> Result<Self, String> {
+        let text = crate::inputs::files::read_text(path)?;
+        Self::from_toml(&text).map_err(|e| format!("{}: {e}", path.display()))
+    }
+
+    fn tracker<const A: usize>(&self) -> RssiTracker<A> {
+        RssiTracker {
+            anchors: std::array::from_fn(|i| [self.anchor[i].x, self.anchor[i].y]),
+            sigma: [self.sigma_db; A],
+            path_loss: PathLoss {
+                p0: self.path_loss.p0_dbm,
+                d0: self.path_loss.d0_m,
+                eta: self.path_loss.eta,
+            },
+            dt: self.dt_s,
+            q: self.process_q,
+            room: self.room,
+        }
+    }
+}
+
+/// One step of the track.
+#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
+pub struct TrackPoint {
+    /// Epoch number from 0.
+    pub step: usize,
+    /// Time, seconds (step x dt).
+    pub t_s: f32,
+    /// East, metres.
+    pub x_m: f32,
+    /// North, metres.
+    pub y_m: f32,
+    /// Velocity east, m/s.
+    pub vx_mps: f32,
+    /// Velocity north, m/s.
+    pub vy_mps: f32,
+    /// Standard deviation of x, metres.
+    pub sd_x_m: f32,
+    /// Standard deviation of y, metres.
+    pub sd_y_m: f32,
+    /// Anchors heard in this epoch.
+    pub heard: usize,
+}
+
+/// What `track` found.
+#[derive(Debug, Clone)]
+pub struct Track {
+    /// One point per epoch.
+    pub points: Vec<TrackPoint>,
+    /// Frames from addresses the anchors file does not list, and those addresses.
+    pub unknown: (u32, BTreeSet<u16>),
+}
+
+/// Track the node of a capture.
+pub fn track(bytes: &[u8], anchors: &AnchorsFile, seed: u64) -> Result<Track, String> {
+    match anchors.anchor.len() {
+        3 => track_with::<3>(bytes, anchors, seed),
+        4 => track_with::<4>(bytes, anchors, seed),
+        5 => track_with::<5>(bytes, anchors, seed),
+        6 => track_with::<6>(bytes, anchors, seed),
+        n => Err(format!("give 3 to 6 anchors, not {n}")),
+    }
+}
+
+/// Group readings into epochs: one reading per anchor each.
+fn epochs<const A: usize>(readings: &[RssiReading]) -> Vec<RssiMeasurement<A>> {
+    let mut out = Vec::new();
+    let mut current = RssiMeasurement {
+        dbm: [0.0; A],
+        present: [false; A],
+    };
+    for r in readings {
+        if current.present[r.anchor] {
+            out.push(current);
+            current.present = [false; A];
+        }
+        current.dbm[r.anchor] = r.dbm;
+        current.present[r.anchor] = true;
+    }
+    if current.present.iter().any(|p| *p) {
+        out.push(current);
+    }
+    out
+}
+
+fn track_with<const A: usize>(
+    bytes: &[u8],
+    file: &AnchorsFile,
+    seed: u64,
+) -> Result<Track, String> {
+    let table: [(u16, [f32; 2]); A] =
+        std::array::from_fn(|i| (file.anchor[i].addr, [file.anchor[i].x, file.anchor[i].y]));
+    // One pass: frames go to the bridge, and the addresses it will skip are noted on the way
+    // for the message.
+    let mut demux = foxhunt_bridge::Demux::<600>::new();
+    let mut bridge = Bridge::<A>::new(BridgeConfig::default(), table);
+    let mut readings = Vec::new();
+    let mut unknown = BTreeSet::new();
+    let mut take = |f: foxhunt_bridge::Frame<'_>| {
+        if let foxhunt_bridge::Frame::Mt(m) = f
+            && let Ok(msg) = AfIncomingMsg::parse(&m)
+            && !table.iter().any(|a| a.0 == msg.src_addr)
+        {
+            unknown.insert(msg.src_addr);
+        }
+        bridge.push(&f, &mut |e| {
+            if let Event::Rssi(r) = e {
+                readings.push(r);
+            }
+        });
+    };
+    demux.feed(bytes, &mut take);
+    demux.finish_into(&mut take);
+    let unknown_frames = bridge.counters().unknown_anchor;
+    if readings.is_empty() {
+        let heard: Vec<String> = unknown.iter().map(|a| format!("0x{a:04x}")).collect();
+        return Err(if heard.is_empty() {
+            "no AF_INCOMING_MSG frame in the capture: nothing to track".into()
+        } else {
+            format!(
+                "no frame from a known anchor: heard {} but the anchors file lists {}",
+                heard.join(", "),
+                file.anchor
+                    .iter()
+                    .map(|a| format!("0x{:04x}", a.addr))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        });
+    }
+    let z = epochs::<A>(&readings);
+    let model = file.tracker::<A>();
+    let mut rng = XorShiftRng::seed_from_u64(seed);
+    // Prior: anywhere in the room (or around the anchors), at walking speed.
+    let (centre, spread) = match file.room {
+        Some([w, d]) => ([w / 2.0, d / 2.0], w.max(d) / 3.0),
+        None => {
+            let n = A as f32;
+            let c = [
+                file.anchor.iter().map(|a| a.x).sum::<f32>() / n,
+                file.anchor.iter().map(|a| a.y).sum::<f32>() / n,
+            ];
+            let s = file
+                .anchor
+                .iter()
+                .map(|a| (a.x - c[0]).hypot(a.y - c[1]))
+                .fold(1.0, f32::max);
+            (c, s)
+        }
+    };
+    let mut cloud = Box::new(ParticleSet::<PARTICLES, 4>::new());
+    for x in cloud.states.iter_mut() {
+        let p = [
+            centre[0] + spread * random::normal(&mut rng),
+            centre[1] + spread * random::normal(&mut rng),
+        ];
+        *x = model.confine([
+            p[0],
+            0.5 * random::normal(&mut rng),
+            p[1],
+            0.5 * random::normal(&mut rng),
+        ]);
+    }
+    let mut points = Vec::with_capacity(z.len());
+    let each = |k: usize, e: &Estimate<4>| {
+        points.push(TrackPoint {
+            step: k,
+            t_s: k as f32 * file.dt_s,
+            x_m: e.mean[0],
+            y_m: e.mean[2],
+            vx_mps: e.mean[1],
+            vy_mps: e.mean[3],
+            sd_x_m: e.covariance[0][0].max(0.0).sqrt(),
+            sd_y_m: e.covariance[2][2].max(0.0).sqrt(),
+            heard: z[k].present.iter().filter(|p| **p).count(),
+        })
+    };
+    let steps = Steps {
+        cloud: &cloud.states,
+        measurements: &z,
+        rng: &mut rng,
+        each,
+        keep_cloud: false,
+    };
+    crate::estimate::pool()
+        .install(|| with_particle_filter::<PARTICLES, 4, _, _>(Method::SirWide, model, steps))
+        .and_then(|r| r)
+        .map_err(|e| format!("cannot track: {e}"))?;
+    Ok(Track {
+        points,
+        unknown: (unknown_frames, unknown),
+    })
+}
+
+/// A simulated indoor capture: its bytes, its anchors file and the node's true positions.
+pub type IndoorCapture = (Vec<u8>, AnchorsFile, Vec<[f32; 2]>);
+
+/// A simulated indoor capture: AF_INCOMING_MSG frames of every anchor each epoch, and the
+/// node's true positions.
+pub fn simulate_capture(name: &str, run: usize) -> Result<IndoorCapture, String> {
+    use crate::runs::scenario::{Scenario, ScenarioModel};
+    let s = Scenario::named(name)
+        .ok_or_else(|| format!("`{name}` is not an RSSI scenario (rssi-sim, rssi-lab)"))?;
+    let ScenarioModel::Rssi {
+        tracker: t,
+        start,
+        steps,
+    } = s.model
+    else {
+        return Err(format!(
+            "`{name}` is not an RSSI scenario (rssi-sim, rssi-lab)"
+        ));
+    };
+    let file = AnchorsFile {
+        room: t.room,
+        dt_s: t.dt,
+        sigma_db: t.sigma[0],
+        process_q: t.q,
+        path_loss: PathLossEntry {
+            p0_dbm: t.path_loss.p0,
+            d0_m: t.path_loss.d0,
+            eta: t.path_loss.eta,
+        },
+        anchor: (0..3)
+            .map(|i| Anchor {
+                addr: 0x0101 + i as u16,
+                x: t.anchors[i][0],
+                y: t.anchors[i][1],
+            })
+            .collect(),
+    };
+    let (states, readings) =
+        crate::runs::tracking::simulate_rssi(&t, start, steps, &mut s.rng(run));
+    let dbm: Vec<[f32; 3]> = readings.iter().map(|m| m.dbm).collect();
+    let map = LinkQualityMap::default();
+    let mut out = Vec::new();
+    let mut seq = 0u8;
+    for (k, z) in dbm.iter().enumerate() {
+        for (i, a) in file.anchor.iter().enumerate() {
+            let msg = AfIncomingMsg {
+                group_id: 0,
+                cluster_id: 0x0402,
+                src_addr: a.addr,
+                src_endpoint: 1,
+                dst_endpoint: 1,
+                was_broadcast: false,
+                link_quality: map.link_quality(z[i]),
+                security_use: false,
+                timestamp: (k as f32 * t.dt * 1000.0) as u32,
+                trans_seq: seq,
+                data: &[0x18, seq, 0x0a],
+            };
+            seq = seq.wrapping_add(1);
+            let mut buf = [0u8; 64];
+            let n = msg
+                .encode(&mut buf)
+                .map_err(|_| "an AF_INCOMING_MSG frame did not fit 64 bytes".to_string())?;
+            out.extend_from_slice(&buf[..n]);
+        }
+    }
+    let truth = states.iter().map(|x| [x[0], x[2]]).collect();
+    Ok((out, file, truth))
+}
+
+impl Track {
+    /// The track as CSV: a header, then one line per step.
+    pub fn csv(&self) -> String {
+        let mut out = String::from("step,t_s,x_m,y_m,vx_mps,vy_mps,sd_x_m,sd_y_m,heard\n");
+        for p in &self.points {
+            let _ = writeln!(
+                out,
+                "{},{:.2},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{}",
+                p.step, p.t_s, p.x_m, p.y_m, p.vx_mps, p.vy_mps, p.sd_x_m, p.sd_y_m, p.heard
+            );
+        }
+        out
+    }
+}
