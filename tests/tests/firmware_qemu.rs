@@ -11,9 +11,7 @@
 use foxhunt_bridge::agrelo::Agrelo;
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::kraken::{ArrayType, KrakenCsv, KrakenXml, Station};
-use foxhunt_bridge::nmea::{
-    Date, Line, Pfoxb, Reference, UtcTime, gga_body, pfoxb_body, rmc_body, write_sentence,
-};
+use foxhunt_bridge::nmea::{Date, Pfoxb, Reference, UtcTime, write_sentence};
 use foxhunt_bridge::replay::{Step, replay};
 use foxhunt_bridge::stream::{DEFAULT_CAPACITY, Demux, Frame};
 use foxhunt_bridge::telemetry::{LinkSentence, StatusSentence, UnitSentence};
@@ -21,6 +19,7 @@ use foxhunt_bridge::track::Status;
 use foxhunt_bridge::unit::Unit;
 use foxhunt_core::fix::ellipse::mahalanobis;
 use foxhunt_core::random;
+use foxhunt_sim::runs::writer::CaptureWriter;
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 use std::path::PathBuf;
@@ -195,7 +194,7 @@ impl Drive {
         )
         .expect("frame");
         let mut rng = XorShiftRng::seed_from_u64(self.seed);
-        let mut out = String::new();
+        let mut w = CaptureWriter::new();
         let start_ms = 10 * 3_600_000u32;
         for k in 0..self.seconds {
             let t = k as f64;
@@ -213,13 +212,10 @@ impl Drive {
                 month: 6,
                 day: 1,
             };
-            let mut line = Line::new();
-            gga_body(&mut line, time, ll, 9, 0.9).expect("fits");
-            write_sentence(&mut out, &line).expect("string");
+            w.gga(time, ll).expect("fits");
             if self.rmc {
-                let mut line = Line::new();
-                rmc_body(&mut line, time, date, ll, speed / 0.514_444, course).expect("fits");
-                write_sentence(&mut out, &line).expect("string");
+                w.rmc(time, date, ll, speed / 0.514_444, course)
+                    .expect("fits");
             }
             let v = route(t + 0.5);
             let truth = (self.emitter[0] - v[0]).atan2(self.emitter[1] - v[1]);
@@ -237,8 +233,7 @@ impl Drive {
                         quality: 8,
                         magnetic_deg: None,
                     };
-                    a.emit(&mut out).expect("string");
-                    out.push_str("\r\n");
+                    w.agrelo(&a).expect("fits");
                 }
                 2 if k % 10 == 2 => {
                     let c = KrakenCsv {
@@ -253,7 +248,7 @@ impl Drive {
                         position: Some(at),
                         heading_deg: course as f32,
                     };
-                    c.emit(&[], &mut out).expect("string");
+                    w.kraken_csv(&c, &[]).expect("fits");
                 }
                 2 | 3 => {
                     let x = KrakenXml {
@@ -268,8 +263,7 @@ impl Drive {
                         pwr: Some(60.0),
                         conf: Some(90.0),
                     };
-                    x.emit(&mut out).expect("string");
-                    out.push('\n');
+                    w.kraken_xml(&x).expect("fits");
                 }
                 _ => {
                     let b = Pfoxb {
@@ -282,13 +276,11 @@ impl Drive {
                         freq_mhz: 433.92,
                         position: None,
                     };
-                    let mut line = Line::new();
-                    pfoxb_body(&mut line, &b).expect("fits");
-                    write_sentence(&mut out, &line).expect("string");
+                    w.pfoxb(&b).expect("fits");
                 }
             }
         }
-        out.into_bytes()
+        w.into_bytes()
     }
 }
 

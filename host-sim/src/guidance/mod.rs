@@ -87,6 +87,8 @@ pub struct GuidanceOptions {
     pub leg_m: f32,
     /// Bearings per second.
     pub rate_hz: f32,
+    /// Open terrain: the largest turn between two moves, radians.
+    pub max_turn: f32,
 }
 
 impl Default for GuidanceOptions {
@@ -98,6 +100,9 @@ impl Default for GuidanceOptions {
             speed: 15.0,
             leg_m: 300.0,
             rate_hz: 1.0,
+            // What the closed-loop benchmark measured: sharper turns than 135 degrees a
+            // move spend the horizon on turning back.
+            max_turn: 0.75 * PI,
         }
     }
 }
@@ -109,6 +114,37 @@ impl GuidanceOptions {
             horizon_s: 150.0,
             depth: 8,
             ..Self::default()
+        }
+    }
+
+    /// The planner's settings at bearing noise `sigma`: aim at [`PLAN_TARGET_SHARE`] of the
+    /// stop rule's target, counting metres, over the look-ahead. The live advice and the
+    /// benchmark's look-ahead policy both plan with these, so the benchmark measures the
+    /// planner users get.
+    pub fn plan_options(&self, sigma: f32) -> PlanOptions {
+        PlanOptions {
+            objective: Objective::Goal {
+                target_m: PLAN_TARGET_SHARE * self.stop.target_cep50_m,
+                // Metres, as the benchmark measures it: on roads of one speed the same plan
+                // as seconds; off a highway onto slower roads it counts the bearings per
+                // kilometre.
+                cost: Cost::Distance,
+            },
+            depth: self.depth,
+            horizon_s: self.horizon_s,
+            rate_hz: self.rate_hz,
+            sigma,
+            sample_m: 100.0,
+        }
+    }
+
+    /// The moves of open terrain: 16 headings, one leg each.
+    pub fn free_headings(&self) -> FreeHeadings {
+        FreeHeadings {
+            count: 16,
+            leg_m: self.leg_m,
+            speed: self.speed,
+            max_turn: self.max_turn,
         }
     }
 }
@@ -331,19 +367,7 @@ pub fn advise_move(
         .heading
         .or_else(|| track_heading(s.bearings))
         .unwrap_or(0.0);
-    let options = PlanOptions {
-        objective: Objective::Goal {
-            target_m: PLAN_TARGET_SHARE * o.stop.target_cep50_m,
-            // Metres, as the benchmark measures it: on roads of one speed the same plan as
-            // seconds; off a highway onto slower roads it counts the bearings per kilometre.
-            cost: Cost::Distance,
-        },
-        depth: o.depth,
-        horizon_s: o.horizon_s,
-        rate_hz: o.rate_hz,
-        sigma,
-        sample_m: 100.0,
-    };
+    let options = o.plan_options(sigma);
     // Before a fix the bearings have not crossed: whatever the planner picks, the reason is
     // the angle.
     let reason = verdict.map(|v| v.reason()).unwrap_or(Reason::WidenAngle);
@@ -371,12 +395,7 @@ pub fn advise_move(
             Ok((a, counted))
         }
         None => {
-            let free = FreeHeadings {
-                count: 16,
-                leg_m: o.leg_m,
-                speed: o.speed,
-                max_turn: PI,
-            };
+            let free = o.free_headings();
             let pose = Pose {
                 position: s.vehicle,
                 heading,

@@ -10,3 +10,4 @@ pub mod run;
 pub mod scenario;
 pub mod simulate;
 pub mod tracking;
+pub mod writer;

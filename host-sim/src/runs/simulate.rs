@@ -19,13 +19,11 @@
 //! route's first point in every format, so the capture's local origin is that point.
 
 use crate::runs::scenario::{Drive, Scenario};
+use crate::runs::writer::CaptureWriter;
 use foxhunt_bridge::agrelo::Agrelo;
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::kraken::{ArrayType, KrakenCsv, KrakenXml, SPECTRUM_LEN, Station};
-use foxhunt_bridge::nmea::{
-    Date, Hdt, LatLon, Line, Pfoxb, Reference, UtcTime, gga_body, pfoxb_body, rmc_body,
-    write_sentence,
-};
+use foxhunt_bridge::nmea::{Date, Hdt, LatLon, Pfoxb, Reference, UtcTime};
 use foxhunt_core::model::bearing::{predicted, theta_to_azimuth, wrap};
 use foxhunt_core::random;
 use std::f32::consts::PI;
@@ -126,13 +124,6 @@ impl Default for CaptureOptions {
     }
 }
 
-fn push(out: &mut Vec<u8>, body: &str) {
-    let mut s = String::new();
-    // Writing to a String cannot fail.
-    let _ = write_sentence(&mut s, body);
-    out.extend_from_slice(s.as_bytes());
-}
-
 impl CaptureOptions {
     /// Refuse values no capture can use, naming the option.
     pub fn check(&self) -> Result<(), String> {
@@ -230,9 +221,7 @@ pub fn drive_capture(scenario: &Scenario, o: &CaptureOptions) -> Result<Vec<u8>,
     let sigma = s.sigma();
     let wild = o.wild_fraction.unwrap_or(s.wild_fraction);
     let bias = o.bias_deg.to_radians();
-    let mut out = Vec::new();
-    let mut line = Line::new();
-    let fmt_err = |_| "record longer than its buffer".to_string();
+    let mut w = CaptureWriter::new();
     let local = |p: [f32; 2]| [f64::from(p[0] - start[0]), f64::from(p[1] - start[1])];
     let geodetic = |p: [f32; 2]| {
         frame
@@ -256,12 +245,8 @@ pub fn drive_capture(scenario: &Scenario, o: &CaptureOptions) -> Result<Vec<u8>,
         let speed_kn = speed_mps * 3600.0 / 1852.0;
         let course = f64::from(dx.atan2(dy).to_degrees().rem_euclid(360.0));
         if !o.format.kraken() {
-            line.clear();
-            gga_body(&mut line, time, geo, 9, 0.9).map_err(fmt_err)?;
-            push(&mut out, &line);
-            line.clear();
-            rmc_body(&mut line, time, date, geo, speed_kn, course).map_err(fmt_err)?;
-            push(&mut out, &line);
+            w.gga(time, geo)?;
+            w.rmc(time, date, geo, speed_kn, course)?;
         }
         if k + 1 == points.len() {
             break;
@@ -292,24 +277,17 @@ pub fn drive_capture(scenario: &Scenario, o: &CaptureOptions) -> Result<Vec<u8>,
                     freq_mhz: o.freq_mhz,
                     position: None,
                 };
-                line.clear();
-                pfoxb_body(&mut line, &bearing).map_err(fmt_err)?;
-                push(&mut out, &line);
+                w.pfoxb(&bearing)?;
             }
             CaptureFormat::Agrelo => {
                 // The heading as HDT writes it (two decimals), and the bearing relative to it.
                 let heading = (course * 100.0).round() / 100.0 % 360.0;
-                line.clear();
-                Hdt {
+                w.hdt(&Hdt {
                     talker: *b"HE",
                     heading_deg: heading,
-                }
-                .emit(&mut line)
-                .map_err(fmt_err)?;
-                push(&mut out, &line);
+                })?;
                 let relative = ((azimuth - heading).rem_euclid(360.0) * 10.0).round() / 10.0;
-                line.clear();
-                Agrelo {
+                w.agrelo(&Agrelo {
                     // 0 is "no bearing": dead ahead is sent as 360, as some units do.
                     bearing_deg: if relative == 0.0 || relative >= 360.0 {
                         360.0
@@ -318,12 +296,7 @@ pub fn drive_capture(scenario: &Scenario, o: &CaptureOptions) -> Result<Vec<u8>,
                     },
                     quality: (quality / 100.0 * 9.0).round().clamp(1.0, 9.0) as u8,
                     magnetic_deg: None,
-                }
-                .emit(&mut line)
-                .map_err(fmt_err)?;
-                line.push_str("\r\n")
-                    .map_err(|_| "record too long".to_string())?;
-                out.extend_from_slice(line.as_bytes());
+                })?;
             }
             CaptureFormat::KrakenCsv | CaptureFormat::KrakenXml => {
                 // The heading as the records write it (one decimal).
@@ -331,24 +304,24 @@ pub fn drive_capture(scenario: &Scenario, o: &CaptureOptions) -> Result<Vec<u8>,
                 let relative = (azimuth - heading).rem_euclid(360.0) as f32;
                 let epoch = o.epoch_ms(at_ms);
                 let station = Station::new("foxhunt-sim");
-                let mut text = String::new();
                 if o.format == CaptureFormat::KrakenCsv {
-                    KrakenCsv {
-                        epoch_ms: epoch,
-                        bearing_deg: relative,
-                        confidence: quality / 100.0,
-                        power_db: -40.0,
-                        freq_hz: (o.freq_mhz * 1e6).round() as u64,
-                        array: ArrayType::Uca,
-                        latency_ms: 100,
-                        station,
-                        position: Some(here),
-                        heading_deg: heading as f32,
-                    }
-                    .emit(&spectrum(relative), &mut text)
-                    .map_err(fmt_err)?;
+                    w.kraken_csv(
+                        &KrakenCsv {
+                            epoch_ms: epoch,
+                            bearing_deg: relative,
+                            confidence: quality / 100.0,
+                            power_db: -40.0,
+                            freq_hz: (o.freq_mhz * 1e6).round() as u64,
+                            array: ArrayType::Uca,
+                            latency_ms: 100,
+                            station,
+                            position: Some(here),
+                            heading_deg: heading as f32,
+                        },
+                        &spectrum(relative),
+                    )?;
                 } else {
-                    KrakenXml {
+                    w.kraken_xml(&KrakenXml {
                         station,
                         time_ms: Some(epoch),
                         gps_time_ms: Some(epoch),
@@ -360,15 +333,12 @@ pub fn drive_capture(scenario: &Scenario, o: &CaptureOptions) -> Result<Vec<u8>,
                         doa_deg: (360.0 - relative).rem_euclid(360.0),
                         pwr: Some(60.0),
                         conf: Some(quality),
-                    }
-                    .emit(&mut text)
-                    .map_err(fmt_err)?;
-                    text.push('\n');
+                    })?;
                 }
-                out.extend_from_slice(text.as_bytes());
             }
         }
     }
+    let mut out = w.into_bytes();
     damage(&mut out, o, &mut rng);
     Ok(out)
 }

@@ -10,6 +10,7 @@ use crate::guidance::guide::Guide;
 use crate::inputs::capture::Decoded;
 use crate::inputs::unit::UnitReport;
 use crate::locate::report::geodetic;
+use crate::outputs::maps::ellipse_ring;
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;
 use foxhunt_core::fix::ellipse::Ellipse;
@@ -115,21 +116,11 @@ fn ll(frame: &LocalFrame, p: [f32; 2]) -> LL {
     [g.lat, g.lon]
 }
 
+/// The source's ellipse ring, in latitude and longitude.
 fn ring(frame: &LocalFrame, s: &Source) -> Vec<LL> {
-    let e: &Ellipse = &s.ellipse;
-    let (c, si) = (e.orientation.cos(), e.orientation.sin());
-    (0..=72)
-        .map(|k| {
-            let t = k as f32 * std::f32::consts::TAU / 72.0;
-            let (a, b) = (e.major * t.cos(), e.minor * t.sin());
-            ll(
-                frame,
-                [
-                    s.position[0] + a * c - b * si,
-                    s.position[1] + a * si + b * c,
-                ],
-            )
-        })
+    ellipse_ring(s.position, &s.ellipse)
+        .into_iter()
+        .map(|p| ll(frame, p))
         .collect()
 }
 
@@ -160,17 +151,17 @@ fn unit_ring(at: LatLon, major: f32, minor: f32, orientation_deg: f32) -> Vec<LL
     let Ok(frame) = LocalFrame::new(at, 0.0) else {
         return Vec::new();
     };
-    let o = f64::from(orientation_deg).to_radians();
-    // East, north of the major axis and of the minor one.
-    let (u, v) = ([o.sin(), o.cos()], [o.cos(), -o.sin()]);
-    let (a, b) = (f64::from(major), f64::from(minor));
-    (0..=72)
-        .map(|k| {
-            let t = f64::from(k) * std::f64::consts::TAU / 72.0;
-            let (x, y) = (a * t.cos(), b * t.sin());
-            let g = frame
-                .to_geodetic([x * u[0] + y * v[0], x * u[1] + y * v[1]])
-                .ok()?;
+    let e = Ellipse {
+        major,
+        minor,
+        // The ring's angle is counter-clockwise from east.
+        orientation: (90.0 - orientation_deg).to_radians(),
+        confidence: 0.95,
+    };
+    ellipse_ring([0.0, 0.0], &e)
+        .into_iter()
+        .map(|p| {
+            let g = frame.to_geodetic([f64::from(p[0]), f64::from(p[1])]).ok()?;
             Some([g.lat, g.lon])
         })
         .collect::<Option<Vec<LL>>>()

@@ -2,6 +2,7 @@
 
 use super::drives::simulate;
 use super::{Condition, Truth};
+use crate::runs::writer::CaptureWriter;
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;
 
@@ -17,7 +18,7 @@ pub fn capture(
     run: usize,
     origin: LatLon,
 ) -> Result<(Vec<u8>, Vec<Truth>), String> {
-    use foxhunt_bridge::nmea::{Gga, Pfoxb, Reference, UtcTime, write_sentence};
+    use foxhunt_bridge::nmea::{Pfoxb, Reference, UtcTime};
     use foxhunt_core::model::bearing::theta_to_azimuth;
     if matches!(
         condition,
@@ -44,43 +45,18 @@ pub fn capture(
     let time = |t: f32| UtcTime {
         ms_of_day: 36_000_000 + (f64::from(t) * 1000.0).round() as u32,
     };
-    let mut out = String::new();
-    let mut line = String::new();
+    let mut w = CaptureWriter::new();
     for o in &d.observations {
         let position = geo(o.bearing.vehicle)?;
-        let fix = Gga {
-            talker: *b"GP",
-            time: time(o.time_s),
-            position,
-            quality: Some(1),
-            satellites: Some(9),
-            hdop: Some(0.9),
-            altitude_m: Some(0.0),
-        };
-        let bearing = Pfoxb {
+        w.gga(time(o.time_s), position)?;
+        w.pfoxb(&Pfoxb {
             time: time(o.time_s),
             azimuth_deg: f64::from(theta_to_azimuth(o.bearing.theta).to_degrees()) % 360.0,
             reference: Reference::True,
             quality: 80.0,
             freq_mhz: f64::from(o.freq_mhz.unwrap_or(433.92)),
             position: Some(position),
-        };
-        for body in [
-            {
-                line.clear();
-                fix.emit(&mut line).map_err(|_| "a GGA did not format")?;
-                line.clone()
-            },
-            {
-                line.clear();
-                bearing
-                    .emit(&mut line)
-                    .map_err(|_| "a PFOXB did not format")?;
-                line.clone()
-            },
-        ] {
-            write_sentence(&mut out, &body).map_err(|_| "a sentence did not format")?;
-        }
+        })?;
     }
     let truths = d
         .emitters
@@ -90,5 +66,5 @@ pub fn capture(
             freq_mhz: t.freq_mhz,
         })
         .collect();
-    Ok((out.into_bytes(), truths))
+    Ok((w.into_bytes(), truths))
 }

@@ -18,7 +18,7 @@
 //! leg).
 
 use super::networks::{HALF_M, Network};
-use super::policy::{Decision, Move, Policy, decide};
+use super::policy::{Decision, GOAL_M, Move, Policy, decide};
 use crate::guidance::reach::OnRoad;
 use crate::guidance::{FixView, Situation};
 use crate::inputs::roads::RoadGraph;
@@ -38,8 +38,6 @@ use serde::Serialize;
 use std::f32::consts::PI;
 use std::fmt::Write;
 
-/// The goal: CEP50 below this, metres.
-pub const GOAL_M: f32 = 100.0;
 /// A run gives up after this distance, metres.
 pub const MAX_DISTANCE_M: f32 = 20_000.0;
 /// ... or this time, seconds.

@@ -16,13 +16,13 @@
 //! its free heading: the free-heading greedy policies "forced onto roads". `lookahead` scores
 //! the reachable road segments themselves.
 
-use super::bench::GOAL_M;
 use crate::guidance::reach::{OnRoad, Roads};
 use crate::guidance::{
-    PLAN_TARGET_SHARE, Situation, averaged_bearing, median_sigma, situation_beliefs,
+    GuidanceOptions, Situation, averaged_bearing, median_sigma, situation_beliefs,
 };
 use crate::inputs::roads::RoadGraph;
-use foxhunt_core::guidance::plan::{Cost, FreeHeadings, Leg, Objective, PlanOptions, Pose, plan};
+use foxhunt_core::guidance::plan::{Leg, Objective, Pose, plan};
+use foxhunt_core::guidance::stop::StopRule;
 use foxhunt_core::model::bearing::wrap;
 use std::f32::consts::{FRAC_PI_2, PI};
 
@@ -67,10 +67,25 @@ impl Policy {
     }
 }
 
-/// Open terrain: the length of one free move, metres, and the speed, m/s.
-pub const OPEN_LEG_M: f32 = 300.0;
-/// Open terrain speed, m/s.
-pub const OPEN_SPEED: f32 = 15.0;
+/// The benchmark's goal: CEP50 below this many metres with the truth inside the ellipse.
+pub const GOAL_M: f32 = 100.0;
+
+/// The look-ahead's settings: what `locate` and `serve` advise with (open terrain, or roads),
+/// aiming at the benchmark's goal.
+pub fn lookahead_options(on_roads: bool) -> GuidanceOptions {
+    let base = if on_roads {
+        GuidanceOptions::roads()
+    } else {
+        GuidanceOptions::default()
+    };
+    GuidanceOptions {
+        stop: StopRule {
+            target_cep50_m: GOAL_M,
+            ..base.stop
+        },
+        ..base
+    }
+}
 /// Homing follows the averaged bearing this far before it drives to the fix, metres.
 pub const HOMING_BEARING_M: f32 = 5000.0;
 
@@ -96,13 +111,14 @@ pub struct Move {
 }
 
 fn free_leg(from: [f32; 2], heading: f32) -> Leg {
+    let o = GuidanceOptions::default();
     Leg {
         from,
         to: [
-            from[0] + OPEN_LEG_M * heading.cos(),
-            from[1] + OPEN_LEG_M * heading.sin(),
+            from[0] + o.leg_m * heading.cos(),
+            from[1] + o.leg_m * heading.sin(),
         ],
-        seconds: OPEN_LEG_M / OPEN_SPEED,
+        seconds: o.leg_m / o.speed,
     }
 }
 
@@ -115,31 +131,28 @@ fn free_heading(p: Policy, d: &Decision<'_>) -> Option<f32> {
         return Some(d.heading);
     }
     let sigma = median_sigma(bearings)?;
-    // The core planner over free headings of one leg each: `depth` legs deep, turns up to
-    // `max_turn` per leg.
-    let planned = |objective: Objective, depth: usize, max_turn: f32| -> Option<f32> {
+    // The core planner over free headings: the look-ahead with the settings users get, the
+    // greedy policies one leg deep with any turn.
+    let planned = |o: &GuidanceOptions, objective: Option<Objective>| -> Option<f32> {
         let (b, n) = situation_beliefs(s).ok()?;
-        let options = PlanOptions {
-            objective,
-            depth,
-            horizon_s: depth as f32 * OPEN_LEG_M / OPEN_SPEED,
-            rate_hz: 1.0,
-            sigma,
-            sample_m: 100.0,
-        };
-        let free = FreeHeadings {
-            count: 16,
-            leg_m: OPEN_LEG_M,
-            speed: OPEN_SPEED,
-            max_turn,
-        };
+        let mut options = o.plan_options(sigma);
+        if let Some(objective) = objective {
+            options.objective = objective;
+        }
         let pose = Pose {
             position: s.vehicle,
             heading: d.heading,
         };
-        plan(&b[..n], pose, &free, options)
+        plan(&b[..n], pose, &o.free_headings(), options)
             .ok()
             .map(|c| c.leg.heading())
+    };
+    let open = GuidanceOptions::default();
+    let greedy = GuidanceOptions {
+        depth: 1,
+        horizon_s: open.leg_m / open.speed,
+        max_turn: PI,
+        ..open
     };
     match p {
         Policy::Homing => {
@@ -160,16 +173,9 @@ fn free_heading(p: Policy, d: &Decision<'_>) -> Option<f32> {
                 b
             })
         }
-        Policy::GreedyD => planned(Objective::DOptimal, 1, PI),
-        Policy::GreedyA => planned(Objective::AOptimal, 1, PI),
-        Policy::Lookahead => planned(
-            Objective::Goal {
-                target_m: PLAN_TARGET_SHARE * GOAL_M,
-                cost: Cost::Distance,
-            },
-            3,
-            0.75 * PI,
-        ),
+        Policy::GreedyD => planned(&greedy, Some(Objective::DOptimal)),
+        Policy::GreedyA => planned(&greedy, Some(Objective::AOptimal)),
+        Policy::Lookahead => planned(&lookahead_options(false), None),
     }
 }
 
@@ -189,17 +195,7 @@ pub fn decide(p: Policy, d: &Decision<'_>) -> Option<Move> {
                 let planned = (|| {
                     let sigma = median_sigma(d.situation.bearings)?;
                     let (b, n) = situation_beliefs(&d.situation).ok()?;
-                    let options = PlanOptions {
-                        objective: Objective::Goal {
-                            target_m: PLAN_TARGET_SHARE * GOAL_M,
-                            cost: Cost::Distance,
-                        },
-                        depth: 8,
-                        horizon_s: 150.0,
-                        rate_hz: 1.0,
-                        sigma,
-                        sample_m: 100.0,
-                    };
+                    let options = lookahead_options(true).plan_options(sigma);
                     plan(&b[..n], at, &roads, options).ok()
                 })();
                 if let Some(c) = planned {

@@ -1,0 +1,104 @@
+//! A capture written record by record as the radios send them: NMEA sentences framed with
+//! their checksum and CR LF, Agrelo bearings, KrakenSDR CSV lines and XML records, each with the
+//! line end its device uses. `foxhunt simulate`, the field conditions' captures and the
+//! firmware's QEMU tests all write through this one writer, so a framing rule lives here
+//! only.
+
+use foxhunt_bridge::agrelo::Agrelo;
+use foxhunt_bridge::kraken::{KrakenCsv, KrakenXml};
+use foxhunt_bridge::nmea::{
+    Date, Hdt, LatLon, Line, Pfoxb, UtcTime, gga_body, pfoxb_body, rmc_body, write_sentence,
+};
+
+/// Why a record could not be written: a field that does not fit its record's buffer.
+pub const TOO_LONG: &str = "record longer than its buffer";
+
+/// The bytes of a capture, written in order.
+#[derive(Debug, Default, Clone)]
+pub struct CaptureWriter {
+    out: String,
+    line: Line,
+}
+
+impl CaptureWriter {
+    /// An empty capture.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Frame the sentence body in `self.line` (`$`, checksum, CR LF).
+    fn frame(&mut self) -> Result<(), String> {
+        write_sentence(&mut self.out, &self.line).map_err(|_| TOO_LONG.to_string())
+    }
+
+    /// A GPS fix as a receiver reports it: GGA (9 satellites, HDOP 0.9).
+    pub fn gga(&mut self, time: UtcTime, at: LatLon) -> Result<(), String> {
+        self.line.clear();
+        gga_body(&mut self.line, time, at, 9, 0.9).map_err(|_| TOO_LONG.to_string())?;
+        self.frame()
+    }
+
+    /// The RMC of a GPS fix: date, speed over ground (knots) and course (degrees true).
+    pub fn rmc(
+        &mut self,
+        time: UtcTime,
+        date: Date,
+        at: LatLon,
+        speed_kn: f64,
+        course_deg: f64,
+    ) -> Result<(), String> {
+        self.line.clear();
+        rmc_body(&mut self.line, time, date, at, speed_kn, course_deg)
+            .map_err(|_| TOO_LONG.to_string())?;
+        self.frame()
+    }
+
+    /// A heading sensor's HDT.
+    pub fn hdt(&mut self, h: &Hdt) -> Result<(), String> {
+        self.line.clear();
+        h.emit(&mut self.line).map_err(|_| TOO_LONG.to_string())?;
+        self.frame()
+    }
+
+    /// A `$PFOXB` bearing.
+    pub fn pfoxb(&mut self, b: &Pfoxb) -> Result<(), String> {
+        self.line.clear();
+        pfoxb_body(&mut self.line, b).map_err(|_| TOO_LONG.to_string())?;
+        self.frame()
+    }
+
+    /// An Agrelo bearing (`%BBB/Q`, CR LF).
+    pub fn agrelo(&mut self, a: &Agrelo) -> Result<(), String> {
+        a.emit(&mut self.out).map_err(|_| TOO_LONG.to_string())?;
+        self.out.push_str("\r\n");
+        Ok(())
+    }
+
+    /// A KrakenSDR CSV line with its DoA spectrum (the line writes its own end).
+    pub fn kraken_csv(&mut self, c: &KrakenCsv, spectrum: &[f32]) -> Result<(), String> {
+        c.emit(spectrum, &mut self.out)
+            .map_err(|_| TOO_LONG.to_string())
+    }
+
+    /// A KrakenSDR XML record on one line.
+    pub fn kraken_xml(&mut self, x: &KrakenXml) -> Result<(), String> {
+        x.emit(&mut self.out).map_err(|_| TOO_LONG.to_string())?;
+        self.out.push('\n');
+        Ok(())
+    }
+
+    /// Bytes written so far.
+    pub fn len(&self) -> usize {
+        self.out.len()
+    }
+
+    /// Nothing written yet.
+    pub fn is_empty(&self) -> bool {
+        self.out.is_empty()
+    }
+
+    /// The capture's bytes.
+    pub fn into_bytes(self) -> Vec<u8> {
+        self.out.into_bytes()
+    }
+}
