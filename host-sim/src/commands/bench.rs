@@ -11,11 +11,11 @@ use std::path::PathBuf;
 /// Options of `foxhunt bench`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Canonical scenario name, `all`, or the field conditions: `field` (every one) or
-    /// `field/NAME` (bias-2deg, bias-4deg, bias-4deg-L600, multipath, two-emitters,
-    /// correlated-5hz, pure-noise, few-bearings, distant-10km, long-20km-47n, long-20km-70n,
-    /// wild-15pct-2deg, aoa-afsa-wild, aoa-afsa, aoa-drive).
-    #[arg(long, default_value = "aoa-afsa", conflicts_with = "scenario_file")]
+    /// A canonical scenario, `all` of them, the field conditions (`field`: every one, or
+    /// `field/NAME`) or the closed-loop guidance sets (`guidance`: every one, or
+    /// `guidance/SET`).
+    #[arg(long, default_value = "aoa-afsa", conflicts_with = "scenario_file",
+          value_parser = super::one_of(super::bench_scenarios()))]
     pub scenario: String,
     /// A scenario file (TOML; see the README).
     #[arg(long)]

@@ -31,7 +31,7 @@ pub struct Args {
     pub captures: Vec<PathBuf>,
     /// Fix method, by its registry name: ml-robust (every emitter, offsets and consistency
     /// checked), or one emitter by ml, ml-huber, sir, sir-robust, gpf, ekf, afsa-pf, ...
-    #[arg(long, default_value = "ml-robust", value_parser = method)]
+    #[arg(long, default_value = "ml-robust", value_parser = method())]
     pub method: Method,
     /// Bearings whose frequencies lie within this many MHz share a channel (one emitter
     /// each).

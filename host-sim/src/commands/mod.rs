@@ -11,15 +11,39 @@ pub mod track;
 
 use crate::guidance::guide::Guide;
 use crate::inputs::roads::RoadGraph;
+use crate::runs::field::Condition;
+use crate::runs::guidance::bench::Set;
+use crate::runs::scenario::NAMES;
+use clap::builder::TypedValueParser;
 use foxhunt_core::Method;
 use foxhunt_core::guidance::stop::StopRule;
 
-/// Parse a method name of the registry (clap value parser).
-pub fn method(name: &str) -> Result<Method, String> {
-    Method::from_name(name).ok_or_else(|| {
-        let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
-        format!("unknown method `{name}`; known: {}", names.join(", "))
-    })
+/// The registry's methods as clap values: `--help` lists them, and an unknown name is a usage
+/// error (exit status 2) that lists them too.
+pub fn method() -> impl clap::builder::TypedValueParser<Value = Method> {
+    clap::builder::PossibleValuesParser::new(Method::ALL.map(|m| m.name()))
+        .try_map(|name| Method::from_name(&name).ok_or(format!("unknown method `{name}`")))
+}
+
+/// Every name `foxhunt bench --scenario` takes: the canonical scenarios, `all`, the field
+/// conditions (`field`, `field/NAME`) and the guidance sets (`guidance`, `guidance/SET`).
+pub fn bench_scenarios() -> Vec<String> {
+    let mut names: Vec<String> = NAMES.iter().map(|n| n.to_string()).collect();
+    names.push("all".into());
+    names.push("field".into());
+    names.extend(Condition::ALL.iter().map(|c| format!("field/{}", c.name())));
+    names.push("guidance".into());
+    names.extend(Set::all().iter().map(|s| s.name()));
+    names
+}
+
+/// `values` as a clap value parser that lists them in `--help` and in its usage error.
+pub fn one_of(values: Vec<String>) -> clap::builder::PossibleValuesParser {
+    clap::builder::PossibleValuesParser::new(
+        values
+            .into_iter()
+            .map(|v| clap::builder::PossibleValue::new(clap::builder::Str::from(v))),
+    )
 }
 
 /// Drive guidance's options, shared by `locate` and `serve` (flattened into both).

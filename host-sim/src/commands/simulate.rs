@@ -2,6 +2,7 @@
 
 use crate::outputs::files::Outputs;
 use crate::outputs::terminal::{Outcome, note};
+use crate::runs::field::Condition;
 use crate::runs::scenario::{NAMES, Scenario, ScenarioModel};
 use crate::runs::simulate::{CaptureFormat, CaptureOptions, drive_capture};
 use crate::track::indoor::simulate_capture;
@@ -12,15 +13,16 @@ use std::path::PathBuf;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Canonical scenario name (a drive, or rssi-sim / rssi-lab for an indoor capture).
-    #[arg(long, default_value = "aoa-drive", conflicts_with = "scenario_file")]
+    #[arg(long, default_value = "aoa-drive", conflicts_with = "scenario_file",
+          value_parser = super::one_of(NAMES.iter().map(|n| n.to_string()).collect()))]
     pub scenario: String,
     /// A scenario file (TOML).
     #[arg(long)]
     pub scenario_file: Option<PathBuf>,
-    /// A field condition instead (see `bench --scenario field`): bias-2deg, multipath,
-    /// two-emitters, correlated-5hz, pure-noise, few-bearings, ...; GGA fixes and $PFOXB
+    /// A field condition instead (see `bench --scenario field`): GGA fixes and $PFOXB
     /// bearings carrying their own position and frequency.
-    #[arg(long, conflicts_with_all = ["scenario_file", "format", "wild", "bias_deg"])]
+    #[arg(long, conflicts_with_all = ["scenario_file", "format", "wild", "bias_deg"],
+          value_parser = super::one_of(Condition::ALL.iter().map(|c| c.name().to_string()).collect()))]
     pub condition: Option<String>,
     /// Where to write the capture.
     #[arg(long)]
