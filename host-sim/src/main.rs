@@ -97,7 +97,8 @@ enum Command {
     /// filter's step time grows with N (100 to 100 000), and with --scale `locate` on large
     /// captures. Single thread; markdown tables.
     ///
-    /// Installs numpy, scipy and filterpy from PyPI into target/peer-venv on first use.
+    /// Installs the peer (numpy, scipy and filterpy at the versions pinned in
+    /// host-sim/benches/peer-requirements.txt) from PyPI into target/peer-venv on first use.
     /// Example: foxhunt perf --runs 20 --scale
     #[command(verbatim_doc_comment)]
     Perf(commands::perf::Args),

@@ -3,7 +3,8 @@
 //!
 //! The peer is `benches/numpy_sir.py`: the registry's `sir-seed` on the same scenario, written
 //! the way users write it today (numpy, filterpy's `systematic_resample`). This module installs
-//! it (numpy, scipy, filterpy from PyPI into `target/peer-venv`), runs it, runs the identical
+//! it (numpy, scipy, filterpy from PyPI into `target/peer-venv`, at the versions pinned in
+//! `benches/peer-requirements.txt`), runs it, runs the identical
 //! Rust filter single-threaded in the same invocation, and prints the ratio. Timing is
 //! wall-clock over whole runs; it is reported, never asserted.
 
@@ -104,11 +105,16 @@ pub fn rust_timing(n: usize, runs: usize) -> Result<Timing, Error> {
     pool().install(|| with_particles!(n, N => rust_sir::<N>(runs)))
 }
 
-/// The peer's virtual environment, made on first use.
+/// The peer's virtual environment, made on first use with the versions pinned in
+/// `benches/peer-requirements.txt` (a venv made from another pin is made again).
 fn peer_python(target: &Path) -> Result<PathBuf, String> {
+    let pins = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/peer-requirements.txt");
+    let wanted = std::fs::read_to_string(&pins)
+        .map_err(|e| format!("cannot read {}: {e}", pins.display()))?;
     let venv = target.join("peer-venv");
+    let stamp = venv.join("foxhunt-pins.txt");
     let python = venv.join("bin").join("python");
-    if python.exists() {
+    if python.exists() && std::fs::read_to_string(&stamp).is_ok_and(|s| s == wanted) {
         return Ok(python);
     }
     let run = |cmd: &mut Command| -> Result<(), String> {
@@ -124,11 +130,16 @@ fn peer_python(target: &Path) -> Result<PathBuf, String> {
             ))
         }
     };
-    run(Command::new("python3").args(["-m", "venv"]).arg(&venv))?;
+    run(Command::new("python3")
+        .args(["-m", "venv", "--clear"])
+        .arg(&venv))?;
     let pip = venv.join("bin").join("pip");
-    // filterpy's resampling needs numpy and scipy, not its plotting dependency.
-    run(Command::new(&pip).args(["install", "-q", "numpy", "scipy"]))?;
-    run(Command::new(&pip).args(["install", "-q", "--no-deps", "filterpy"]))?;
+    // --no-deps: filterpy's resampling needs numpy and scipy (pinned beside it), not its
+    // plotting dependency.
+    run(Command::new(&pip)
+        .args(["install", "-q", "--no-deps", "-r"])
+        .arg(&pins))?;
+    std::fs::write(&stamp, wanted).map_err(|e| format!("cannot write {}: {e}", stamp.display()))?;
     Ok(python)
 }
 
