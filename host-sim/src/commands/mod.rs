@@ -34,6 +34,7 @@ pub fn bench_scenarios() -> Vec<String> {
     names.extend(Condition::ALL.iter().map(|c| format!("field/{}", c.name())));
     names.push("guidance".into());
     names.extend(Set::all().iter().map(|s| s.name()));
+    names.push("guidance/plot".into());
     names
 }
 
