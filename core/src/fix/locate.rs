@@ -70,39 +70,7 @@ use crate::model::bearing::{Bearing, predicted, wrap};
 use crate::stats;
 use rand_core::Rng;
 
-/// One bearing as a DF unit delivered it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Observation {
-    /// The bearing in the local frame (vehicle position, angle, the unit's sigma).
-    pub bearing: Bearing,
-    /// When it was taken, seconds (any origin; only the order and equality matter).
-    pub time_s: f32,
-    /// The channel's frequency, MHz, if the unit reports one.
-    pub freq_mhz: Option<f32>,
-    /// Which DF source took it (< [`MAX_SOURCES`]): each has its own offset.
-    pub source: u8,
-}
-
-impl Sighting for Observation {
-    fn bearing(&self) -> &Bearing {
-        &self.bearing
-    }
-    fn source(&self) -> usize {
-        self.source as usize
-    }
-}
-
-impl Observation {
-    /// A bearing from source 0 without a frequency.
-    pub const fn new(bearing: Bearing, time_s: f32) -> Self {
-        Self {
-            bearing,
-            time_s,
-            freq_mhz: None,
-            source: 0,
-        }
-    }
-}
+pub use super::observation::Observation;
 
 /// An observation in the working storage, with where it came from.
 #[derive(Debug, Clone, Copy, PartialEq)]
