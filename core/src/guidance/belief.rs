@@ -12,8 +12,8 @@
 //! u^T P^2 u / (sigma^2 r^2 + u^T P u)).
 
 use crate::error::{Error, check_finite};
-use crate::fix::bias::{BiasPrior, inverse_scaled};
-use crate::linalg;
+use crate::fix::bias::BiasPrior;
+use crate::linalg::{self, inverse_scaled};
 use crate::model::bearing::Bearing;
 
 /// Hypothesised emitter positions a score is averaged over at most.
