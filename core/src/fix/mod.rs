@@ -11,6 +11,7 @@ pub mod init;
 pub mod intersection;
 pub mod locate;
 pub mod ml;
+pub mod noise;
 pub mod observation;
 pub mod order;
 pub mod pcrb;

@@ -25,6 +25,7 @@
 
 use super::bias::{self, BiasPrior, BiasedFix, BiasedOptions, MAX_SOURCES, Sighting, Start};
 use super::intersection::intersect;
+use super::noise::median_sigma;
 use crate::error::{Error, check_finite};
 use crate::likelihood::{Gaussian, Tukey};
 use crate::model::bearing::{predicted, wrap};
@@ -166,22 +167,6 @@ pub struct Consensus {
     pub hypotheses: u32,
     /// The agreement angle used, radians.
     pub threshold: f32,
-}
-
-fn median_sigma<T: Sighting>(items: &[T]) -> f32 {
-    let mut s = [0.0f32; SCORE_SAMPLE];
-    let stride = items.len().div_ceil(SCORE_SAMPLE).max(1);
-    let mut k = 0;
-    for t in items.iter().step_by(stride) {
-        let b = t.bearing();
-        if b.check().is_ok()
-            && let Some(slot) = s.get_mut(k)
-        {
-            *slot = b.sigma;
-            k += 1;
-        }
-    }
-    super::order::median(&mut s[..k])
 }
 
 /// Count of sorted `r` inside [lo, lo + width], and the mean of those.

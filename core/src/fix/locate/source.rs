@@ -5,6 +5,7 @@
 
 use super::super::bias::{self, BiasPrior, BiasedFix, BiasedOptions, MAX_SOURCES, Sighting, Start};
 use super::super::consistency;
+use super::super::noise::median_sigma;
 use super::super::robust::{self, Consensus, OffsetWindow, RefineOptions, RobustFix, TRIM_CUT};
 use super::region::{Region, confidence_region};
 use super::{Item, LocateConfig, NoEmitter, NoiseModel, Source};
@@ -304,17 +305,4 @@ fn as_reported(
             last.map(|i| i.obs.time_s).unwrap_or(0.0),
         ],
     }
-}
-
-fn median_sigma(items: &[Item]) -> f32 {
-    let mut s = [0.0f32; robust::SCORE_SAMPLE];
-    let stride = items.len().div_ceil(robust::SCORE_SAMPLE).max(1);
-    let mut k = 0;
-    for it in items.iter().step_by(stride) {
-        if let Some(slot) = s.get_mut(k) {
-            *slot = it.obs.bearing.sigma;
-            k += 1;
-        }
-    }
-    super::super::order::median(&mut s[..k])
 }
