@@ -33,7 +33,7 @@ pub use bound::{BiasedCrlb, crlb, information};
 pub use calibration::{Calibration, calibrate};
 pub use prior::{BiasPrior, same_priors};
 pub use profile_likelihood::{ProfilePoint, profile};
-pub use solve::{BiasedFix, BiasedOptions, Start, ml, ml_sources};
+pub use solve::{BiasedFix, BiasedOptions, Start, ml, ml_sources, refit};
 
 use crate::model::bearing::Bearing;
 

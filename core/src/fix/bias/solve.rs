@@ -4,7 +4,7 @@ use super::super::{Geometry, geometry};
 use super::problem::{Problem, on_line, residual, set_up, usable};
 use super::{BiasPrior, MAX_SOURCES, STATE, Sighting, same_priors};
 use crate::error::{Error, check_finite};
-use crate::likelihood::Likelihood;
+use crate::likelihood::{Gaussian, Likelihood};
 use crate::linalg::{inverse_scaled, mat_vec};
 use crate::model::bearing::{Bearing, wrap};
 
@@ -95,6 +95,28 @@ pub fn ml_sources<T: Sighting, L: Likelihood>(
     let (problem, mut x, geo) = set_up(items, priors, start, loss, options)?;
     let iterations = descend(&problem, &mut x, options, None);
     finish(&problem, &x, &geo, iterations)
+}
+
+/// Gaussian ML on `items` started from the fix `from` (converged, or nearly: the same source's
+/// fix on a set of bearings that changed a little, or at another noise `scale`): how a robust
+/// fit is refitted on the bearings it kept and at the noise it estimated.
+pub fn refit<T: Sighting>(
+    items: &[T],
+    priors: &[BiasPrior; MAX_SOURCES],
+    from: &BiasedFix,
+    scale: f32,
+    solver: BiasedOptions,
+) -> Result<BiasedFix, Error> {
+    ml_sources(
+        items,
+        priors,
+        Start {
+            position: from.position,
+            bias: from.bias,
+        },
+        &Gaussian,
+        BiasedOptions { scale, ..solver },
+    )
 }
 
 /// Levenberg-Marquardt from `x` to the minimum (along `line` only, if given); returns the

@@ -3,14 +3,13 @@
 //! residuals' correlation in time), the fit at the noise used, and the confidence region
 //! ([`super::region`]).
 
-use super::super::bias::{self, BiasPrior, BiasedFix, BiasedOptions, MAX_SOURCES, Sighting, Start};
+use super::super::bias::{self, BiasPrior, BiasedFix, BiasedOptions, MAX_SOURCES, Sighting};
 use super::super::consistency;
 use super::super::noise::median_sigma;
 use super::super::robust::{self, Consensus, OffsetWindow, RefineOptions, RobustFix, TRIM_CUT};
 use super::region::{Region, confidence_region};
 use super::{Item, LocateConfig, NoEmitter, NoiseModel, Source};
 use crate::error::{Error, check_finite};
-use crate::likelihood::Gaussian;
 use crate::model::bearing::{predicted, wrap};
 use crate::stats;
 use rand_core::Rng;
@@ -236,21 +235,10 @@ fn at_noise(
     scale: f32,
     solver: BiasedOptions,
 ) -> Result<BiasedFix, NoEmitter> {
-    let fix = refined.fix;
     if scale == refined.scale {
-        return Ok(fix);
+        return Ok(refined.fix);
     }
-    bias::ml_sources(
-        members,
-        priors,
-        Start {
-            position: fix.position,
-            bias: fix.bias,
-        },
-        &Gaussian,
-        BiasedOptions { scale, ..solver },
-    )
-    .map_err(NoEmitter::Geometry)
+    bias::refit(members, priors, &refined.fix, scale, solver).map_err(NoEmitter::Geometry)
 }
 
 /// The main DF unit of a source: the one with most of its bearings.

@@ -5,7 +5,7 @@ use super::super::bias::{self, BiasPrior, BiasedFix, BiasedOptions, MAX_SOURCES,
 use super::super::noise::median_sigma;
 use super::{Consensus, MAX_TRIM_ROUNDS, TRIM_ALPHA, TRIM_CUT};
 use crate::error::{Error, check_finite};
-use crate::likelihood::{Gaussian, Tukey};
+use crate::likelihood::Tukey;
 use crate::model::bearing::{predicted, wrap};
 use crate::stats;
 use core::f32::consts::PI;
@@ -141,19 +141,7 @@ pub fn refine<T: Sighting + Copy>(
             return Err(Error::TooFewMeasurements);
         }
         let set = scratch.get(..kept).ok_or(Error::OutOfRange)?;
-        let next = bias::ml_sources(
-            set,
-            priors,
-            Start {
-                position: fix.position,
-                bias: fix.bias,
-            },
-            &Gaussian,
-            BiasedOptions {
-                scale,
-                ..options.solver
-            },
-        )?;
+        let next = bias::refit(set, priors, &fix, scale, options.solver)?;
         let mut settled = kept as u32 == kept_before;
         let dof = kept as f32 - next.parameters;
         if options.estimate_scale && dof > 0.0 {
@@ -177,19 +165,7 @@ pub fn refine<T: Sighting + Copy>(
     let set = scratch
         .get(..kept_before as usize)
         .ok_or(Error::OutOfRange)?;
-    let fix = bias::ml_sources(
-        set,
-        priors,
-        Start {
-            position: fix.position,
-            bias: fix.bias,
-        },
-        &Gaussian,
-        BiasedOptions {
-            scale,
-            ..options.solver
-        },
-    )?;
+    let fix = bias::refit(set, priors, &fix, scale, options.solver)?;
     check_finite(&[scale])?;
     Ok(RobustFix {
         fix,
