@@ -4,7 +4,7 @@
 use super::super::bias::{BiasPrior, MAX_SOURCES, Sighting};
 use super::super::intersection::intersect;
 use super::super::noise::median_sigma;
-use super::SCORE_SAMPLE;
+use super::{MAX_RANGE_M, SCORE_SAMPLE};
 use crate::error::{Error, check_finite};
 use crate::model::bearing::{predicted, wrap};
 use crate::random;
@@ -25,7 +25,8 @@ pub struct RansacOptions {
     pub threshold: f32,
     /// ...or within this angle, radians, whichever is larger.
     pub floor: f32,
-    /// Hypotheses farther than this from the drive's centroid are dropped, metres.
+    /// Hypotheses farther than this from the drive's centroid are dropped, metres (default
+    /// [`MAX_RANGE_M`]).
     pub max_range: f32,
 }
 
@@ -37,7 +38,7 @@ impl Default for RansacOptions {
             min_crossing: 1.0 * PI / 180.0,
             threshold: 3.0,
             floor: 0.5 * PI / 180.0,
-            max_range: 100_000.0,
+            max_range: MAX_RANGE_M,
         }
     }
 }

@@ -31,6 +31,14 @@ mod trimmed;
 pub use consensus::{Consensus, OffsetWindow, RansacOptions, chance, ransac};
 pub use trimmed::{RefineOptions, RobustFix, refine, trim_cut};
 
+/// How far from the drive an emitter is sought, metres (the default
+/// [`RansacOptions::max_range`]): a crossing farther than this from the drive's centroid is no
+/// hypothesis, the pipeline's far-side stretch of an ellipse is capped here, and a likelihood
+/// region that runs out this far is no fix (the range is unobservable: [`super::reach`]). It is
+/// a cut-off, not a prior, so it can be wide at no cost to the fixes within it; the filters'
+/// initial cloud, which spends particles over its range, stops at half of it
+/// ([`super::init::CLOUD_MAX_RANGE_M`]).
+pub const MAX_RANGE_M: f32 = 100_000.0;
 /// Bearings a hypothesis is scored on at most (an evenly strided sample).
 pub const SCORE_SAMPLE: usize = 256;
 /// Rounds of trimming at most.
