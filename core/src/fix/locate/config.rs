@@ -21,7 +21,8 @@ pub struct LocateConfig {
     pub noise: NoiseModel,
     /// Prior of each DF source's offset ([`BiasPrior::calibrated`] for a calibrated unit).
     pub priors: [BiasPrior; MAX_SOURCES],
-    /// Frequencies within this of a channel's lowest share the channel, MHz.
+    /// Frequencies within this of a channel's lowest share the channel, MHz
+    /// ([`channel::belongs`](super::super::channel::belongs)).
     pub channel_width_mhz: f32,
     /// Probability inside the reported ellipses.
     pub confidence: f32,

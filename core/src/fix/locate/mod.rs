@@ -79,6 +79,16 @@ use super::evidence::{self, Verdict};
 use crate::error::{Error, check_finite};
 use rand_core::Rng;
 
+/// A channel's frequencies, as its report and its sources carry them (MHz; `None` for the
+/// channel of the bearings without one).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct ChannelFreq {
+    /// The mean of its bearings' frequencies.
+    mean: Option<f32>,
+    /// The lowest, where the channel starts ([`channel::belongs`]).
+    lowest: Option<f32>,
+}
+
 /// What an observation's intake check says.
 fn intake(o: &Observation) -> Result<(), Error> {
     o.bearing.check()?;
@@ -183,7 +193,10 @@ pub fn locate<const C: usize, const O: usize, R: Rng + ?Sized>(
         while end < n && order[end] == c as u32 {
             end += 1;
         }
-        let freq = channels.freq(c).flatten();
+        let freq = ChannelFreq {
+            mean: channels.freq(c).flatten(),
+            lowest: channels.lowest(c).flatten(),
+        };
         let outcome = sequential::channel_sources(
             &mut items[start..end],
             &mut scratch[start..end],
@@ -194,7 +207,8 @@ pub fn locate<const C: usize, const O: usize, R: Rng + ?Sized>(
         );
         if let Some(slot) = report.channels.get_mut(report.channel_count) {
             *slot = ChannelReport {
-                freq_mhz: freq,
+                freq_mhz: freq.mean,
+                lowest_mhz: freq.lowest,
                 bearings: (end - start) as u32,
                 outcome,
             };

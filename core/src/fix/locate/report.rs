@@ -1,14 +1,19 @@
 //! What [`super::locate`] reports: the sources found (emitters and others), each channel's
 //! outcome, and the observations set aside by reason.
 
+use super::super::channel;
 use super::super::ellipse::Ellipse;
 use crate::error::Error;
 
 /// A located source: an emitter, or another point some bearings agree on.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Source {
-    /// The channel's frequency, MHz (`None` for bearings without one).
+    /// The channel's frequency, the mean of its bearings', MHz (`None` for bearings without
+    /// one).
     pub freq_mhz: Option<f32>,
+    /// The channel's lowest frequency, where it starts, MHz (`None` for bearings without one):
+    /// with the channel width, which bearings are the channel's ([`Source::in_channel`]).
+    pub channel_lowest_mhz: Option<f32>,
     /// Position (east, north), metres.
     pub position: [f32; 2],
     /// Honest position covariance, m^2: offsets integrated out, at the noise used, widened by
@@ -55,6 +60,16 @@ pub struct Source {
     pub time_span: [f32; 2],
 }
 
+impl Source {
+    /// Whether a bearing at `freq_mhz` (`None`: without a frequency) is in this source's
+    /// channel, `width_mhz` being the channel width the bearings were grouped with
+    /// ([`LocateConfig::channel_width_mhz`](super::LocateConfig::channel_width_mhz)): the
+    /// grouping's own rule, [`channel::belongs`].
+    pub fn in_channel(&self, freq_mhz: Option<f32>, width_mhz: f32) -> bool {
+        channel::belongs(freq_mhz, self.channel_lowest_mhz, width_mhz)
+    }
+}
+
 /// Why bearings that agree on a point are not the channel's emitter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum OtherReason {
@@ -99,10 +114,22 @@ pub enum ChannelOutcome {
 pub struct ChannelReport {
     /// Frequency, MHz (`None` for bearings without one).
     pub freq_mhz: Option<f32>,
+    /// Lowest frequency, where the channel starts, MHz (`None` for bearings without one): with
+    /// the channel width, which bearings are the channel's ([`ChannelReport::holds`]).
+    pub lowest_mhz: Option<f32>,
     /// Bearings in the channel (after the evidence checks).
     pub bearings: u32,
     /// What it came to.
     pub outcome: ChannelOutcome,
+}
+
+impl ChannelReport {
+    /// Whether a bearing at `freq_mhz` (`None`: without a frequency) is in this channel,
+    /// `width_mhz` being the channel width the bearings were grouped with: the grouping's own
+    /// rule, [`channel::belongs`].
+    pub fn holds(&self, freq_mhz: Option<f32>, width_mhz: f32) -> bool {
+        channel::belongs(freq_mhz, self.lowest_mhz, width_mhz)
+    }
 }
 
 /// Observations set aside, by reason.
@@ -131,6 +158,7 @@ pub struct Rejected {
 /// A slot not yet filled.
 const EMPTY_SOURCE: Source = Source {
     freq_mhz: None,
+    channel_lowest_mhz: None,
     position: [0.0; 2],
     covariance: [[0.0; 2]; 2],
     ellipse: Ellipse {
@@ -179,6 +207,7 @@ impl<const C: usize, const O: usize> Report<C, O> {
         Self {
             channels: [ChannelReport {
                 freq_mhz: None,
+                lowest_mhz: None,
                 bearings: 0,
                 outcome: ChannelOutcome::NoConsistentEmitter(NoEmitter::NoConsensus),
             }; C],

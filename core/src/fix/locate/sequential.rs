@@ -4,7 +4,9 @@
 
 use super::super::bias::{BiasPrior, MAX_SOURCES};
 use super::source::find_source;
-use super::{ChannelOutcome, Item, LocateConfig, NoEmitter, OtherReason, OtherSource, Report};
+use super::{
+    ChannelFreq, ChannelOutcome, Item, LocateConfig, NoEmitter, OtherReason, OtherSource, Report,
+};
 use rand_core::Rng;
 
 /// The sources of one channel: sequential consensus on `run` (its bearings, in input order),
@@ -12,7 +14,7 @@ use rand_core::Rng;
 pub(super) fn channel_sources<const C: usize, const O: usize, R: Rng + ?Sized>(
     run: &mut [Item],
     scratch: &mut [Item],
-    freq: Option<f32>,
+    freq: ChannelFreq,
     config: &LocateConfig,
     report: &mut Report<C, O>,
     rng: &mut R,

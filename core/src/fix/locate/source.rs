@@ -8,7 +8,7 @@ use super::super::consistency;
 use super::super::noise::median_sigma;
 use super::super::robust::{self, Consensus, OffsetWindow, RefineOptions, RobustFix, TRIM_CUT};
 use super::region::{Region, confidence_region};
-use super::{Item, LocateConfig, NoEmitter, NoiseModel, Source};
+use super::{ChannelFreq, Item, LocateConfig, NoEmitter, NoiseModel, Source};
 use crate::error::{Error, check_finite};
 use crate::model::bearing::{predicted, wrap};
 use crate::stats;
@@ -23,7 +23,7 @@ pub(super) fn find_source<R: Rng + ?Sized>(
     set: &[Item],
     scratch: &mut [Item],
     priors: &[BiasPrior; MAX_SOURCES],
-    freq: Option<f32>,
+    freq: ChannelFreq,
     config: &LocateConfig,
     rng: &mut R,
 ) -> Result<(Source, usize, Offsets), NoEmitter> {
@@ -255,7 +255,7 @@ fn main_unit(members: &[Item]) -> usize {
 /// The source as reported.
 fn as_reported(
     members: &[Item],
-    freq: Option<f32>,
+    freq: ChannelFreq,
     refined: &RobustFix,
     at_scale: &BiasedFix,
     noise: &Noise,
@@ -265,7 +265,8 @@ fn as_reported(
     let main = main_unit(members);
     let (first, last) = (members.first(), members.last());
     Source {
-        freq_mhz: freq,
+        freq_mhz: freq.mean,
+        channel_lowest_mhz: freq.lowest,
         position: refined.fix.position,
         covariance: region.covariance,
         ellipse: region.ellipse,

@@ -154,6 +154,14 @@ fn two_frequencies_give_two_emitters() {
             .map(|f| libm::roundf(f * 100.0) as i32),
         Some(14652)
     );
+    // Each emitter's channel holds its own frequency only, by the grouping's rule.
+    let width = LocateConfig::default().channel_width_mhz;
+    let [a, b] = [r.emitters()[0], r.emitters()[1]];
+    assert!(a.in_channel(Some(145.0), width) && !a.in_channel(Some(146.52), width));
+    assert!(b.in_channel(Some(146.52), width) && !b.in_channel(None, width));
+    assert_eq!(r.channels()[1].lowest_mhz, Some(146.52));
+    assert!(r.channels()[1].holds(Some(146.54), width));
+    assert!(!r.channels()[1].holds(Some(146.6), width));
 }
 
 #[test]
