@@ -48,7 +48,7 @@ pub(super) fn find_source<R: Rng + ?Sized>(
         priors,
         &at_scale,
         &refined.fix.position,
-        noise.fit(),
+        noise.for_region(),
         config,
     )?;
     let source = as_reported(members, freq, &refined, &at_scale, &noise, &region, chance);
@@ -164,7 +164,7 @@ struct Noise {
 
 impl Noise {
     /// What the confidence region needs of it.
-    fn fit(&self) -> super::region::Noise {
+    fn for_region(&self) -> super::region::Noise {
         super::region::Noise {
             scale: self.scale,
             inflation: self.tau,
