@@ -25,39 +25,45 @@ use crate::{Afsa, Firefly, Gsa, ImprovedFirefly, Pso};
 /// An estimator's name.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Method {
-    /// The seeds' SIR.
+    /// The seeds' SIR: Gaussian likelihood, systematic resampling every step, no roughening,
+    /// the scenario's jitter on a static emitter.
     SirSeed,
-    /// The tuned plain SIR.
+    /// The tuned SIR: static model, Gaussian likelihood, systematic resampling at ESS < N/2,
+    /// shrinkage roughening.
     Sir,
-    /// The tuned SIR with a Gaussian + uniform likelihood.
+    /// The tuned SIR with a Gaussian + uniform likelihood (5 % outliers): survives wild
+    /// bearings.
     SirRobust,
-    /// The tuned SIR for sharp likelihoods.
+    /// SIR for sharp likelihoods (RSSI): a Cauchy likelihood widened 2x, resampling every step
+    /// with shrinkage.
     SirWide,
-    /// AFSA-PF (seed 002).
+    /// AFSA-PF (seed 002): the seeds' SIR with an artificial-fish-swarm move every step.
     AfsaPf,
-    /// Standard firefly PF.
+    /// Standard firefly PF (seed 001's comparison): the seeds' SIR with Yang's O(N^2) move.
     FaPf,
-    /// Improved firefly PF (seed 001).
+    /// Improved firefly PF (seed 001): move toward the best only, resample at ESS < N/2.
     FaPfImp,
-    /// Gaussian particle filter.
+    /// Gaussian particle filter (Kotecha and Djuric).
     Gpf,
-    /// PSO inside the GPF.
+    /// Particle swarm optimisation inside the GPF.
     PsoGpf,
-    /// GSA inside the GPF (seed 003).
+    /// Gravitational search inside the GPF (seed 003).
     GsaGpf,
-    /// Extended Kalman filter (bearings).
+    /// Extended Kalman filter on the emitter position (bearings only).
     Ekf,
-    /// Pseudo-linear estimator.
+    /// Pseudo-linear estimator (closed form, biased toward the vehicle).
     Ple,
-    /// Bias-compensated PLE.
+    /// Bias-compensated pseudo-linear estimator.
     BcPle,
-    /// Weighted instrumental variable.
+    /// Weighted instrumental variable (Dogancay), three iterations.
     Wiv,
-    /// Gaussian maximum likelihood.
+    /// Maximum likelihood, Gaussian loss (Levenberg-Marquardt from the bias-compensated PLE).
     Ml,
-    /// Huber maximum likelihood.
+    /// Maximum likelihood with a Huber loss (IRLS): wild bearings down-weighted.
     MlHuber,
-    /// The field pipeline: robust, bias-aware, consistency-checked ML per channel.
+    /// The field pipeline ([`crate::fix::locate`]): RANSAC start, Tukey then trimmed ML over
+    /// position and the DF unit's offset, noise estimated, consistency checked, F-scaled
+    /// ellipses, one emitter per channel and other sources.
     MlRobust,
 }
 
@@ -94,32 +100,16 @@ pub enum SwarmMove {
     Gsa,
 }
 
-/// The loss on a residual.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Loss {
-    /// Gaussian.
-    Gaussian,
-    /// Gaussian + uniform with this outlier share.
-    GaussianUniform(f32),
-    /// Cauchy with its scale multiplied by this factor.
-    WidenedCauchy(f32),
-    /// Huber (c = 1.345).
-    Huber,
-}
-
-/// What an estimator is made of.
+/// What an estimator is made of (its likelihood is chosen where it is built,
+/// [`with_particle_filter`] and [`batch_fix`]; each [`Method`] variant's doc says which).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Spec {
     /// The one name used in the CLI, JSON, README and tests.
     pub name: &'static str,
-    /// One line on what it is.
-    pub summary: &'static str,
     /// Base filter or batch fix.
     pub base: Base,
     /// Swarm move.
     pub swarm: SwarmMove,
-    /// Likelihood or loss.
-    pub loss: Loss,
     /// Resampling settings (SIR only).
     pub config: SirConfig,
     /// On a static emitter, whether each step adds the scenario's random-walk jitter (the
@@ -153,19 +143,15 @@ const WIDENING: f32 = 2.0;
 
 const fn spec(
     name: &'static str,
-    summary: &'static str,
     base: Base,
     swarm: SwarmMove,
-    loss: Loss,
     config: SirConfig,
     jitter: bool,
 ) -> Spec {
     Spec {
         name,
-        summary,
         base,
         swarm,
-        loss,
         config,
         jitter,
     }
@@ -174,162 +160,25 @@ const fn spec(
 /// Every estimator, in table order ([`Method::spec`] indexes it by the enum's order).
 const SPECS: [Spec; 17] = {
     use Base as B;
-    use Loss as L;
     use SwarmMove as S;
     [
-        spec(
-            "sir-seed",
-            "the seeds' SIR: Gaussian likelihood, systematic resampling every step, no roughening, the scenario's jitter on a static emitter",
-            B::Sir,
-            S::None,
-            L::Gaussian,
-            SEEDS,
-            true,
-        ),
-        spec(
-            "sir",
-            "tuned SIR: static model, Gaussian likelihood, systematic resampling at ESS < N/2, shrinkage roughening",
-            B::Sir,
-            S::None,
-            L::Gaussian,
-            TUNED,
-            false,
-        ),
-        spec(
-            "sir-robust",
-            "the tuned SIR with a Gaussian + uniform likelihood (5 % outliers): survives wild bearings",
-            B::Sir,
-            S::None,
-            L::GaussianUniform(ROBUST_EPS),
-            TUNED,
-            false,
-        ),
-        spec(
-            "sir-wide",
-            "SIR for sharp likelihoods (RSSI): a Cauchy likelihood widened 2x, resampling every step with shrinkage",
-            B::Sir,
-            S::None,
-            L::WidenedCauchy(WIDENING),
-            EVERY_STEP_SHRINK,
-            false,
-        ),
-        spec(
-            "afsa-pf",
-            "AFSA-PF (seed 002): the seeds' SIR with an artificial-fish-swarm move every step",
-            B::Sir,
-            S::Afsa,
-            L::Gaussian,
-            SEEDS,
-            true,
-        ),
-        spec(
-            "fa-pf",
-            "standard firefly PF (seed 001's comparison): the seeds' SIR with Yang's O(N^2) move",
-            B::Sir,
-            S::Firefly,
-            L::Gaussian,
-            SEEDS,
-            true,
-        ),
-        spec(
-            "fa-pf-imp",
-            "improved firefly PF (seed 001): move toward the best only, resample at ESS < N/2",
-            B::Sir,
-            S::ImprovedFirefly,
-            L::Gaussian,
-            HALF_ESS,
-            true,
-        ),
-        spec(
-            "gpf",
-            "Gaussian particle filter (Kotecha and Djuric)",
-            B::Gpf,
-            S::None,
-            L::Gaussian,
-            TUNED,
-            false,
-        ),
-        spec(
-            "pso-gpf",
-            "particle swarm optimisation inside the GPF",
-            B::Gpf,
-            S::Pso,
-            L::Gaussian,
-            TUNED,
-            false,
-        ),
-        spec(
-            "gsa-gpf",
-            "gravitational search inside the GPF (seed 003)",
-            B::Gpf,
-            S::Gsa,
-            L::Gaussian,
-            TUNED,
-            false,
-        ),
-        spec(
-            "ekf",
-            "extended Kalman filter on the emitter position (bearings only)",
-            B::Ekf,
-            S::None,
-            L::Gaussian,
-            TUNED,
-            false,
-        ),
-        spec(
-            "ple",
-            "pseudo-linear estimator (closed form, biased toward the vehicle)",
-            B::Batch,
-            S::None,
-            L::Gaussian,
-            TUNED,
-            false,
-        ),
-        spec(
-            "bc-ple",
-            "bias-compensated pseudo-linear estimator",
-            B::Batch,
-            S::None,
-            L::Gaussian,
-            TUNED,
-            false,
-        ),
-        spec(
-            "wiv",
-            "weighted instrumental variable (Dogancay), three iterations",
-            B::Batch,
-            S::None,
-            L::Gaussian,
-            TUNED,
-            false,
-        ),
-        spec(
-            "ml",
-            "maximum likelihood, Gaussian loss (Levenberg-Marquardt from the bias-compensated PLE)",
-            B::Batch,
-            S::None,
-            L::Gaussian,
-            TUNED,
-            false,
-        ),
-        spec(
-            "ml-huber",
-            "maximum likelihood with a Huber loss (IRLS): wild bearings down-weighted",
-            B::Batch,
-            S::None,
-            L::Huber,
-            TUNED,
-            false,
-        ),
-        spec(
-            "ml-robust",
-            "the field pipeline: RANSAC start, Tukey then trimmed ML over position and the DF unit's offset, noise estimated, consistency checked, F-scaled ellipses, one emitter per channel and other sources",
-            B::Pipeline,
-            S::None,
-            L::Huber,
-            TUNED,
-            false,
-        ),
+        spec("sir-seed", B::Sir, S::None, SEEDS, true),
+        spec("sir", B::Sir, S::None, TUNED, false),
+        spec("sir-robust", B::Sir, S::None, TUNED, false),
+        spec("sir-wide", B::Sir, S::None, EVERY_STEP_SHRINK, false),
+        spec("afsa-pf", B::Sir, S::Afsa, SEEDS, true),
+        spec("fa-pf", B::Sir, S::Firefly, SEEDS, true),
+        spec("fa-pf-imp", B::Sir, S::ImprovedFirefly, HALF_ESS, true),
+        spec("gpf", B::Gpf, S::None, TUNED, false),
+        spec("pso-gpf", B::Gpf, S::Pso, TUNED, false),
+        spec("gsa-gpf", B::Gpf, S::Gsa, TUNED, false),
+        spec("ekf", B::Ekf, S::None, TUNED, false),
+        spec("ple", B::Batch, S::None, TUNED, false),
+        spec("bc-ple", B::Batch, S::None, TUNED, false),
+        spec("wiv", B::Batch, S::None, TUNED, false),
+        spec("ml", B::Batch, S::None, TUNED, false),
+        spec("ml-huber", B::Batch, S::None, TUNED, false),
+        spec("ml-robust", B::Pipeline, S::None, TUNED, false),
     ]
 };
 

@@ -1,5 +1,7 @@
 //! The little linear algebra the filters need: symmetric 2x2 inverse and eigen-decomposition,
-//! and a Cholesky factor for any small D. Everything returns `None` instead of NaN.
+//! and for any small D a Cholesky factor, the SPD inverse (plain, or scaled to unit diagonal
+//! for entries of very different sizes) and a matrix-vector product. Everything returns `None`
+//! instead of NaN.
 
 /// Inverse of a symmetric 2x2 matrix; `None` when it is singular or ill-conditioned.
 pub fn inverse2(m: &[[f32; 2]; 2]) -> Option<[[f32; 2]; 2]> {
@@ -87,6 +89,36 @@ pub fn inverse_spd<const D: usize>(m: &[[f32; D]; D]) -> Option<[[f32; D]; D]> {
         }
     }
     inv.iter().flatten().all(|v| v.is_finite()).then_some(inv)
+}
+
+/// Inverse of a symmetric positive definite matrix scaled to unit diagonal first, so entries
+/// of very different sizes (metres and radians) keep their digits. `None` if not SPD.
+pub fn inverse_scaled<const D: usize>(m: &[[f32; D]; D]) -> Option<[[f32; D]; D]> {
+    let mut d = [0.0f32; D];
+    for i in 0..D {
+        if !(m[i][i] > 0.0) || !m[i][i].is_finite() {
+            return None;
+        }
+        d[i] = 1.0 / libm::sqrtf(m[i][i]);
+    }
+    let mut s = [[0.0f32; D]; D];
+    for i in 0..D {
+        for j in 0..D {
+            s[i][j] = 0.5 * (m[i][j] + m[j][i]) * d[i] * d[j];
+        }
+    }
+    let mut inv = inverse_spd(&s)?;
+    for i in 0..D {
+        for j in 0..D {
+            inv[i][j] *= d[i] * d[j];
+        }
+    }
+    inv.iter().flatten().all(|v| v.is_finite()).then_some(inv)
+}
+
+/// The product of a D x D matrix and a vector.
+pub fn mat_vec<const D: usize>(m: &[[f32; D]; D], v: &[f32; D]) -> [f32; D] {
+    core::array::from_fn(|i| (0..D).map(|j| m[i][j] * v[j]).sum())
 }
 
 fn all_finite2(m: &[[f32; 2]; 2]) -> bool {

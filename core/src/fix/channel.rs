@@ -4,7 +4,8 @@
 //! different frequencies makes phantom fixes between two transmitters (FIELD.md). Frequencies
 //! are sorted and swept: a channel holds every frequency within `width` of its lowest, the next
 //! frequency beyond starts a new channel. Bearings without a frequency form one channel of
-//! their own, listed first.
+//! their own, listed first. [`belongs`] is that rule for one frequency and one channel, for
+//! whoever needs to pick a channel's bearings out again.
 
 use super::order::heapsort_by;
 use crate::error::{Error, check_finite};
@@ -12,12 +13,27 @@ use crate::error::{Error, check_finite};
 /// Marks an item that belongs to no channel (excluded, or beyond the capacity).
 pub const NO_CHANNEL: u8 = u8::MAX;
 
+/// Whether a bearing at `freq` (MHz; `None`: without a frequency) belongs to the channel whose
+/// lowest frequency is `lowest` (`None`: the channel of the bearings without one) and whose
+/// width is `width` (MHz): from its lowest frequency to `width` above it, both ends included.
+/// It is the rule [`group`] assigns by: every bearing [`group`] put in a channel belongs to it
+/// and to no other. A negative or NaN width holds nothing.
+pub fn belongs(freq: Option<f32>, lowest: Option<f32>, width: f32) -> bool {
+    match (freq, lowest) {
+        (Some(f), Some(l)) => f >= l && f - l <= width,
+        (None, None) => true,
+        _ => false,
+    }
+}
+
 /// The channels of a set of bearings, at most `C` of them.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Channels<const C: usize> {
     len: usize,
     /// Mean frequency of each channel, MHz (`None` for the channel without frequency).
     freq: [Option<f32>; C],
+    /// Lowest frequency of each channel, MHz (`None` for the channel without frequency).
+    lowest: [Option<f32>; C],
     /// Items in each channel.
     count: [u32; C],
     /// Items whose channel did not fit in `C`.
@@ -38,6 +54,12 @@ impl<const C: usize> Channels<C> {
     /// Mean frequency of channel `c` (MHz; `Some(None)` for the channel without frequency).
     pub fn freq(&self, c: usize) -> Option<Option<f32>> {
         self.freq.get(..self.len)?.get(c).copied()
+    }
+
+    /// Lowest frequency of channel `c`, where it starts (MHz; `Some(None)` for the channel
+    /// without frequency): what [`belongs`] takes.
+    pub fn lowest(&self, c: usize) -> Option<Option<f32>> {
+        self.lowest.get(..self.len)?.get(c).copied()
     }
 
     /// Items in channel `c`.
@@ -76,6 +98,7 @@ pub fn group<const C: usize>(
     let mut out = Channels {
         len: 0,
         freq: [None; C],
+        lowest: [None; C],
         count: [0; C],
         overflow: 0,
     };
@@ -117,10 +140,12 @@ pub fn group<const C: usize>(
     let mut current: Option<usize> = None;
     for &i in &order[..k] {
         let f = f_of(i);
-        if current.is_none() || f - lowest > width {
+        // Sorted: f is at least `lowest`, and beyond the width it starts the next channel.
+        if current.is_none() || !belongs(Some(f), Some(lowest), width) {
             lowest = f;
             current = (out.len < C).then_some(out.len);
-            if current.is_some() {
+            if let Some(c) = current {
+                out.lowest[c] = Some(f);
                 out.len += 1;
             }
         }
@@ -164,6 +189,45 @@ mod tests {
         assert_eq!(ch.freq(0), Some(None));
         assert!((ch.freq(1).flatten().unwrap() - 145.005).abs() < 1e-3);
         assert_eq!((ch.count(0), ch.count(1), ch.count(2)), (2, 2, 2));
+    }
+
+    #[test]
+    fn a_channel_holds_from_its_lowest_to_the_width_above_and_belongs_says_so() {
+        // Sorted 100, 100.5 | 100.75, 101.25 at width 0.5: 100.75 is within the width of the
+        // first channel's mean (100.25) but beyond its lowest, so it starts the second.
+        let f = [
+            Some(Some(101.25)),
+            Some(Some(100.0)),
+            Some(None),
+            Some(Some(100.75)),
+            Some(Some(100.5)),
+        ];
+        let mut order = [0u32; 5];
+        let mut of = [0u8; 5];
+        let ch = group::<4>(5, |i| f[i], 0.5, &mut order, &mut of).unwrap();
+        assert_eq!(of, [2, 1, 0, 2, 1]);
+        assert_eq!(
+            (ch.lowest(0), ch.lowest(1), ch.lowest(2), ch.lowest(3)),
+            (Some(None), Some(Some(100.0)), Some(Some(100.75)), None)
+        );
+        for (i, fi) in f.iter().enumerate() {
+            for c in 0..ch.len() {
+                let lowest = ch.lowest(c).unwrap();
+                assert_eq!(
+                    belongs(fi.unwrap(), lowest, 0.5),
+                    of[i] as usize == c,
+                    "{i} {c}"
+                );
+            }
+        }
+        // Both ends included; below the lowest, or a frequency against the untuned channel, not.
+        assert!(belongs(Some(100.5), Some(100.0), 0.5));
+        assert!(!belongs(Some(99.75), Some(100.0), 0.5));
+        assert!(!belongs(Some(100.0), None, 0.5) && !belongs(None, Some(100.0), 0.5));
+        // Width 0: equal frequencies only; a width no channel could have holds nothing.
+        assert!(belongs(Some(100.0), Some(100.0), 0.0));
+        assert!(!belongs(Some(100.5), Some(100.0), 0.0));
+        assert!(!belongs(Some(100.0), Some(100.0), f32::NAN));
     }
 
     #[test]

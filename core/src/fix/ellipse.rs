@@ -89,12 +89,16 @@ pub fn mahalanobis(cov: &[[f32; 2]; 2], centre: &[f32; 2], point: &[f32; 2]) -> 
     (q >= 0.0 && q.is_finite()).then(|| libm::sqrtf(q))
 }
 
+/// CEP50 per unit of s1 + s2, the standard deviations along a Gaussian's two axes: the usual
+/// approximation CEP50 ~ 0.59 (s1 + s2), accurate to a few percent while s2 / s1 > 0.2.
+pub const CEP50_PER_SD_SUM: f32 = 0.59;
+
 /// Circular error probable (50 %): 0.59 (s1 + s2) of the standard deviations along the axes
-/// (accurate to a few percent while s2 / s1 > 0.2).
+/// ([`CEP50_PER_SD_SUM`]).
 pub fn cep50(cov: &[[f32; 2]; 2]) -> Result<f32, Error> {
     let e = Ellipse::from_covariance(cov, 0.5)?;
     let k = libm::sqrtf(-2.0 * libm::logf(0.5));
-    Ok(0.59 * (e.major + e.minor) / k)
+    Ok(CEP50_PER_SD_SUM * (e.major + e.minor) / k)
 }
 
 #[cfg(test)]

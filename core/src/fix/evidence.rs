@@ -9,7 +9,7 @@
 //! cannot be placed in the drive's order, and the correlation estimate needs that order. Both
 //! are counted and never used; the first occurrence is kept.
 
-use super::locate::Observation;
+use super::observation::Observation;
 use super::order::heapsort_by;
 use crate::error::Error;
 

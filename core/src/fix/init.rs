@@ -26,6 +26,20 @@ use crate::particles::ParticleSet;
 use crate::random;
 use rand_core::Rng;
 
+/// Pair intersections tried at most by default: 2^16, as many as a drive of about 360 bearings
+/// has in all (m (m - 1) / 2 pairs), so a longer drive costs no more.
+pub const MAX_PAIRS: u32 = 65_536;
+/// Nearest range of the along-bearings cloud by default, metres: nearer than a few tens of
+/// metres a GPS fix's few metres of error ([`super::reach::POSITION_SD_M`]) swing a bearing by
+/// several degrees.
+pub const CLOUD_MIN_RANGE_M: f32 = 20.0;
+/// Farthest range of the along-bearings cloud by default, metres. The cloud is a prior that
+/// spends particles: drawn log-uniform in range, every decade between [`CLOUD_MIN_RANGE_M`] and
+/// this gets the same share (3.4 decades here), so a farther limit thins the particles at every
+/// range. The robust search's cut-off ([`super::robust::MAX_RANGE_M`]), which costs nothing to
+/// widen, is twice this.
+pub const CLOUD_MAX_RANGE_M: f32 = 50_000.0;
+
 /// How the initial cloud was made.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum InitialCloud {
@@ -52,9 +66,9 @@ impl Default for InitOptions {
     fn default() -> Self {
         Self {
             min_angle: super::intersection::MIN_CROSSING,
-            max_pairs: 65_536,
-            min_range: 20.0,
-            max_range: 50_000.0,
+            max_pairs: MAX_PAIRS,
+            min_range: CLOUD_MIN_RANGE_M,
+            max_range: CLOUD_MAX_RANGE_M,
         }
     }
 }

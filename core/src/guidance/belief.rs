@@ -12,8 +12,9 @@
 //! u^T P^2 u / (sigma^2 r^2 + u^T P u)).
 
 use crate::error::{Error, check_finite};
-use crate::fix::bias::{BiasPrior, inverse_scaled};
-use crate::linalg;
+use crate::fix::bias::BiasPrior;
+use crate::fix::ellipse::CEP50_PER_SD_SUM;
+use crate::linalg::{self, inverse_scaled};
 use crate::model::bearing::Bearing;
 
 /// Hypothesised emitter positions a score is averaged over at most.
@@ -180,7 +181,7 @@ impl Belief {
     /// [`crate::fix::ellipse::cep50`] computes it.
     pub fn cep50(&self) -> f32 {
         let (a, b) = self.axes();
-        0.59 * (a + b)
+        CEP50_PER_SD_SUM * (a + b)
     }
 }
 

@@ -1,0 +1,227 @@
+//! The offsets found with the position, the bound, several sources, calibration, bad priors.
+
+use super::*;
+use crate::error::Error;
+use crate::linalg::inverse_scaled;
+use crate::model::bearing::{predicted, wrap};
+use crate::random;
+use rand_core::SeedableRng;
+use rand_xorshift::XorShiftRng;
+
+const DEG: f32 = core::f32::consts::PI / 180.0;
+
+/// 120 bearings on a circle of `radius` about `centre`, over `arc` radians, offset `b`.
+fn arc_drive(
+    e: [f32; 2],
+    centre: [f32; 2],
+    radius: f32,
+    arc: f32,
+    b: f32,
+    sigma: f32,
+    rng: &mut XorShiftRng,
+) -> [Bearing; 120] {
+    core::array::from_fn(|k| {
+        let a = arc * k as f32 / 119.0;
+        let v = [
+            centre[0] + radius * libm::cosf(a),
+            centre[1] + radius * libm::sinf(a),
+        ];
+        Bearing {
+            vehicle: v,
+            theta: wrap(predicted(&e, &v) + b + sigma * random::normal(rng)),
+            sigma,
+        }
+    })
+}
+
+#[test]
+fn a_surrounded_emitter_gives_its_offset_and_an_unchanged_position_bound() {
+    let mut rng = XorShiftRng::seed_from_u64(1);
+    let e = [1200.0, 800.0];
+    let bs = arc_drive(
+        e,
+        e,
+        300.0,
+        2.0 * core::f32::consts::PI,
+        4.0 * DEG,
+        0.02,
+        &mut rng,
+    );
+    let f = ml(
+        &bs,
+        BiasPrior::default(),
+        None,
+        &crate::Gaussian,
+        Default::default(),
+    )
+    .unwrap();
+    // sigma / sqrt(N) = 1.15 deg / 11 = 0.1 deg: 4 degrees found to a few tenths.
+    assert!(
+        (f.bias[0] - 4.0 * DEG).abs() < 0.4 * DEG,
+        "{}",
+        f.bias[0] / DEG
+    );
+    assert!((f.bias_sd[0] - 0.02 / libm::sqrtf(120.0)).abs() < 0.2 * f.bias_sd[0]);
+    assert!(libm::hypotf(f.position[0] - e[0], f.position[1] - e[1]) < 5.0);
+    // Around the emitter the offset costs the position nothing.
+    let plain = crate::fix::crlb::crlb(&e, &bs).unwrap().rmse;
+    let aware = crlb(&e, &bs, BiasPrior::default()).unwrap().rmse;
+    assert!(aware < 1.01 * plain, "{aware} {plain}");
+    assert!(f.parameters > 2.99, "{}", f.parameters);
+}
+
+#[test]
+fn on_a_short_arc_the_prior_governs_and_the_covariance_shows_it() {
+    let mut rng = XorShiftRng::seed_from_u64(2);
+    let e = [0.0, 2000.0];
+    // A straight road, 400 m long, the emitter broadside 2 km away: an 11 degree spread of
+    // bearings, which cannot tell an offset from a sideways shift.
+    let bs: [Bearing; 120] = core::array::from_fn(|k| {
+        let v = [-200.0 + 400.0 * k as f32 / 119.0, 0.0];
+        Bearing {
+            vehicle: v,
+            theta: wrap(predicted(&e, &v) + 0.02 * random::normal(&mut rng)),
+            sigma: 0.02,
+        }
+    });
+    let prior = BiasPrior::default();
+    let f = ml(&bs, prior, None, &crate::Gaussian, Default::default()).unwrap();
+    let calibrated = ml(
+        &bs,
+        BiasPrior::calibrated(0.0),
+        None,
+        &crate::Gaussian,
+        Default::default(),
+    )
+    .unwrap();
+    // The offset is barely measured: its sd stays near the prior's.
+    assert!(f.bias_sd[0] > 0.9 * prior.sd, "{}", f.bias_sd[0] / DEG);
+    assert!(f.parameters < 2.2, "{}", f.parameters);
+    // And the position's cross-range sd grows toward range x prior sd (2 km x 6 deg).
+    let cross = libm::sqrtf(f.covariance[0][0]);
+    let plain = libm::sqrtf(calibrated.covariance[0][0]);
+    assert!(cross > 100.0 && cross > 5.0 * plain, "{cross} vs {plain}");
+    let bound = crlb(&e, &bs, prior).unwrap();
+    assert!(
+        (bound.rmse - libm::sqrtf(f.covariance[0][0] + f.covariance[1][1])).abs()
+            < 0.1 * bound.rmse
+    );
+}
+
+#[test]
+fn three_by_three_information_matches_the_bound() {
+    let mut rng = XorShiftRng::seed_from_u64(3);
+    let e = [500.0, 900.0];
+    let bs = arc_drive(e, [0.0, 0.0], 400.0, 1.5, 0.0, 0.03, &mut rng);
+    let prior = BiasPrior {
+        mean: 0.0,
+        sd: 0.05,
+    };
+    let j = information(&e, &bs, prior).unwrap();
+    let c = inverse_scaled(&j).unwrap();
+    let b = crlb(&e, &bs, prior).unwrap();
+    assert!((libm::sqrtf(c[0][0] + c[1][1]) - b.rmse).abs() < 1e-3 * b.rmse);
+    assert!((libm::sqrtf(c[2][2]) - b.bias_sd).abs() < 1e-3 * b.bias_sd);
+    assert!((j[2][2] - (120.0 / (0.03 * 0.03) + 400.0)).abs() < 1.0);
+    // A calibrated unit: the plain 2 x 2 bound.
+    let cal = crlb(&e, &bs, BiasPrior::calibrated(0.0)).unwrap();
+    let plain = crate::fix::crlb::crlb(&e, &bs).unwrap();
+    assert!((cal.rmse - plain.rmse).abs() < 1e-3 * plain.rmse);
+}
+
+#[test]
+fn calibration_measures_the_offset_with_sigma_over_root_n() {
+    let mut rng = XorShiftRng::seed_from_u64(4);
+    let e = [300.0, 700.0];
+    let mut bs = arc_drive(e, [0.0, 0.0], 200.0, 1.0, -3.0 * DEG, 0.03, &mut rng);
+    bs[7].theta += 1.0; // a wild bearing
+    bs[9].sigma = -1.0; // an unusable one
+    let c = calibrate(&bs, e).unwrap();
+    assert_eq!((c.used, c.rejected), (118, 2));
+    assert!(
+        (c.bias + 3.0 * DEG).abs() < 4.0 * c.sd,
+        "{} +- {}",
+        c.bias / DEG,
+        c.sd / DEG
+    );
+    assert!((c.sigma - 0.03).abs() < 0.005, "{}", c.sigma);
+    // White noise: N_eff near N, the sd near sigma / sqrt(N).
+    assert!(c.effective > 80.0, "{}", c.effective);
+    assert!((c.sd - 0.03 / libm::sqrtf(118.0)).abs() < 0.3 * c.sd);
+    assert_eq!(calibrate(&bs[..1], e), Err(Error::TooFewMeasurements));
+}
+
+#[test]
+fn several_sources_get_their_own_offsets() {
+    struct S(Bearing, usize);
+    impl Sighting for S {
+        fn bearing(&self) -> &Bearing {
+            &self.0
+        }
+        fn source(&self) -> usize {
+            self.1
+        }
+    }
+    let mut rng = XorShiftRng::seed_from_u64(5);
+    let e = [1000.0, 1000.0];
+    let bs = arc_drive(e, e, 500.0, 6.0, 0.0, 0.01, &mut rng);
+    let items: [S; 120] = core::array::from_fn(|k| {
+        let src = k % 2;
+        let mut b = bs[k];
+        b.theta = wrap(b.theta + if src == 0 { 2.0 * DEG } else { -5.0 * DEG });
+        S(b, src)
+    });
+    let f = ml_sources(
+        &items,
+        &same_priors(BiasPrior::default()),
+        Start {
+            position: [900.0, 1100.0],
+            bias: [0.0; MAX_SOURCES],
+        },
+        &crate::Gaussian,
+        Default::default(),
+    )
+    .unwrap();
+    assert!(
+        (f.bias[0] - 2.0 * DEG).abs() < 0.3 * DEG,
+        "{}",
+        f.bias[0] / DEG
+    );
+    assert!(
+        (f.bias[1] + 5.0 * DEG).abs() < 0.3 * DEG,
+        "{}",
+        f.bias[1] / DEG
+    );
+    assert_eq!(f.sources, 0b11);
+    // Unseen sources keep their prior.
+    assert_eq!((f.bias[2], f.bias_sd[2]), (0.0, DEFAULT_BIAS_SD));
+    assert!(libm::hypotf(f.position[0] - e[0], f.position[1] - e[1]) < 3.0);
+}
+
+#[test]
+fn bad_priors_are_refused() {
+    let bs = [Bearing {
+        vehicle: [0.0, 0.0],
+        theta: 0.0,
+        sigma: 0.01,
+    }; 3];
+    let nan = BiasPrior {
+        mean: 0.0,
+        sd: f32::NAN,
+    };
+    assert_eq!(
+        ml(
+            &bs,
+            nan,
+            Some([1.0, 1.0]),
+            &crate::Gaussian,
+            Default::default()
+        ),
+        Err(Error::NonFinite)
+    );
+    let neg = BiasPrior {
+        mean: 0.0,
+        sd: -1.0,
+    };
+    assert_eq!(crlb(&[1.0, 1.0], &bs, neg), Err(Error::OutOfRange));
+}

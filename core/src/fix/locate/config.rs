@@ -1,0 +1,92 @@
+//! The settings of [`super::locate`].
+
+use super::super::bias::{BiasPrior, BiasedOptions, MAX_SOURCES, same_priors};
+use super::super::robust::RansacOptions;
+use crate::error::{Error, check_finite};
+
+/// How far the bearings' own sigmas are trusted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum NoiseModel {
+    /// Estimate the noise from the residuals; intervals use the F distribution.
+    #[default]
+    Estimated,
+    /// The sigmas are the unit's, checked by the residuals' chi-square.
+    Known,
+}
+
+/// Settings of [`super::locate`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LocateConfig {
+    /// Whether the bearings' sigmas are estimated or trusted.
+    pub noise: NoiseModel,
+    /// Prior of each DF source's offset ([`BiasPrior::calibrated`] for a calibrated unit).
+    pub priors: [BiasPrior; MAX_SOURCES],
+    /// Frequencies within this of a channel's lowest share the channel, MHz
+    /// ([`channel::belongs`](super::super::channel::belongs)).
+    pub channel_width_mhz: f32,
+    /// Probability inside the reported ellipses.
+    pub confidence: f32,
+    /// Estimated noise above this (radians) means no consistent emitter.
+    pub max_sigma: f32,
+    /// A cluster is a source only if luck would line up as many bearings with a chance below
+    /// this.
+    pub significance: f32,
+    /// With [`NoiseModel::Known`], a residual chi-square p-value below this marks the unit
+    /// noisier than it claims.
+    pub consistency: f32,
+    /// Sources (emitter and others) sought per channel at most.
+    pub max_sources_per_channel: u32,
+    /// Bearings a source needs at least.
+    pub min_bearings: u32,
+    /// The robust search.
+    pub ransac: RansacOptions,
+    /// The solver.
+    pub solver: BiasedOptions,
+}
+
+impl Default for LocateConfig {
+    fn default() -> Self {
+        Self {
+            noise: NoiseModel::Estimated,
+            priors: same_priors(BiasPrior::default()),
+            channel_width_mhz: 0.05,
+            confidence: 0.95,
+            max_sigma: 10.0 * core::f32::consts::PI / 180.0,
+            significance: 0.01,
+            consistency: 1e-3,
+            max_sources_per_channel: 4,
+            min_bearings: 3,
+            ransac: RansacOptions::default(),
+            solver: BiasedOptions::default(),
+        }
+    }
+}
+
+impl LocateConfig {
+    /// `Ok` when every setting is usable.
+    pub fn check(&self) -> Result<(), Error> {
+        for p in &self.priors {
+            p.check()?;
+        }
+        self.ransac.check()?;
+        check_finite(&[
+            self.channel_width_mhz,
+            self.confidence,
+            self.max_sigma,
+            self.significance,
+            self.consistency,
+        ])?;
+        if self.channel_width_mhz >= 0.0
+            && self.confidence > 0.0
+            && self.confidence < 1.0
+            && self.max_sigma > 0.0
+            && self.significance > 0.0
+            && self.consistency >= 0.0
+            && self.min_bearings >= 3
+        {
+            Ok(())
+        } else {
+            Err(Error::OutOfRange)
+        }
+    }
+}

@@ -1,0 +1,241 @@
+//! What [`super::locate`] reports: the sources found (emitters and others), each channel's
+//! outcome, and the observations set aside by reason.
+
+use super::super::channel;
+use super::super::ellipse::Ellipse;
+use crate::error::Error;
+
+/// A located source: an emitter, or another point some bearings agree on.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Source {
+    /// The channel's frequency, the mean of its bearings', MHz (`None` for bearings without
+    /// one).
+    pub freq_mhz: Option<f32>,
+    /// The channel's lowest frequency, where it starts, MHz (`None` for bearings without one):
+    /// with the channel width, which bearings are the channel's ([`Source::in_channel`]).
+    pub channel_lowest_mhz: Option<f32>,
+    /// Position (east, north), metres.
+    pub position: [f32; 2],
+    /// Honest position covariance, m^2: offsets integrated out, at the noise used, widened by
+    /// N / N_eff. The ellipse is x^T C^-1 x <= `ellipse_scale`.
+    pub covariance: [[f32; 2]; 2],
+    /// The `confidence` ellipse.
+    pub ellipse: Ellipse,
+    /// The ellipse's scale k (chi-square or 2 F(2, dof)).
+    pub ellipse_scale: f32,
+    /// Circular error probable, metres (with the same scaling).
+    pub cep50: f32,
+    /// The ellipse's major axis over the Fisher ellipse's (after the N / N_eff and far-side
+    /// widening): above 1 where the likelihood reaches farther than its curvature at the fix
+    /// says ([`super::super::reach`]), a range the bearings barely observe.
+    pub stretch: f32,
+    /// The bias-aware bound at the fix: sqrt(trace) of the marginal position block of the
+    /// inverse information, at the noise used, metres.
+    pub crlb: f32,
+    /// Offset of the source's main DF unit (the one with most bearings), radians.
+    pub bias: f32,
+    /// Its standard deviation, radians (0 for a calibrated unit).
+    pub bias_sd: f32,
+    /// Which DF unit `bias` is.
+    pub bias_source: u8,
+    /// Bearing noise used, radians (the median bearing sigma times the scale).
+    pub sigma: f32,
+    /// Whether `sigma` was estimated from the residuals.
+    pub sigma_estimated: bool,
+    /// Bearings used.
+    pub used: u32,
+    /// Their effective number (N / tau, tau from the residuals' autocorrelation).
+    pub effective: f32,
+    /// Residual degrees of freedom: N_eff minus the effective unknowns.
+    pub dof: f32,
+    /// P(chi-square > observed) of the residuals against the bearings' stated sigmas.
+    pub p_value: f32,
+    /// How likely luck lines up this many bearings (smaller is surer).
+    pub chance: f32,
+    /// The residuals agree with the noise model and the noise is plausible.
+    pub consistent: bool,
+    /// First and last input index of its bearings.
+    pub index_span: [u32; 2],
+    /// First and last time of its bearings, seconds.
+    pub time_span: [f32; 2],
+}
+
+impl Source {
+    /// Whether a bearing at `freq_mhz` (`None`: without a frequency) is in this source's
+    /// channel, `width_mhz` being the channel width the bearings were grouped with
+    /// ([`LocateConfig::channel_width_mhz`](super::LocateConfig::channel_width_mhz)): the
+    /// grouping's own rule, [`channel::belongs`].
+    pub fn in_channel(&self, freq_mhz: Option<f32>, width_mhz: f32) -> bool {
+        channel::belongs(freq_mhz, self.channel_lowest_mhz, width_mhz)
+    }
+}
+
+/// Why bearings that agree on a point are not the channel's emitter.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OtherReason {
+    /// Fewer bearings agree on it than on the channel's emitter: a reflection (a stretch of
+    /// the drive that saw a ghost) or a second transmitter on the channel.
+    Weaker,
+}
+
+/// Another source: a point some bearings agree on besides the channel's emitter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OtherSource {
+    /// Its fix.
+    pub source: Source,
+    /// Why it is not the emitter.
+    pub why: OtherReason,
+}
+
+/// Why a channel has no consistent emitter.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NoEmitter {
+    /// No point has more bearings agreeing than luck would give.
+    NoConsensus,
+    /// The residuals' noise is beyond [`LocateConfig::max_sigma`](super::LocateConfig::max_sigma).
+    TooNoisy,
+    /// Too few bearings to estimate the noise and check the fit.
+    TooFew,
+    /// The geometry gives no fix (parallel bearings, a stationary vehicle...).
+    Geometry(Error),
+}
+
+/// What a channel came to.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ChannelOutcome {
+    /// Its emitter is `emitters()[i]`.
+    Emitter(usize),
+    /// No consistent emitter.
+    NoConsistentEmitter(NoEmitter),
+}
+
+/// One channel's summary.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChannelReport {
+    /// Frequency, MHz (`None` for bearings without one).
+    pub freq_mhz: Option<f32>,
+    /// Lowest frequency, where the channel starts, MHz (`None` for bearings without one): with
+    /// the channel width, which bearings are the channel's ([`ChannelReport::holds`]).
+    pub lowest_mhz: Option<f32>,
+    /// Bearings in the channel (after the evidence checks).
+    pub bearings: u32,
+    /// What it came to.
+    pub outcome: ChannelOutcome,
+}
+
+impl ChannelReport {
+    /// Whether a bearing at `freq_mhz` (`None`: without a frequency) is in this channel,
+    /// `width_mhz` being the channel width the bearings were grouped with: the grouping's own
+    /// rule, [`channel::belongs`].
+    pub fn holds(&self, freq_mhz: Option<f32>, width_mhz: f32) -> bool {
+        channel::belongs(freq_mhz, self.lowest_mhz, width_mhz)
+    }
+}
+
+/// Observations set aside, by reason.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Rejected {
+    /// Non-finite or out-of-range values (a bad sigma, a NaN angle, a negative frequency).
+    pub invalid: u32,
+    /// A DF source index beyond [`MAX_SOURCES`](super::super::bias::MAX_SOURCES).
+    pub unknown_source: u32,
+    /// Beyond the working storage's capacity.
+    pub over_capacity: u32,
+    /// Exact repeats of earlier observations.
+    pub repeated: u32,
+    /// Older than their source's latest.
+    pub time_backwards: u32,
+    /// In a channel beyond the report's capacity.
+    pub too_many_channels: u32,
+    /// In a channel but agreeing with no source found (wild bearings).
+    pub outliers: u32,
+    /// In a channel without a consistent emitter.
+    pub no_emitter: u32,
+    /// In an other source beyond the report's capacity.
+    pub too_many_sources: u32,
+}
+
+/// A slot not yet filled.
+const EMPTY_SOURCE: Source = Source {
+    freq_mhz: None,
+    channel_lowest_mhz: None,
+    position: [0.0; 2],
+    covariance: [[0.0; 2]; 2],
+    ellipse: Ellipse {
+        major: 0.0,
+        minor: 0.0,
+        orientation: 0.0,
+        confidence: 0.0,
+    },
+    ellipse_scale: 0.0,
+    cep50: 0.0,
+    stretch: 0.0,
+    crlb: 0.0,
+    bias: 0.0,
+    bias_sd: 0.0,
+    bias_source: 0,
+    sigma: 0.0,
+    sigma_estimated: false,
+    used: 0,
+    effective: 0.0,
+    dof: 0.0,
+    p_value: 0.0,
+    chance: 0.0,
+    consistent: false,
+    index_span: [0; 2],
+    time_span: [0.0; 2],
+};
+
+/// What [`super::locate`] found: up to `C` channels (one emitter each) and `O` other sources.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Report<const C: usize, const O: usize> {
+    pub(super) channels: [ChannelReport; C],
+    pub(super) channel_count: usize,
+    pub(super) emitters: [Source; C],
+    pub(super) emitter_count: usize,
+    pub(super) others: [OtherSource; O],
+    pub(super) other_count: usize,
+    /// Observations set aside, by reason.
+    pub rejected: Rejected,
+    /// Observations accepted into the analysis (after the evidence checks).
+    pub accepted: u32,
+}
+
+impl<const C: usize, const O: usize> Report<C, O> {
+    /// Nothing found yet.
+    pub(super) fn new() -> Self {
+        Self {
+            channels: [ChannelReport {
+                freq_mhz: None,
+                lowest_mhz: None,
+                bearings: 0,
+                outcome: ChannelOutcome::NoConsistentEmitter(NoEmitter::NoConsensus),
+            }; C],
+            channel_count: 0,
+            emitters: [EMPTY_SOURCE; C],
+            emitter_count: 0,
+            others: [OtherSource {
+                source: EMPTY_SOURCE,
+                why: OtherReason::Weaker,
+            }; O],
+            other_count: 0,
+            rejected: Rejected::default(),
+            accepted: 0,
+        }
+    }
+
+    /// One consistent emitter per channel that has one.
+    pub fn emitters(&self) -> &[Source] {
+        self.emitters.get(..self.emitter_count).unwrap_or(&[])
+    }
+
+    /// Other sources, every channel's.
+    pub fn others(&self) -> &[OtherSource] {
+        self.others.get(..self.other_count).unwrap_or(&[])
+    }
+
+    /// Every channel and what it came to.
+    pub fn channels(&self) -> &[ChannelReport] {
+        self.channels.get(..self.channel_count).unwrap_or(&[])
+    }
+}

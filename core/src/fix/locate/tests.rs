@@ -1,0 +1,219 @@
+//! The pipeline end to end: a clean drive, a repeated capture, a ghost, two channels, bad input
+//! and a unit noisier than it claims.
+
+use super::*;
+use crate::model::bearing::{Bearing, predicted, wrap};
+use crate::random;
+use core::f32::consts::PI;
+use rand_core::SeedableRng;
+use rand_xorshift::XorShiftRng;
+
+const DEG: f32 = PI / 180.0;
+const E: [f32; 2] = [0.0, 1500.0];
+
+/// `n` positions on a U round (0, 1500) (9 km: east, north, west).
+fn u(k: usize, n: usize) -> [f32; 2] {
+    let s = 9000.0 * k as f32 / n as f32;
+    if s < 3000.0 {
+        [-1500.0 + s, 0.0]
+    } else if s < 6000.0 {
+        [1500.0, s - 3000.0]
+    } else {
+        [1500.0 - (s - 6000.0), 3000.0]
+    }
+}
+
+fn obs(v: [f32; 2], target: [f32; 2], error: f32, k: usize) -> Observation {
+    Observation::new(
+        Bearing {
+            vehicle: v,
+            theta: wrap(predicted(&target, &v) + error),
+            sigma: 2.0 * DEG,
+        },
+        k as f32,
+    )
+}
+
+fn drive(rng: &mut XorShiftRng, bias: f32) -> [Observation; 240] {
+    core::array::from_fn(|k| obs(u(k, 240), E, bias + 2.0 * DEG * random::normal(rng), k))
+}
+
+fn run<const N: usize>(o: &[Observation], config: &LocateConfig) -> Report<4, 4> {
+    let mut work = Workspace::<N>::new();
+    let mut rng = XorShiftRng::seed_from_u64(7);
+    locate::<4, 4, _>(o, config, work.buffers(), &mut rng).unwrap()
+}
+
+#[test]
+fn a_clean_drive_with_an_offset_gives_one_consistent_emitter() {
+    let mut rng = XorShiftRng::seed_from_u64(1);
+    let o = drive(&mut rng, 3.0 * DEG);
+    let r = run::<512>(&o, &LocateConfig::default());
+    assert_eq!(r.emitters().len(), 1);
+    assert_eq!(r.channels()[0].outcome, ChannelOutcome::Emitter(0));
+    let e = r.emitters()[0];
+    let err = libm::hypotf(e.position[0] - E[0], e.position[1] - E[1]);
+    assert!(err < 4.0 * e.crlb, "{err} m: {e:?}");
+    assert!(e.consistent && e.sigma_estimated && e.used >= 238);
+    assert!(
+        (e.bias - 3.0 * DEG).abs() < 4.0 * e.bias_sd,
+        "{}",
+        e.bias / DEG
+    );
+    assert!((e.sigma - 2.0 * DEG).abs() < 0.3 * DEG, "{}", e.sigma / DEG);
+    assert_eq!(
+        r.rejected.repeated + r.rejected.invalid + r.rejected.no_emitter,
+        0
+    );
+    assert_eq!((e.index_span, e.time_span), ([0, 239], [0.0, 239.0]));
+    // Many white residuals: F scaling close to chi-square's, no widening.
+    assert!((e.ellipse_scale - 5.99).abs() < 0.2, "{}", e.ellipse_scale);
+    assert!(e.effective > 200.0, "{}", e.effective);
+    assert!(r.others().is_empty(), "{:?}", r.others());
+}
+
+#[test]
+fn a_capture_concatenated_with_itself_is_counted_once() {
+    let mut rng = XorShiftRng::seed_from_u64(2);
+    let once = drive(&mut rng, 0.0);
+    let twice: [Observation; 480] = core::array::from_fn(|k| once[k % 240]);
+    let config = LocateConfig::default();
+    let a = run::<512>(&once, &config);
+    let b = run::<512>(&twice, &config);
+    assert_eq!(b.rejected.repeated, 240);
+    assert_eq!(a.emitters()[0].position, b.emitters()[0].position);
+    assert_eq!(a.emitters()[0].covariance, b.emitters()[0].covariance);
+}
+
+#[test]
+fn a_ghost_is_another_source_and_noise_is_no_emitter() {
+    let mut rng = XorShiftRng::seed_from_u64(3);
+    let ghost = [900.0, 1800.0];
+    let o: [Observation; 240] = core::array::from_fn(|k| {
+        let t = if (60..120).contains(&k) { ghost } else { E };
+        obs(u(k, 240), t, 2.0 * DEG * random::normal(&mut rng), k)
+    });
+    let r = run::<512>(&o, &LocateConfig::default());
+    let e = r.emitters()[0];
+    assert!(
+        libm::hypotf(e.position[0] - E[0], e.position[1] - E[1]) < 40.0,
+        "{e:?}"
+    );
+    let g = r.others().first().expect("the ghost");
+    assert_eq!(g.why, OtherReason::Weaker);
+    assert!(
+        libm::hypotf(
+            g.source.position[0] - ghost[0],
+            g.source.position[1] - ghost[1]
+        ) < 150.0,
+        "{g:?}"
+    );
+    assert!((55..=62).contains(&g.source.used), "{}", g.source.used);
+    assert!(
+        g.source.index_span[0] >= 58 && g.source.index_span[1] <= 121,
+        "{:?}",
+        g.source.index_span
+    );
+    // Uniform bearings: no point gathers more than luck would.
+    let noise: [Observation; 240] = core::array::from_fn(|k| {
+        let mut x = o[k];
+        x.bearing.theta = random::uniform_in(&mut rng, -PI, PI);
+        x
+    });
+    let r = run::<512>(&noise, &LocateConfig::default());
+    assert!(r.emitters().is_empty());
+    assert!(matches!(
+        r.channels()[0].outcome,
+        ChannelOutcome::NoConsistentEmitter(_)
+    ));
+    assert_eq!(r.rejected.no_emitter, 240);
+}
+
+#[test]
+fn two_frequencies_give_two_emitters() {
+    let mut rng = XorShiftRng::seed_from_u64(4);
+    let b = [-700.0, 2200.0];
+    let o: [Observation; 480] = core::array::from_fn(|k| {
+        let (t, f) = if k % 2 == 0 { (E, 145.0) } else { (b, 146.52) };
+        let mut x = obs(u(k / 2, 240), t, 2.0 * DEG * random::normal(&mut rng), k);
+        x.freq_mhz = Some(f);
+        x
+    });
+    let r = run::<512>(&o, &LocateConfig::default());
+    assert_eq!(r.emitters().len(), 2, "{:?}", r.channels());
+    for (e, t) in r.emitters().iter().zip([E, b]) {
+        assert!(
+            libm::hypotf(e.position[0] - t[0], e.position[1] - t[1]) < 40.0,
+            "{e:?}"
+        );
+        assert!(e.consistent);
+    }
+    assert_eq!(
+        r.emitters()[1]
+            .freq_mhz
+            .map(|f| libm::roundf(f * 100.0) as i32),
+        Some(14652)
+    );
+    // Each emitter's channel holds its own frequency only, by the grouping's rule.
+    let width = LocateConfig::default().channel_width_mhz;
+    let [a, b] = [r.emitters()[0], r.emitters()[1]];
+    assert!(a.in_channel(Some(145.0), width) && !a.in_channel(Some(146.52), width));
+    assert!(b.in_channel(Some(146.52), width) && !b.in_channel(None, width));
+    assert_eq!(r.channels()[1].lowest_mhz, Some(146.52));
+    assert!(r.channels()[1].holds(Some(146.54), width));
+    assert!(!r.channels()[1].holds(Some(146.6), width));
+}
+
+#[test]
+fn bad_observations_are_counted_by_reason() {
+    let mut rng = XorShiftRng::seed_from_u64(5);
+    let mut o = drive(&mut rng, 0.0);
+    o[3].bearing.theta = f32::NAN;
+    o[4].bearing.sigma = 0.0;
+    o[5].source = 9;
+    o[6].freq_mhz = Some(-1.0);
+    o[7].time_s = 1.5; // older than o[6]: time went backwards
+    let r = run::<200>(&o, &LocateConfig::default());
+    let rej = r.rejected;
+    assert_eq!(
+        (rej.invalid, rej.unknown_source, rej.time_backwards),
+        (3, 1, 1)
+    );
+    // 236 usable, 200 fit: the rest is over capacity.
+    assert_eq!(rej.over_capacity, 36);
+    assert_eq!(r.emitters().len(), 1);
+    let bad = LocateConfig {
+        confidence: 1.0,
+        ..LocateConfig::default()
+    };
+    let mut work = Workspace::<8>::new();
+    let mut rng = XorShiftRng::seed_from_u64(0);
+    assert_eq!(
+        locate::<1, 1, _>(&o, &bad, work.buffers(), &mut rng).map(|_| ()),
+        Err(Error::OutOfRange)
+    );
+}
+
+#[test]
+fn a_unit_noisier_than_it_claims_is_inconsistent_when_trusted() {
+    let mut rng = XorShiftRng::seed_from_u64(6);
+    // 4 degree noise, the unit claims 2.
+    let o: [Observation; 240] =
+        core::array::from_fn(|k| obs(u(k, 240), E, 4.0 * DEG * random::normal(&mut rng), k));
+    let known = LocateConfig {
+        noise: NoiseModel::Known,
+        ..LocateConfig::default()
+    };
+    let r = run::<512>(&o, &known);
+    let e = r.emitters()[0];
+    assert!(!e.consistent && e.sigma_estimated, "{e:?}");
+    assert!((e.sigma - 4.0 * DEG).abs() < 0.6 * DEG, "{}", e.sigma / DEG);
+    assert!(e.p_value < 1e-3);
+    // A unit that tells the truth is trusted: chi-square scale, its own sigma.
+    let honest: [Observation; 240] =
+        core::array::from_fn(|k| obs(u(k, 240), E, 2.0 * DEG * random::normal(&mut rng), k));
+    let r = run::<512>(&honest, &known);
+    let e = r.emitters()[0];
+    assert!(e.consistent && !e.sigma_estimated, "{e:?}");
+    assert!((e.ellipse_scale - 5.991).abs() < 1e-3 && e.sigma == 2.0 * DEG);
+}

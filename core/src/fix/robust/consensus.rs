@@ -1,0 +1,285 @@
+//! The consensus: the point most bearings agree on, each hypothesis with its best common
+//! offset, and how likely luck would have lined up as many.
+
+use super::super::bias::{BiasPrior, MAX_SOURCES, Sighting};
+use super::super::intersection::intersect;
+use super::super::noise::median_sigma;
+use super::{MAX_RANGE_M, SCORE_SAMPLE};
+use crate::error::{Error, check_finite};
+use crate::model::bearing::{predicted, wrap};
+use crate::random;
+use crate::stats;
+use core::f32::consts::PI;
+use rand_core::Rng;
+
+/// Settings of the robust search.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RansacOptions {
+    /// Hypotheses scored at most.
+    pub hypotheses: u32,
+    /// Bearing pairs drawn at most (pairs that do not cross well are drawn and dropped).
+    pub max_attempts: u32,
+    /// Minimum crossing angle of a pair, radians (small: a far emitter has only shallow ones).
+    pub min_crossing: f32,
+    /// A bearing agrees with a hypothesis within this many of its sigmas...
+    pub threshold: f32,
+    /// ...or within this angle, radians, whichever is larger.
+    pub floor: f32,
+    /// Hypotheses farther than this from the drive's centroid are dropped, metres (default
+    /// [`MAX_RANGE_M`]).
+    pub max_range: f32,
+}
+
+impl Default for RansacOptions {
+    fn default() -> Self {
+        Self {
+            hypotheses: 256,
+            max_attempts: 4096,
+            min_crossing: 1.0 * PI / 180.0,
+            threshold: 3.0,
+            floor: 0.5 * PI / 180.0,
+            max_range: MAX_RANGE_M,
+        }
+    }
+}
+
+impl RansacOptions {
+    /// `Ok` when every setting is usable.
+    pub fn check(&self) -> Result<(), Error> {
+        check_finite(&[
+            self.min_crossing,
+            self.threshold,
+            self.floor,
+            self.max_range,
+        ])?;
+        if self.hypotheses > 0
+            && self.max_attempts > 0
+            && self.min_crossing >= 0.0
+            && self.threshold > 0.0
+            && self.floor >= 0.0
+            && self.max_range > 0.0
+        {
+            Ok(())
+        } else {
+            Err(Error::OutOfRange)
+        }
+    }
+}
+
+/// The range of common offsets a hypothesis may take: centre +- half width (radians).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OffsetWindow {
+    /// Centre, radians.
+    pub centre: f32,
+    /// Half width, radians (0: the offset is known).
+    pub half_width: f32,
+}
+
+impl OffsetWindow {
+    /// Three prior sds either side of the widest free prior among `priors` (capped at 30
+    /// degrees), centred on its mean; a zero window when every unit is calibrated.
+    pub fn from_priors(priors: &[BiasPrior; MAX_SOURCES]) -> Self {
+        let widest = priors
+            .iter()
+            .copied()
+            .fold(None::<BiasPrior>, |w, p| match w {
+                Some(w) if w.sd >= p.sd => Some(w),
+                _ => Some(p),
+            })
+            .unwrap_or_default();
+        Self {
+            centre: widest.mean,
+            half_width: (3.0 * widest.sd).min(30.0 * PI / 180.0),
+        }
+    }
+}
+
+/// The best-supported point of a set of bearings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Consensus {
+    /// The hypothesis, metres.
+    pub position: [f32; 2],
+    /// Its best common offset, radians.
+    pub bias: f32,
+    /// Bearings of the whole set within the threshold of it (offset removed).
+    pub inliers: u32,
+    /// Usable bearings in the set.
+    pub candidates: u32,
+    /// Hypotheses scored.
+    pub hypotheses: u32,
+    /// The agreement angle used, radians.
+    pub threshold: f32,
+}
+
+/// Count of sorted `r` inside [lo, lo + width], and the mean of those.
+fn window_at(r: &[f32], lo: f32, width: f32) -> (u32, f32) {
+    let mut n = 0u32;
+    let mut sum = 0.0f32;
+    for &x in r {
+        if x >= lo && x <= lo + width {
+            n += 1;
+            sum += x;
+        }
+    }
+    (
+        n,
+        if n > 0 {
+            sum / n as f32
+        } else {
+            lo + 0.5 * width
+        },
+    )
+}
+
+/// The densest window of width 2t among sorted residuals `r`, its centre constrained to
+/// `window`: (count, offset).
+fn best_offset(r: &[f32], t: f32, window: OffsetWindow) -> (u32, f32) {
+    let (lo_c, hi_c) = (
+        window.centre - window.half_width,
+        window.centre + window.half_width,
+    );
+    // The windows at either end of the allowed range, then every window starting at a
+    // residual whose centre is allowed (two pointers over the sorted residuals).
+    let mut best = window_at(r, lo_c - t, 2.0 * t);
+    let high = window_at(r, hi_c - t, 2.0 * t);
+    if high.0 > best.0 {
+        best = high;
+    }
+    let mut j = 0;
+    for i in 0..r.len() {
+        let centre = r[i] + t;
+        if centre < lo_c || centre > hi_c {
+            continue;
+        }
+        j = j.max(i);
+        while j < r.len() && r[j] <= r[i] + 2.0 * t {
+            j += 1;
+        }
+        let n = (j - i) as u32;
+        if n > best.0 {
+            let mean = r[i..j].iter().sum::<f32>() / n as f32;
+            best = (n, mean);
+        }
+    }
+    best
+}
+
+/// RANSAC over bearing pairs: the point most bearings agree on, with its common offset.
+pub fn ransac<T: Sighting, R: Rng + ?Sized>(
+    items: &[T],
+    options: &RansacOptions,
+    window: OffsetWindow,
+    rng: &mut R,
+) -> Result<Consensus, Error> {
+    options.check()?;
+    check_finite(&[window.centre, window.half_width])?;
+    let usable = |t: &T| t.source() < MAX_SOURCES && t.bearing().check().is_ok();
+    let candidates = items.iter().filter(|t| usable(t)).count() as u32;
+    if candidates < 2 {
+        return Err(Error::TooFewMeasurements);
+    }
+    let t = (options.threshold * median_sigma(items)).max(options.floor);
+    // Centroid of the drive, to drop hypotheses beyond any plausible range.
+    let mut centroid = [0.0f32; 2];
+    for it in items.iter().filter(|t| usable(t)) {
+        centroid[0] += it.bearing().vehicle[0] / candidates as f32;
+        centroid[1] += it.bearing().vehicle[1] / candidates as f32;
+    }
+    let stride = items.len().div_ceil(SCORE_SAMPLE).max(1);
+    let n = items.len();
+    let mut best: Option<(u32, f32, [f32; 2], f32)> = None;
+    let mut scored = 0u32;
+    let mut residuals = [0.0f32; SCORE_SAMPLE];
+    for _ in 0..options.max_attempts {
+        if scored >= options.hypotheses {
+            break;
+        }
+        let i = ((random::uniform(rng) * n as f32) as usize).min(n - 1);
+        let j = ((random::uniform(rng) * n as f32) as usize).min(n - 1);
+        let (Some(a), Some(b)) = (items.get(i), items.get(j)) else {
+            continue;
+        };
+        if i == j || !usable(a) || !usable(b) {
+            continue;
+        }
+        // The pair's crossing with the window's offset removed from both bearings.
+        let (mut ba, mut bb) = (*a.bearing(), *b.bearing());
+        ba.theta -= window.centre;
+        bb.theta -= window.centre;
+        let Ok(p) = intersect(&ba, &bb, options.min_crossing) else {
+            continue;
+        };
+        if libm::hypotf(p[0] - centroid[0], p[1] - centroid[1]) > options.max_range {
+            continue;
+        }
+        scored += 1;
+        let mut k = 0;
+        for it in items.iter().step_by(stride).filter(|t| usable(t)) {
+            if let Some(slot) = residuals.get_mut(k) {
+                let bg = it.bearing();
+                *slot = wrap(bg.theta - predicted(&p, &bg.vehicle));
+                k += 1;
+            }
+        }
+        super::super::order::heapsort(&mut residuals[..k]);
+        let (count, offset) = best_offset(&residuals[..k], t, window);
+        // Ties go to the tighter window (smaller spread about its offset).
+        let spread = residuals[..k]
+            .iter()
+            .map(|r| libm::fabsf(r - offset))
+            .filter(|d| *d <= t)
+            .sum::<f32>();
+        let better = match best {
+            None => true,
+            Some((c, s, _, _)) => count > c || (count == c && spread < s),
+        };
+        if better {
+            best = Some((count, spread, p, offset));
+        }
+    }
+    let Some((_, _, position, offset)) = best else {
+        return Err(Error::ShallowCrossing);
+    };
+    let inliers = items
+        .iter()
+        .filter(|t| usable(t))
+        .filter(|it| {
+            let b = it.bearing();
+            libm::fabsf(wrap(b.theta - predicted(&position, &b.vehicle) - offset)) <= t
+        })
+        .count() as u32;
+    Ok(Consensus {
+        position,
+        bias: offset,
+        inliers,
+        candidates,
+        hypotheses: scored,
+        threshold: t,
+    })
+}
+
+/// How likely `inliers` of `candidates` uniformly random bearings would agree within
+/// `threshold` (radians) of the best of a search over `hypotheses` points and offsets within
+/// +- `half_width`: a Bonferroni bound, min(1, H P(Binomial(n - 2, t / pi) >= k - 2)) (the two
+/// bearings that made the hypothesis agree by construction), with H the hypotheses (no more
+/// than the n (n - 1) / 2 pairs) times the distinct offsets (1 + half_width / threshold).
+pub fn chance(
+    inliers: u32,
+    candidates: u32,
+    threshold: f32,
+    hypotheses: u32,
+    half_width: f32,
+) -> Result<f32, Error> {
+    check_finite(&[threshold, half_width])?;
+    if !(threshold > 0.0) || half_width < 0.0 {
+        return Err(Error::OutOfRange);
+    }
+    if inliers < 2 || candidates < 2 {
+        return Ok(1.0);
+    }
+    let q = (threshold / PI).min(1.0);
+    let pairs = (candidates as f32) * (candidates as f32 - 1.0) / 2.0;
+    let h = (hypotheses as f32).min(pairs).max(1.0) * (1.0 + half_width / threshold);
+    let tail = stats::binomial_tail(inliers - 2, candidates - 2, q)?;
+    Ok((h * tail).min(1.0))
+}
