@@ -335,7 +335,7 @@ fn channel(d: &Decoded, all: &[Bearing], f: &Source, o: &LocateOptions) -> Vec<B
         .observations
         .iter()
         .zip(all)
-        .filter(|(x, _)| same_channel(x.freq_mhz, f.freq_mhz, o.channel_width_mhz))
+        .filter(|(x, _)| f.in_channel(x.freq_mhz, o.channel_width_mhz))
         .map(|(_, b)| *b)
         .collect();
     let scale = noise_scale(f, &c);
@@ -392,28 +392,9 @@ fn noise_scale(f: &Source, bearings: &[Bearing]) -> f32 {
     if s.is_finite() && s > 0.0 { s } else { 1.0 }
 }
 
-/// Whether a bearing at `freq` belongs to the channel at `channel` (the pipeline's grouping:
-/// within the channel width; bearings without a frequency form their own channel).
-fn same_channel(freq: Option<f32>, channel: Option<f32>, width: f32) -> bool {
-    match (freq, channel) {
-        (Some(f), Some(c)) => (f - c).abs() <= width.max(1e-3),
-        (None, None) => true,
-        _ => false,
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn bearings_join_their_own_channel_only() {
-        assert!(same_channel(Some(146.52), Some(146.52), 0.05));
-        assert!(same_channel(Some(146.54), Some(146.52), 0.05));
-        assert!(!same_channel(Some(147.0), Some(146.52), 0.05));
-        assert!(!same_channel(None, Some(146.52), 0.05));
-        assert!(same_channel(None, None, 0.05));
-    }
 
     #[test]
     fn a_target_no_rule_can_use_is_refused_by_name() {
