@@ -53,6 +53,17 @@ fn foxhunt(args: &[&str]) -> Output {
         .expect("run foxhunt")
 }
 
+/// A usage error: exit status 2, clap's message naming the value and every one it takes.
+fn usage_error(out: &Output, words: &[&str]) {
+    let err = stderr(out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.starts_with("error: invalid value"), "{err}");
+    assert!(err.contains("possible values"), "{err}");
+    for w in words {
+        assert!(err.contains(w), "`{w}` not in: {err}");
+    }
+}
+
 /// The command failed with one line on stderr that contains every one of `words`, exit 1,
 /// and no panic.
 fn refused(out: &Output, words: &[&str]) {
@@ -215,10 +226,14 @@ fn bench_runs_a_scenario_file() {
 }
 
 #[test]
-fn unknown_scenario_is_a_one_line_error() {
-    refused(
+fn an_unknown_scenario_is_a_usage_error_listing_the_known_ones() {
+    usage_error(
         &foxhunt(&["bench", "--scenario", "nowhere"]),
-        &["unknown scenario `nowhere`", "aoa-afsa"],
+        &["'nowhere'", "aoa-afsa", "field/multipath", "guidance/grid-offset4"],
+    );
+    usage_error(
+        &foxhunt(&["locate", "--method", "nowhere"]),
+        &["'nowhere'", "ml-robust", "gsa-gpf"],
     );
 }
 
@@ -359,9 +374,9 @@ fn pure_noise_is_no_consistent_emitter() {
     let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!(r["emitters"].as_array().map(Vec::len), Some(1), "{r}");
     assert!(r["other_sources"][0]["why"].is_string(), "{r}");
-    refused(
+    usage_error(
         &foxhunt(&["simulate", "--condition", "nowhere", "--out", c]),
-        &["unknown field condition", "multipath"],
+        &["'nowhere'", "multipath"],
     );
 }
 
