@@ -1,4 +1,4 @@
-//! The canonical scenarios' constants (SCENARIOS.md) that the no_std images need as much as
+//! The canonical scenarios' constants (docs/src/scenarios.md) that the no_std images need as much as
 //! the host: the emitters, the bearing noise, the routes and the RSSI trackers. The bench, the
 //! firmware image, the MCU step bench and the tests all read them from here.
 

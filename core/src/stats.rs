@@ -499,7 +499,7 @@ mod tests {
             assert!(close(q, v, 3e-4), "F({d1}, {d2}; {p}) = {q}, table {v}");
         }
         // With n = 5 bearings and p = 2 unknowns, the honest ellipse has twice the area of
-        // the chi-square one (FIELD.md): 2 F(2, 3; 0.95) / chi2(2; 0.95) = 3.19 in scale.
+        // the chi-square one (docs/src/field.md, "Honest intervals"): 2 F(2, 3; 0.95) / chi2(2; 0.95) = 3.19 in scale.
         let ratio = 2.0 * f_quantile(0.95, 2.0, 3.0).unwrap() / 5.991_465;
         assert!((ratio - 3.188_6).abs() < 1e-3, "{ratio}");
         assert!(close(t_quantile(0.95, 4.0).unwrap(), 2.776_445, 3e-4));

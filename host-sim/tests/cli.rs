@@ -229,7 +229,12 @@ fn bench_runs_a_scenario_file() {
 fn an_unknown_scenario_is_a_usage_error_listing_the_known_ones() {
     usage_error(
         &foxhunt(&["bench", "--scenario", "nowhere"]),
-        &["'nowhere'", "aoa-afsa", "field/multipath", "guidance/grid-offset4"],
+        &[
+            "'nowhere'",
+            "aoa-afsa",
+            "field/multipath",
+            "guidance/grid-offset4",
+        ],
     );
     usage_error(
         &foxhunt(&["locate", "--method", "nowhere"]),

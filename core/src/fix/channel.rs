@@ -1,7 +1,7 @@
 //! Bearings grouped into channels by frequency: one emitter per channel.
 //!
 //! A KrakenSDR reports up to 16 channels (VFOs), each with its frequency; pairing bearings of
-//! different frequencies makes phantom fixes between two transmitters (FIELD.md). Frequencies
+//! different frequencies makes phantom fixes between two transmitters (docs/src/field.md, "Several emitters"). Frequencies
 //! are sorted and swept: a channel holds every frequency within `width` of its lowest, the next
 //! frequency beyond starts a new channel. Bearings without a frequency form one channel of
 //! their own, listed first. [`belongs`] is that rule for one frequency and one channel, for

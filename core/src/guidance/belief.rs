@@ -1,13 +1,13 @@
 //! What the bearings so far say about the emitter and the unit's offset, at one hypothesised
 //! emitter position, and what a bearing from a candidate position would add.
 //!
-//! The unknowns are [x, y, b] (FIELD.md, "Mounting offset"): a bearing from vehicle s adds
+//! The unknowns are [x, y, b] (docs/src/field.md, "Mounting offset"): a bearing from vehicle s adds
 //! g g^T / sigma^2 to the Fisher information, g = [-dy/d^2, dx/d^2, 1] (d = emitter - s); the
 //! offset's prior adds 1 / sd^2 to the last diagonal entry. The belief keeps the inverse C of
 //! that 3 x 3 information, so a candidate bearing is a Sherman-Morrison update,
 //! C' = C - w (C g)(C g)^T / (1 + w g^T C g), O(9) work with no inversion, and the position
 //! marginal (the top-left 2 x 2 of C) is the bias-aware bound: the offset integrated out. For a
-//! calibrated unit the offset column is dropped and the same formulas reduce to FIELD.md's
+//! calibrated unit the offset column is dropped and the same formulas reduce to docs/src/guidance.md's
 //! closed forms (D gain log(1 + u^T P u / (sigma^2 r^2)), A gain
 //! u^T P^2 u / (sigma^2 r^2 + u^T P u)).
 
@@ -263,7 +263,7 @@ impl Hypotheses {
     }
 
     /// Before the bearings cross: points along the line of bearing `theta` from `vehicle` at
-    /// the given ranges (at most [`MAX_POINTS`]; FIELD.md's initialisation spreads them evenly
+    /// the given ranges (at most [`MAX_POINTS`]; docs/src/field.md's initialisation spreads them evenly
     /// in log range).
     pub fn along(vehicle: [f32; 2], theta: f32, ranges: &[f32]) -> Result<Self, Error> {
         check_finite(&vehicle)?;

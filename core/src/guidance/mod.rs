@@ -1,7 +1,7 @@
 //! Where to drive next to learn the most about the emitter, and when to stop.
 //!
 //! No DF tool tells the driver this; the KrakenSDR app only homes along the averaged bearing.
-//! Here (FIELD.md, "Guidance"):
+//! Here (docs/src/guidance.md):
 //! - [`belief`]: the bias-aware Fisher information of the bearings so far, over [x, y, offset],
 //!   at a hypothesised emitter position, and the bearing a candidate position would add
 //!   (a rank-one update); several hypotheses where the posterior is wide.

@@ -1,6 +1,6 @@
 //! When to stop, and otherwise what the fix lacks.
 //!
-//! "Good enough" needs three things at once (FIELD.md, "Guidance"): the predicted CEP50 from
+//! "Good enough" needs three things at once (docs/src/guidance.md, "The stop rule"): the predicted CEP50 from
 //! the bias-aware bound at the fix below the target radius; residuals consistent with the noise
 //! model; and enough independent bearings behind the fix. What limits a fix that is not yet good
 //! enough is read off the same bound:

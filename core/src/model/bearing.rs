@@ -1,6 +1,6 @@
 //! The static emitter seen from a moving vehicle: one bearing per vehicle position.
 //!
-//! Conventions (SCENARIOS.md): local East-North metres; the model bearing is the mathematical
+//! Conventions (docs/src/conventions.md): local East-North metres; the model bearing is the mathematical
 //! angle theta = atan2(yT - y, xT - x) from +x, counter-clockwise; a DF unit reports the azimuth
 //! gamma clockwise from true north, theta = pi/2 - gamma. Every residual is wrapped to
 //! (-pi, pi] before it reaches a likelihood, so a bearing near +-180 degrees is never an outlier.

@@ -1,4 +1,4 @@
-//! Artificial fish swarm (seed 002; ALGORITHMS.md "AFSA-PF"). Each particle is a fish whose
+//! Artificial fish swarm (seed 002; docs/src/estimators.md, "AFSA-PF"). Each particle is a fish whose
 //! food concentration is the likelihood Y = L(z | x). Per iteration each fish either swarms
 //! toward the centre of its neighbours within the visual range (when the centre is better and
 //! not too crowded: Y_c / n_f > delta Y_i) or preys: it tries up to `tries` random points within

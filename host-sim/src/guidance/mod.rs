@@ -31,7 +31,7 @@ use std::f32::consts::PI;
 /// information proper (a broad "somewhere within 20 km").
 pub const POSITION_SD_M: f32 = 2.0e4;
 /// Ranges along the averaged bearing scored before there is a fix, metres (even in log range,
-/// FIELD.md's initialisation).
+/// docs/src/field.md's initialisation).
 pub const RANGES_M: [f32; 4] = [1000.0, 2000.0, 4000.0, 8000.0];
 /// A fix whose 1-sigma ellipse reaches beyond this share of the range is scored over its
 /// spread, not at its centre.

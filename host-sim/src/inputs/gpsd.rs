@@ -1,4 +1,4 @@
-//! Positions and headings from a running gpsd (PROTOCOLS.md 6): how Linux programs share one
+//! Positions and headings from a running gpsd (docs/src/formats/gpsd.md): how Linux programs share one
 //! GPS receiver.
 //!
 //! The client connects to gpsd's TCP port (2947 unless told), reads its VERSION banner, sends

@@ -1,5 +1,5 @@
 //! A KrakenSDR on the network: its web server's DoA pages polled about twice a second, as
-//! df-aggregator does (PROTOCOLS.md 5.2, 5.3).
+//! df-aggregator does (docs/src/formats/bearings.md, "KrakenSDR over HTTP").
 //!
 //! `http://HOST:8081` alone reads `DOA_value.html` (the "Kraken App" CSV, one line per
 //! channel) and falls back to `doa.xml` when the unit has no such page; a URL naming either

@@ -1,5 +1,5 @@
-//! Seeded, parallel Monte Carlo runs of a scenario's table and the metrics of SCENARIOS.md
-//! (../shared/spec): one skeleton for bearing and tracking scenarios alike.
+//! Seeded, parallel Monte Carlo runs of a scenario's table and the metrics of
+//! docs/src/scenarios.md: one skeleton for bearing and tracking scenarios alike.
 
 use crate::estimate::pool;
 use crate::outputs::tables::Row;

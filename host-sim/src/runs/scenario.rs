@@ -1,4 +1,4 @@
-//! The canonical scenarios of SCENARIOS.md (../shared/spec) as data, in one place: each
+//! The canonical scenarios of docs/src/scenarios.md as data, in one place: each
 //! carries its model, the methods of its table, its particle counts and the source papers'
 //! figures. Scenario files a user writes are read here too.
 
@@ -325,7 +325,7 @@ impl Scenario {
             .map(|p| p.text)
     }
 
-    /// Parse a scenario file (TOML, format of SCENARIOS.md): a bearing scenario with the
+    /// Parse a scenario file (TOML, docs/src/formats/files.md): a bearing scenario with the
     /// methods of a drive's table. Unknown keys and values no run can use are errors that name
     /// them.
     pub fn from_toml(text: &str) -> Result<Self, String> {
@@ -469,7 +469,7 @@ impl Drive {
     }
 }
 
-/// A scenario file as written (SCENARIOS.md).
+/// A scenario file as written (docs/src/formats/files.md).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct ScenarioFile {
@@ -492,7 +492,7 @@ mod tests {
 
     #[test]
     fn canonical_crlb_matches_the_table() {
-        // SCENARIOS.md prints the CRLB rmse of each scenario to 3 significant figures.
+        // docs/src/scenarios.md prints the CRLB rmse of each scenario to 3 significant figures.
         for (name, expect) in [
             ("aoa-afsa", 1.51),
             ("aoa-firefly", 1.89),

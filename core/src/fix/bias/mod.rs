@@ -2,7 +2,7 @@
 //!
 //! Every real DF unit has one: an antenna mounted a few degrees off the vehicle's axis, an
 //! array whose reference element is not where the software thinks (1-5 degrees for
-//! pseudo-Doppler units, 9-12 for some KrakenSDR set-ups, FIELD.md). Ignored, an offset b
+//! pseudo-Doppler units, 9-12 for some KrakenSDR set-ups: docs/src/field.md, "Mounting offset"). Ignored, an offset b
 //! moves the fix by about r b (5 degrees at 2 km: 175 m) while the ellipse stays small. Here
 //! the model is z_k = atan2(emitter - s_k) + b_{source(k)} + noise and the unknowns are
 //! [x, y, b_0 .. b_{S-1}]: the ML Jacobian gains one column of ones per source.
@@ -10,7 +10,7 @@
 //! Each offset has a Gaussian prior: by default mean 0 and sd [`DEFAULT_BIAS_SD`] (6 degrees,
 //! so the 1-12 degrees real units show lie within two sd); sd 0 is a calibrated unit (the
 //! offset is fixed at the prior's mean); an infinite sd is no prior at all. On a drive that
-//! cannot tell an offset from a cross-range shift (a straight road, a short arc: FIELD.md's
+//! cannot tell an offset from a cross-range shift (a straight road, a short arc: docs/src/field.md's
 //! inscribed-angle argument) the prior governs and the position covariance, the marginal of the
 //! (2 + S)-dimensional one, grows to show it; where the drive surrounds the emitter the offset
 //! is measured to sigma / sqrt(N) and costs the position nothing.

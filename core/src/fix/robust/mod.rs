@@ -4,7 +4,7 @@
 //! Scattered wild bearings are handled by any bounded-influence loss started from the PLE; a
 //! consistent ghost (a stretch of the drive that sees a reflection) is not: the PLE lands
 //! between the emitter and the ghost, and a loss that must pull it back has to tell, from that
-//! start, which bearings are the wild ones (FIELD.md: Huber or Cauchy from the PLE, 100-114 m
+//! start, which bearings are the wild ones (docs/src/field.md, "Multipath": Huber or Cauchy from the PLE, 100-114 m
 //! median; RANSAC then ML on the inliers, 34-35 m). So:
 //!
 //! 1. [`ransac`]: intersections of random bearing pairs are hypotheses; each is scored by how

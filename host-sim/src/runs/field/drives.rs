@@ -26,7 +26,7 @@ pub fn u_route(n: usize) -> Vec<[f32; 2]> {
         .collect()
 }
 
-/// SCENARIOS.md's L600.
+/// The canonical L600 route (docs/src/scenarios.md).
 pub fn l600() -> Vec<[f32; 2]> {
     crate::runs::scenario::route("L600", [0.0, 0.0]).unwrap_or_default()
 }

@@ -1,4 +1,4 @@
-//! Field conditions as bearing sets: what real DF drives do to a fix (FIELD.md), simulated so
+//! Field conditions as bearing sets: what real DF drives do to a fix (docs/src/field.md), simulated so
 //! the default `locate` pipeline can be measured on them over seeded Monte Carlo runs.
 //!
 //! Each [`Condition`] makes the observations of one run (bearings with time, source and
@@ -8,11 +8,11 @@
 //! holds the truth, how far off it is against the bias-aware bound, whether a ghost came out
 //! as another source.
 //!
-//! The drives (chosen; the canonical routes of SCENARIOS.md where one fits):
+//! The drives (chosen; the canonical routes of docs/src/scenarios.md where one fits):
 //! - `u-drive`: 9 km, 240 bearings (one per 37.5 m at 10 m/s), a U round an emitter at
 //!   (0, 1500): east along y = 0 from x = -1500, north along x = 1500, west along y = 3000.
 //!   Its bearings span more than 180 degrees, so a mounting offset is observable.
-//! - `L600` (SCENARIOS.md), with the emitter at 1.4 km (aoa-drive) or 10 km.
+//! - `L600` (docs/src/scenarios.md), with the emitter at 1.4 km (aoa-drive) or 10 km.
 //! - `long`: a 20 km L (10 km east, 10 km north, 400 bearings) placed at 47 or 70 degrees
 //!   north and simulated on the WGS-84 ellipsoid: each bearing is the true azimuth at the
 //!   vehicle plus noise, turned into the local frame of the drive's start by the meridian
