@@ -58,9 +58,9 @@ pub struct Firefly {
     pub params: FireflyParams,
 }
 
-/// Improved firefly of seed 001 (its formulas (4)-(5) are lost; reconstruction of
-/// docs/src/estimators.md, "FA-PF (improved)", chosen): every firefly moves toward the current best G only,
-/// beta_i = beta0 (I_best / (I_best + I_i)) exp(-gamma r_i^2) eps(t),
+/// Improved firefly of seed 001 (its formulas (4)-(5) are lost; the reconstruction of
+/// docs/src/estimators.md, "FA-PF (improved)", chosen): every firefly moves toward the
+/// current best G only, beta_i = beta0 (I_best / (I_best + I_i)) exp(-gamma r_i^2) eps(t),
 /// eps(t) = eps_min + (1 - eps_min) exp(-t / t_c). O(N) per iteration.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ImprovedFirefly {
