@@ -104,7 +104,7 @@ pub enum SwarmMove {
 /// [`with_particle_filter`] and [`batch_fix`]; each [`Method`] variant's doc says which).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Spec {
-    /// The one name used in the CLI, JSON, README and tests.
+    /// The one name used in the CLI, JSON, the book and tests.
     pub name: &'static str,
     /// Base filter or batch fix.
     pub base: Base,

@@ -88,7 +88,7 @@ enum Command {
     ///
     /// Examples:
     ///   foxhunt bench                              # aoa-afsa, 100 seeded runs
-    ///   foxhunt bench --scenario all --markdown    # every canonical scenario, README table
+    ///   foxhunt bench --scenario all --markdown    # every canonical scenario, the book's table
     ///   foxhunt bench --scenario rssi-sim --runs 20 --particles 80
     ///   foxhunt bench --scenario-file my.toml --json
     #[command(verbatim_doc_comment)]

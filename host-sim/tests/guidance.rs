@@ -1,4 +1,4 @@
-//! The closed-loop guidance benchmark at a CI size (the README's figures come from
+//! The closed-loop guidance benchmark at a CI size (the book's figures come from
 //! `foxhunt bench --scenario guidance`, 100 runs per row).
 
 use foxhunt_sim::runs::guidance::bench::{Row, Set, measure, rows};

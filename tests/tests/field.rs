@@ -339,7 +339,7 @@ fn the_sir_reaches_a_distant_emitter() {
 
 #[test]
 fn a_collapsed_cloud_is_flagged() {
-    // The standard FA-PF collapses its cloud to a handful of points (README); the check
+    // The standard FA-PF collapses its cloud to a handful of points (docs/src/accuracy.md); the check
     // against the CRLB at the cloud's own mean says so, and passes the tuned SIR's cloud.
     let d = simulate(Condition::AoaAfsa, 0);
     let bs: Vec<Bearing> = d.observations.iter().map(|o| o.bearing).collect();

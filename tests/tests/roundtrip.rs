@@ -107,7 +107,7 @@ fn indoor_capture_is_tracked_through_the_bytes() {
 fn the_bundled_captures_are_what_simulate_writes_today() {
     // serial-bridge/captures holds `foxhunt simulate --scenario aoa-drive --out
     // serial-bridge/captures/aoa-drive.nmea` and `foxhunt simulate --scenario rssi-sim --out
-    // serial-bridge/captures/rssi-sim.znp --force` (the README's commands): regenerate them
+    // serial-bridge/captures/rssi-sim.znp --force` (the book's commands): regenerate them
     // with those when the simulation changes.
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../serial-bridge/captures");
     let read = |f: &str| std::fs::read(dir.join(f)).expect("bundled capture");

@@ -17,7 +17,7 @@ pub struct Args {
     #[arg(long, default_value = "aoa-afsa", conflicts_with = "scenario_file",
           value_parser = super::one_of(super::bench_scenarios()))]
     pub scenario: String,
-    /// A scenario file (TOML; see the README).
+    /// A scenario file (TOML; docs/src/formats/files.md).
     #[arg(long)]
     pub scenario_file: Option<PathBuf>,
     /// Monte Carlo runs (at least 1; default: the scenario's).

@@ -1,4 +1,4 @@
-//! `foxhunt perf`: the speed tables of the README.
+//! `foxhunt perf`: the speed tables of the book (docs/src/speed.md).
 
 use crate::outputs::terminal::{Out, Outcome, note};
 use crate::runs::perf::{

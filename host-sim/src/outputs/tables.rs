@@ -236,7 +236,7 @@ pub fn table(rows: &[Row]) -> String {
     out
 }
 
-/// The same rows as a Markdown table (for the README).
+/// The same rows as a Markdown table (for the book).
 pub fn markdown(rows: &[Row]) -> String {
     if field(rows) {
         return field_table(rows, true);

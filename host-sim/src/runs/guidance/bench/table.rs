@@ -134,7 +134,7 @@ pub fn table(rows: &[Row]) -> String {
 }
 
 /// Median CEP50 against distance driven, a panel per set and a line per policy: the plot of
-/// the README (SVG, log CEP50 axis from 10 m to 10 km, 0-10 km driven).
+/// the book (SVG, log CEP50 axis from 10 m to 10 km, 0-10 km driven).
 pub fn svg(results: &Results) -> String {
     const W: f32 = 300.0;
     const H: f32 = 200.0;
