@@ -246,12 +246,12 @@ fn field(a: &Args, name: &str) -> Outcome {
         .map(|t| format!("({:.0}, {:.0}) m", t.position[0], t.position[1]))
         .collect();
     note(&format!(
-        "{} bytes; emitters at {} from the route's first point",
+        "{} bytes; {}",
         bytes.len(),
         if at.is_empty() {
-            "none".into()
+            "no emitter (the bearings are noise)".to_string()
         } else {
-            at.join(", ")
+            format!("emitters at {} from the route's first point", at.join(", "))
         }
     ));
     Ok(())

@@ -109,8 +109,9 @@ pub fn explain(e: Error, bearings: &[Bearing]) -> String {
     }
 }
 
-/// Why a channel of `n` bearings has no consistent emitter, in words.
-pub(crate) fn no_emitter(why: NoEmitter, n: u32, bearings: &[Bearing]) -> String {
+/// Why a channel of `n` bearings has no consistent emitter, in words (`max_sigma`: the noise,
+/// radians, above which the pipeline calls bearings too scattered).
+pub(crate) fn no_emitter(why: NoEmitter, n: u32, bearings: &[Bearing], max_sigma: f32) -> String {
     match why {
         NoEmitter::TooFew if n <= 1 => {
             explain(Error::TooFewMeasurements, bearings.get(..1).unwrap_or(&[]))
@@ -118,10 +119,11 @@ pub(crate) fn no_emitter(why: NoEmitter, n: u32, bearings: &[Bearing]) -> String
         NoEmitter::NoConsensus => "no consistent emitter: no point has more bearings agreeing \
              than chance would give (noise, or bearings of nothing)"
             .into(),
-        NoEmitter::TooNoisy => {
-            "no consistent emitter: the bearings scatter by more than 10 degrees about any point"
-                .into()
-        }
+        NoEmitter::TooNoisy => format!(
+            "no consistent emitter: the bearings scatter by more than {:.0} degrees about any \
+             point",
+            max_sigma.to_degrees()
+        ),
         NoEmitter::TooFew => format!(
             "no consistent emitter: {n} bearings are too few to estimate their noise and check \
              the fit (at least 5 that cross well)"

@@ -130,7 +130,8 @@ pub fn locate_guided(
             let advice = match (l.emitters.is_empty(), o.method) {
                 (false, _) | (true, Method::MlRobust) => located_advice(guide, d, &l.emitters, o),
                 (true, m) => Err(format!(
-                    "the stop rule wants a fix whose consistency and independent bearings are                      checked (--method ml-robust, not {})",
+                    "the stop rule wants a fix whose consistency and independent bearings are \
+                     checked (--method ml-robust, not {})",
                     m.name()
                 )),
             };

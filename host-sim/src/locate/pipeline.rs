@@ -86,7 +86,9 @@ pub(crate) fn located_by_pipeline(
                     }
                     _ => None,
                 };
-                let text = geometry.unwrap_or_else(|| no_emitter(why, c.bearings, &bearings));
+                let text = geometry.unwrap_or_else(|| {
+                    no_emitter(why, c.bearings, &bearings, o.config().max_sigma)
+                });
                 why_none.get_or_insert(text.clone());
                 text
             }
