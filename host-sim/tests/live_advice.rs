@@ -323,7 +323,9 @@ fn with_roads_the_advice_is_the_next_turn() {
     );
 }
 
-/// `foxhunt locate - ARGS` fed `bytes` in chunks of `lines` sentences: its update lines.
+/// `foxhunt locate - ARGS` fed `bytes` in chunks of `lines` sentences, each chunk sent once
+/// the previous one's update line has come (every chunk carries new bearings, so every chunk
+/// makes at least one update, however the pipe delivers it): its update lines.
 fn live_chunks(bytes: &[u8], lines: usize, args: &[&str]) -> Vec<String> {
     let mut child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
         .args(["locate", "-"])
@@ -334,29 +336,32 @@ fn live_chunks(bytes: &[u8], lines: usize, args: &[&str]) -> Vec<String> {
         .spawn()
         .expect("run foxhunt");
     let mut stdin = child.stdin.take().expect("stdin");
+    let updates = common::line_reader(&mut child);
     let sentences: Vec<&[u8]> = bytes.split_inclusive(|b| *b == b'\n').collect();
-    let feed = sentences
-        .chunks(lines)
-        .map(<[&[u8]]>::concat)
-        .collect::<Vec<_>>();
-    let writer = std::thread::spawn(move || {
-        for c in feed {
-            stdin.write_all(&c).expect("write");
-            stdin.flush().expect("flush");
-            std::thread::sleep(Duration::from_millis(150));
-        }
-    });
-    let out = child.wait_with_output().expect("foxhunt ends");
-    writer.join().expect("writer");
+    let mut out = Vec::new();
+    let chunks = sentences.chunks(lines).count();
+    for c in sentences.chunks(lines) {
+        stdin.write_all(&c.concat()).expect("write");
+        stdin.flush().expect("flush");
+        let line = updates
+            .recv_timeout(Duration::from_secs(120))
+            .expect("an update line for every chunk");
+        out.push(line);
+    }
+    drop(stdin);
+    out.extend(updates.iter());
+    let status = child.wait().expect("foxhunt ends");
+    let mut err = String::new();
+    if let Some(mut e) = child.stderr.take() {
+        let _ = std::io::Read::read_to_string(&mut e, &mut err);
+    }
+    assert!(status.success(), "{err}");
     assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+        out.len() >= chunks,
+        "{} updates for {chunks} chunks",
+        out.len()
     );
-    String::from_utf8_lossy(&out.stdout)
-        .lines()
-        .map(str::to_string)
-        .collect()
+    out
 }
 
 #[test]
@@ -376,10 +381,8 @@ fn two_emitters_each_get_a_verdict_and_the_move_names_the_one_it_serves() {
         .expect("run foxhunt simulate");
     assert!(made.status.success(), "{made:?}");
     let bytes = std::fs::read(&file).expect("capture");
-    // 40 sentences (20 bearings, 10 per emitter) per chunk, a pause between: updates as the
-    // drive goes on (how many depends on how the pipe batches them).
+    // 40 sentences (20 bearings, 10 per emitter) per chunk: updates as the drive goes on.
     let lines = json(&live_chunks(&bytes, 40, &["--json"]));
-    assert!(lines.len() >= 3, "{} updates", lines.len());
     let mut split = false;
     for v in &lines {
         let a = &v["advice"];
