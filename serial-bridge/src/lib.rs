@@ -6,7 +6,7 @@
 //! metres, and [`bridge`] turns fixes, headings, bearings and link qualities into core
 //! measurements. The DF unit's own side: [`track`] keeps a fix on one emitter for ever in fixed
 //! memory, [`telemetry`] writes and reads the unit's sentences, [`command`] its configuration
-//! commands, [`unit`] puts ports, bridge and tracker together as the MCU runs them, and
+//! commands, [`unit`](mod@unit) puts ports, bridge and tracker together as the MCU runs them, and
 //! [`replay`] runs the MCU's logged order of frames again on the host.
 //! Nothing allocates; every buffer has a fixed capacity; every rejection is counted by reason.
 //!

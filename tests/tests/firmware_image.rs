@@ -179,7 +179,10 @@ fn own(site: &str) -> bool {
     site.contains("serial-bridge/src/bin/firmware")
         || ["track", "telemetry", "command", "unit", "replay"]
             .iter()
-            .any(|m| site.contains(&format!("serial-bridge/src/{m}.rs")))
+            .any(|m| {
+                site.contains(&format!("serial-bridge/src/{m}.rs"))
+                    || site.contains(&format!("serial-bridge/src/{m}/"))
+            })
 }
 
 #[test]
