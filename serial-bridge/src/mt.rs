@@ -5,7 +5,9 @@
 //! XOR of LEN, CMD0, CMD1 and DATA. Multi-byte fields are little-endian.
 
 use crate::nmea::xor;
-use crate::stream::MT_SOF;
+
+/// Start of frame of an MT frame.
+pub const MT_SOF: u8 = 0xFE;
 
 /// CMD0 of `AF_INCOMING_MSG`: type AREQ (2), subsystem AF (4).
 pub const AF_INCOMING_MSG_CMD0: u8 = 0x44;

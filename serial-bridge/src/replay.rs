@@ -126,11 +126,7 @@ mod tests {
         let mut direct = Vec::new();
         let mut unit = Unit::default();
         for line in CAPTURE.split_inclusive(|b| *b == b'\n') {
-            let port = if line.starts_with(b"$PFOXB") {
-                Port::Df
-            } else {
-                Port::Gps
-            };
+            let port = Port::of_record(line).unwrap_or(Port::Gps);
             let s = &mut streams[port as usize];
             // Half a line, then the rest: only the read that completes it is logged.
             let (a, b) = line.split_at(line.len() / 2);

@@ -36,6 +36,7 @@ use crate::agrelo;
 use crate::kraken::{
     CsvDecoder, KrakenCsv, KrakenError, KrakenXml, SPECTRUM_LEN, Step, XmlDecoder,
 };
+use crate::record::{Framing, RecordKind};
 use scan::{Overlap, Reject, Scan, resolve_overlap, scan_mt, scan_sentence_from};
 
 /// Longest NMEA sentence, `$` to LF inclusive: GPSD's limit (`NMEA_MAX` in its `gpsd.h`), since
@@ -46,8 +47,7 @@ pub const MAX_MT_FRAME: usize = 255 + 5;
 /// Default buffer: room for an MT frame and a second one starting inside it, so every wait
 /// for more bytes ends before the buffer is full.
 pub const DEFAULT_CAPACITY: usize = 2 * MAX_MT_FRAME + 8;
-/// Start of frame of an MT frame.
-pub const MT_SOF: u8 = 0xFE;
+pub use crate::mt::MT_SOF;
 
 /// One checked frame, borrowed from the demultiplexer's buffer until the next call.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -84,7 +84,25 @@ impl KrakenCsvFrame<'_> {
     }
 }
 
+impl Frame<'_> {
+    /// What the frame is: [`RecordKind::of_sentence`] of a sentence, else its format.
+    pub fn kind(&self) -> RecordKind {
+        match self {
+            Self::Nmea(body) => RecordKind::of_sentence(body),
+            Self::Mt(_) => RecordKind::Mt,
+            Self::Agrelo(_) => RecordKind::Agrelo,
+            Self::KrakenCsv(_) => RecordKind::KrakenCsv,
+            Self::KrakenXml(_) => RecordKind::KrakenXml,
+        }
+    }
+}
+
 pub use crate::mt::MtFrame;
+
+/// Whitespace between records, skipped without counting it as garbage.
+fn blank(b: u8) -> bool {
+    matches!(b, b' ' | b'\t' | b'\r' | b'\n')
+}
 
 /// What the demultiplexer has seen and thrown away, by reason.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -377,8 +395,8 @@ impl<const CAP: usize, const SPECTRUM: usize> Demux<CAP, SPECTRUM> {
             }
             let data = &self.buf[self.start..self.end];
             let first = *data.first()?;
-            let verdict = match first {
-                b'%' => {
+            let verdict = match Framing::of(first) {
+                Some(Framing::Agrelo) => {
                     match agrelo::scan(data, self.ended) {
                         agrelo::Scan::Valid { text, end } => {
                             self.counters.agrelo += 1;
@@ -402,20 +420,20 @@ impl<const CAP: usize, const SPECTRUM: usize> Demux<CAP, SPECTRUM> {
                     self.drop_first();
                     continue;
                 }
-                b'<' => {
+                Some(Framing::KrakenXml) => {
                     self.streaming = Streaming::Xml(XmlDecoder::new());
                     continue;
                 }
-                b'0'..=b'9' => {
+                Some(Framing::KrakenCsv) => {
                     self.streaming = Streaming::Csv(CsvDecoder::new());
                     continue;
                 }
-                b' ' | b'\t' | b'\r' | b'\n' => {
+                None if blank(first) => {
                     self.start += 1;
                     self.plain = 0;
                     continue;
                 }
-                b'$' => {
+                Some(Framing::Sentence) => {
                     let v = scan_sentence_from(data, self.plain);
                     if v == Scan::Incomplete {
                         // Resume after the plain bytes next time; a trailing CR is checked
@@ -425,19 +443,13 @@ impl<const CAP: usize, const SPECTRUM: usize> Demux<CAP, SPECTRUM> {
                     }
                     v
                 }
-                MT_SOF => scan_mt(data),
-                _ => {
+                Some(Framing::Mt) => scan_mt(data),
+                None => {
                     // The first byte starts nothing: skip it and what follows up to a byte
                     // that may start a record (or whitespace, skipped silently).
                     let skip = 1 + data[1..]
                         .iter()
-                        .position(|&b| {
-                            matches!(
-                                b,
-                                b'$' | MT_SOF | b'%' | b'<' | b'0'
-                                    ..=b'9' | b' ' | b'\t' | b'\r' | b'\n'
-                            )
-                        })
+                        .position(|&b| Framing::of(b).is_some() || blank(b))
                         .unwrap_or(data.len() - 1);
                     self.counters.garbage_bytes =
                         self.counters.garbage_bytes.saturating_add(skip as u32);

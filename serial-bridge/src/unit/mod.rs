@@ -39,6 +39,7 @@ pub use projection::Projection;
 use crate::bridge::{BearingMeasurement, Bridge, BridgeConfig, Event};
 use crate::command::{self, Command};
 use crate::nmea::UtcTime;
+use crate::record::{RecordClass, RecordKind};
 use crate::stream::{DEFAULT_CAPACITY, Demux, Frame};
 use crate::telemetry::{FixSentence, LinkSentence, SentenceBuf};
 use crate::track::{Noise, TrackConfig, TrackFix, Tracker};
@@ -71,20 +72,20 @@ impl Port {
         Self::ALL.get(usize::from(i)).copied()
     }
 
-    /// The port a record of a mixed capture belongs to, from its first bytes: `$PFOXC`
-    /// commands the user port; `$PFOXB`, Agrelo `%`, KrakenSDR XML `<` and CSV (a digit) the
+    /// The port a record of a mixed capture belongs to, by its [`RecordKind`]: `$PFOXC`
+    /// commands the user port; bearings (`$PFOXB`, Agrelo `%`, KrakenSDR XML `<` and CSV) the
     /// DF port; other sentences the GPS port; MT frames (`0xFE`) the ZigBee port. `None`: not
     /// the start of a record (the bytes go with the record before them).
     pub fn of_record(record: &[u8]) -> Option<Self> {
-        match record.first() {
-            Some(b'$') if record.starts_with(b"$PFOXC") => Some(Self::User),
-            Some(b'$') if record.starts_with(b"$PFOXB") => Some(Self::Df),
-            Some(b'$') => Some(Self::Gps),
-            Some(b'%' | b'<') => Some(Self::Df),
-            Some(c) if c.is_ascii_digit() => Some(Self::Df),
-            Some(0xFE) => Some(Self::Zigbee),
-            _ => None,
-        }
+        Some(match RecordKind::of_record(record)?.class() {
+            RecordClass::Command => Self::User,
+            RecordClass::Bearing => Self::Df,
+            RecordClass::Mt => Self::Zigbee,
+            RecordClass::Position
+            | RecordClass::Heading
+            | RecordClass::Unit
+            | RecordClass::OtherSentence => Self::Gps,
+        })
     }
 }
 
