@@ -46,6 +46,19 @@
 #![cfg_attr(not(any(feature = "std", test)), no_std)]
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
+// The MCU image runs this crate: no unwrap, expect, panic or unreachable anywhere, and no
+// unchecked indexing but in the byte decoders that allow it where they index the bytes they
+// have measured (agrelo, geo, kraken, mt, nmea's field readers, stream). The firmware image
+// test (tests/tests/firmware_image.rs) checks the linked image for panic calls in the rest.
+#![deny(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing,
+    clippy::unreachable,
+    clippy::todo,
+    clippy::unimplemented
+)]
 
 pub mod agrelo;
 pub mod bridge;

@@ -4,6 +4,9 @@
 //! Layout: `0xFE | LEN | CMD0 | CMD1 | DATA[LEN] | FCS`, CMD0 = type << 5 | subsystem, FCS =
 //! XOR of LEN, CMD0, CMD1 and DATA. Multi-byte fields are little-endian.
 
+// Frames are read and written at the field table's offsets once their length is checked.
+#![allow(clippy::indexing_slicing)]
+
 use crate::nmea::xor;
 
 /// Start of frame of an MT frame.

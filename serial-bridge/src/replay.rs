@@ -7,15 +7,6 @@
 //! far>`; [`Step::parse`] reads those lines back and [`replay`] runs them. Reads that completed
 //! no frame need no line: their bytes only wait in a demultiplexer, and go in with the next
 //! read of their port.
-#![deny(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::indexing_slicing,
-    clippy::unreachable,
-    clippy::todo,
-    clippy::unimplemented
-)]
 
 use crate::unit::{Fed, Port, Unit};
 
@@ -112,7 +103,6 @@ pub fn replay(
 }
 
 #[cfg(test)]
-#[allow(clippy::unwrap_used, clippy::indexing_slicing, clippy::panic)]
 mod tests {
     use super::*;
 

@@ -2,6 +2,9 @@
 //! once to `f64`), times, dates, angles and positions, each field numbered from 1 after the
 //! address.
 
+// Field readers index the digits whose count they have checked.
+#![allow(clippy::indexing_slicing)]
+
 use super::{Date, LatLon, NmeaError, UtcTime};
 
 /// An exact decimal: mantissa and number of fraction digits.

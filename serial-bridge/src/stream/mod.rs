@@ -28,6 +28,10 @@
 //! The checks of a candidate (a sentence's line end and checksum, an MT frame's FCS, the
 //! overlap rule) are in `scan.rs`; the demultiplexer's buffer and state are here.
 
+// The demultiplexer indexes its own buffer within the start and end it keeps, and its
+// checks index the candidate bytes they have measured.
+#![allow(clippy::indexing_slicing)]
+
 mod scan;
 #[cfg(test)]
 mod tests;

@@ -23,21 +23,11 @@
 //! watchdog. Counters are `u32` and wrap.
 //!
 //! The fixed-buffer writer is in `writer.rs`, the decoding in `parse.rs`.
-#![deny(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::indexing_slicing,
-    clippy::unreachable,
-    clippy::todo,
-    clippy::unimplemented
-)]
 
 mod parse;
 mod writer;
 
 #[cfg(test)]
-#[allow(clippy::unwrap_used, clippy::indexing_slicing, clippy::panic)]
 mod tests;
 
 pub use writer::SentenceBuf;
