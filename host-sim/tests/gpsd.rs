@@ -3,8 +3,8 @@
 //! bearings, relative to the vehicle, come on standard input. Positions reach foxhunt only
 //! through gpsd's TPV reports and headings only through its ATT reports.
 //!
-//! Skipped with a message where gpsfake is missing, except under CI (the env var CI set),
-//! where that is a failure: .ci/run installs it.
+//! Needs gpsd and gpsfake: without them the test fails saying what to install (.ci/run
+//! installs both).
 
 use foxhunt_bridge::agrelo::Agrelo;
 use foxhunt_bridge::geo::LocalFrame;
@@ -20,21 +20,18 @@ use std::time::{Duration, Instant};
 /// A deadline for waits that guard against a hang (not timing assertions).
 const PATIENCE: Duration = Duration::from_secs(60);
 
-fn gpsfake_available() -> bool {
+/// Fails the test, saying what to install, where gpsfake is missing.
+fn require_gpsfake() {
     let found = Command::new("gpsfake")
         .arg("--help")
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .status()
         .is_ok_and(|s| s.success());
-    if !found {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "gpsfake not found under CI: apt-get install gpsd gpsd-clients (.ci/run does)"
-        );
-        eprintln!("SKIPPED: gpsfake not found (apt-get install gpsd gpsd-clients)");
-    }
-    found
+    assert!(
+        found,
+        "gpsfake not found: apt-get install gpsd gpsd-clients (.ci/run does)"
+    );
 }
 
 fn sentence(body: &str) -> String {
@@ -135,9 +132,7 @@ fn lines(r: impl std::io::Read + Send + 'static) -> mpsc::Receiver<String> {
 
 #[test]
 fn locate_takes_positions_and_headings_from_a_real_gpsd() {
-    if !gpsfake_available() {
-        return;
-    }
+    require_gpsfake();
     let (log, bearings, scenario) = drive();
     let dir = std::env::temp_dir().join(format!("foxhunt-gpsd-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("scratch");

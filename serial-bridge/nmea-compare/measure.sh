@@ -3,7 +3,8 @@
 # our NMEA decoder and of the nmea crate (0.8), each behind our framing, over the bundled
 # drive; and the share of GPSD's positions each reproduces over its regression captures.
 # Needs: qemu-system-arm, binutils-arm-none-eabi, gcc, the thumbv7em-none-eabihf target.
-# Run: bash serial-bridge/nmea-compare/measure.sh [path to shared/data/gpsd]
+# Run: bash serial-bridge/nmea-compare/measure.sh [folder of GPSD captures; default: the
+# vendored serial-bridge/tests/data/gpsd]
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 out="$here/target"
@@ -32,4 +33,4 @@ awk -v bytes="$bytes" '
         v, text[v] - text["none"], (ins[v] - ins["none"]) / bytes, ins["none"] / bytes
   }' "$out/summary"
 rm -f "$out/summary"
-(cd "$here/suite" && cargo run -q --release -- "${1:-$here/../../../shared/data/gpsd}" | tail -n 1)
+(cd "$here/suite" && cargo run -q --release -- "${1:-$here/../tests/data/gpsd}" | tail -n 1)

@@ -12,6 +12,9 @@
 //! A record ends at CR or LF, or where the next record (`%`) or sentence (`$`) starts, since
 //! units that share a line with their own GPS may not end it.
 
+// The record scanner slices the bytes it has just measured.
+#![allow(clippy::indexing_slicing)]
+
 use core::fmt::{self, Write};
 
 /// Longest record the framing looks at, `%` to the line end.

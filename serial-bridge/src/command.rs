@@ -17,15 +17,6 @@
 //! `GATE`, `REF` and `MOUNT` restart the bridge (its fix history and heading state): bearings
 //! resume with the next GPS fix. `REF` and `MOUNT` also empty the tracker's window, whose
 //! bearings were placed in the old frame or turned by the old offset.
-#![deny(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::indexing_slicing,
-    clippy::unreachable,
-    clippy::todo,
-    clippy::unimplemented
-)]
 
 use crate::nmea::{LatLon, angle, number};
 use crate::track::WINDOW;
@@ -197,7 +188,6 @@ impl Command {
 }
 
 #[cfg(test)]
-#[allow(clippy::unwrap_used, clippy::indexing_slicing, clippy::panic)]
 mod tests {
     use super::*;
 

@@ -1,12 +1,13 @@
 //! foxhunt-bridge: the bytes the radios send, turned into measurements for foxhunt-core.
 //!
 //! [`stream`] splits a raw serial stream into checked records (NMEA sentences, TI
-//! Monitor-and-Test frames, Agrelo bearings, KrakenSDR CSV lines and XML records), [`nmea`],
-//! [`mt`], [`agrelo`] and [`kraken`] decode and encode them, [`geo`] puts positions in local
-//! metres, and [`bridge`] turns fixes, headings, bearings and link qualities into core
-//! measurements. The DF unit's own side: [`track`] keeps a fix on one emitter for ever in fixed
-//! memory, [`telemetry`] writes and reads the unit's sentences, [`command`] its configuration
-//! commands, [`unit`] puts ports, bridge and tracker together as the MCU runs them, and
+//! Monitor-and-Test frames, Agrelo bearings, KrakenSDR CSV lines and XML records), [`record`]
+//! tells what a record is from its first bytes, [`nmea`], [`mt`], [`agrelo`] and [`kraken`]
+//! decode and encode them, [`geo`] puts positions in local metres, and [`bridge`] turns
+//! fixes, headings, bearings and link qualities into core measurements. The DF unit's own
+//! side: [`track`] keeps a fix on one emitter for ever in fixed memory, [`telemetry`] writes
+//! and reads the unit's sentences, [`command`] its configuration commands,
+//! [`unit`](mod@unit) puts ports, bridge and tracker together as the MCU runs them, and
 //! [`replay`] runs the MCU's logged order of frames again on the host.
 //! Nothing allocates; every buffer has a fixed capacity; every rejection is counted by reason.
 //!
@@ -45,6 +46,19 @@
 #![cfg_attr(not(any(feature = "std", test)), no_std)]
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
+// The MCU image runs this crate: no unwrap, expect, panic or unreachable anywhere, and no
+// unchecked indexing but in the byte decoders that allow it where they index the bytes they
+// have measured (agrelo, geo, kraken, mt, nmea's field readers, stream). The firmware image
+// test (tests/tests/firmware_image.rs) checks the linked image for panic calls in the rest.
+#![deny(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing,
+    clippy::unreachable,
+    clippy::todo,
+    clippy::unimplemented
+)]
 
 pub mod agrelo;
 pub mod bridge;
@@ -53,6 +67,7 @@ pub mod geo;
 pub mod kraken;
 pub mod mt;
 pub mod nmea;
+pub mod record;
 pub mod replay;
 pub mod stream;
 pub mod telemetry;

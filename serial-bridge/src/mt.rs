@@ -4,8 +4,13 @@
 //! Layout: `0xFE | LEN | CMD0 | CMD1 | DATA[LEN] | FCS`, CMD0 = type << 5 | subsystem, FCS =
 //! XOR of LEN, CMD0, CMD1 and DATA. Multi-byte fields are little-endian.
 
+// Frames are read and written at the field table's offsets once their length is checked.
+#![allow(clippy::indexing_slicing)]
+
 use crate::nmea::xor;
-use crate::stream::MT_SOF;
+
+/// Start of frame of an MT frame.
+pub const MT_SOF: u8 = 0xFE;
 
 /// CMD0 of `AF_INCOMING_MSG`: type AREQ (2), subsystem AF (4).
 pub const AF_INCOMING_MSG_CMD0: u8 = 0x44;

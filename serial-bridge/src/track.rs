@@ -23,15 +23,6 @@
 //! Only `f32` arithmetic, with the core's branch-free `atan2` and `sincos` (libm's `sinf`,
 //! `cosf` and `hypotf` compute in `f64`, which the Cortex-M4F emulates in software), so the
 //! host and the MCU compute the same bits.
-#![deny(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::indexing_slicing,
-    clippy::unreachable,
-    clippy::todo,
-    clippy::unimplemented
-)]
 
 use foxhunt_core::Bearing;
 use foxhunt_core::fastmath::{atan2, sincos};
@@ -792,7 +783,6 @@ impl Tracker {
 }
 
 #[cfg(test)]
-#[allow(clippy::unwrap_used, clippy::indexing_slicing, clippy::panic)]
 mod tests {
     use super::*;
     use foxhunt_core::model::bearing::predicted;

@@ -1,6 +1,6 @@
 //! The NMEA decoder against GPSD's own decoding of the 54 real receivers' captures in
-//! `../shared/data/gpsd` (GPSD's regression suite: `*.log` raw bytes, `*.log.chk` GPSD's JSON
-//! reports after each sentence).
+//! `tests/data/gpsd` (GPSD's regression suite: `*.log` raw bytes, `*.log.chk` GPSD's JSON
+//! reports after each sentence; its README says where they come from).
 //!
 //! GPSD reports a TPV whenever a sentence updates its fix, often repeating a position, and
 //! merges sentences of one cycle; so sets are compared, not sequences:
@@ -10,9 +10,6 @@
 //! - every TPV speed and track (to GPSD's printed precision, 3 and 4 decimals) is one of ours
 //!   (RMC or VTG) at the same time;
 //! - every fix we decode is a position GPSD reported (no sentence GPSD rejected gives a fix).
-//!
-//! The data folder is not part of the repository. Without it the test prints SKIPPED, except
-//! under CI (the `CI` variable set), where a missing folder is a failure.
 
 use foxhunt_bridge::nmea::{KNOT_MPS, LatLon, Sentence};
 use foxhunt_bridge::{Demux, Frame};
@@ -20,25 +17,15 @@ use serde_json::Value;
 use std::collections::HashSet;
 use std::path::PathBuf;
 
-fn data_dir() -> Option<PathBuf> {
-    let dir = std::env::var_os("FOXHUNT_GPSD_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/gpsd")
-        });
-    if dir.is_dir() {
-        return Some(dir);
-    }
+/// The vendored captures: part of the repository, so a missing folder is a failure.
+fn data_dir() -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/gpsd");
     assert!(
-        std::env::var_os("CI").is_none(),
-        "CI is set but the GPSD captures are missing at {} (set FOXHUNT_GPSD_DATA)",
+        dir.is_dir(),
+        "GPSD's captures are missing at {} (they are part of the repository)",
         dir.display()
     );
-    eprintln!(
-        "SKIPPED: {} is absent (set FOXHUNT_GPSD_DATA)",
-        dir.display()
-    );
-    None
+    dir
 }
 
 /// One fix we decoded.
@@ -305,9 +292,7 @@ fn captures(dir: &std::path::Path) -> Vec<String> {
 
 #[test]
 fn every_position_gpsd_reports_from_the_54_captures() {
-    let Some(dir) = data_dir() else {
-        return;
-    };
+    let dir = data_dir();
     let names = captures(&dir);
     assert_eq!(names.len(), 54, "captures in {}", dir.display());
     let mut total = Tally::default();

@@ -79,7 +79,7 @@ fn run_mcu(name: &str, capture: &[u8], speed: f64, icount: bool) -> McuRun {
         .arg(&elf)
         .stdin(std::fs::File::open(dir.join("defmt.bin")).expect("defmt log"))
         .output()
-        .expect("defmt-print runs (cargo install defmt-print; .ci/run does)");
+        .expect("defmt-print not found: cargo install defmt-print --version 1.2.0 --locked (.ci/run does)");
     let text = String::from_utf8_lossy(&log.stdout);
     assert!(
         !text.contains("ERROR") && !text.contains("WARN"),

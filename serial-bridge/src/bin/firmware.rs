@@ -3,13 +3,15 @@
 //! commands in and the unit's sentences out on USART3 (see `foxhunt_bridge::telemetry` and
 //! `foxhunt_bridge::command`).
 //!
-//! Interrupt-driven on RTIC 2: each receive interrupt puts its byte into a lock-free SPSC
-//! queue (a full queue or a receiver overrun is counted, never silent); the idle loop drains
-//! the queues into `foxhunt_bridge::unit::Unit`, settles a line that went quiet for
-//! [`IDLE_MS`], and sends a status and a link sentence once a second; the user port's
-//! transmitter drains an output queue from its own interrupt, so a sentence never blocks the
-//! loop (one that does not fit is dropped and counted). SysTick counts milliseconds and gives
-//! the cycle clock the latency and fix-cost figures are measured with.
+//! On RTIC 2, receiving is interrupt-driven: each receive interrupt puts its byte into a
+//! lock-free SPSC queue (a full queue or a receiver overrun is counted, never silent). The idle
+//! loop drains the queues into `foxhunt_bridge::unit::Unit`, settles a line that went quiet
+//! for `IDLE_MS`, and sends a status and a link sentence once a second. Its sentences go into
+//! an output queue that the loop itself hands to the user port's transmitter, polling it as
+//! it goes (as many bytes as the transmitter takes each time round; QEMU models no transmit
+//! interrupt), so a sentence never blocks the loop (one that does not fit the queue is
+//! dropped and counted). SysTick counts milliseconds and gives the cycle clock the latency and
+//! fix-cost figures are measured with.
 //!
 //! For each read that completed a frame the loop logs `feed <port> <bytes so far>` (and
 //! `idle ...` for a settle): the host replays exactly that order (`foxhunt_bridge::replay`)
@@ -18,9 +20,13 @@
 //! Never stuck: the `board` build feeds the independent watchdog from the loop; the panic and
 //! hard-fault handlers record the reason in RAM that survives the reset, and reset; the next
 //! ready banner and every status sentence say why the unit last reset. The image's own code
-//! denies the lints of panicking paths, and `tests/tests/firmware_image.rs` checks that the
-//! linked image has no panic path at all.
+//! (this binary, and the bridge library but for its byte decoders that index their buffers:
+//! agrelo, geo, kraken, mt, nmea's field readers, stream) denies the lints of panicking
+//! paths, and `tests/tests/firmware_image.rs` checks that the linked image has no panic call
+//! in that code; the decoders' bounds checks (and heapless' and the logger's) are what remain,
+//! listed by that test, and a panic there resets the unit as above.
 #![cfg_attr(target_os = "none", no_std, no_main)]
+// The library's list (a binary is a crate of its own).
 #![deny(
     clippy::unwrap_used,
     clippy::expect_used,

@@ -58,6 +58,7 @@ fn main() -> std::process::ExitCode {
 #[cfg(not(target_os = "none"))]
 mod host {
     use foxhunt_bridge::nmea::{Pfoxb, Sentence};
+    use foxhunt_bridge::record::{Framing, RecordKind};
     use foxhunt_bridge::stream::{Demux, Frame};
     use foxhunt_bridge::telemetry::UnitSentence;
     use foxhunt_bridge::unit::Port;
@@ -134,14 +135,15 @@ mod host {
     /// Port and time (ms of day, or a Kraken epoch) of a record, if it names them.
     fn classify(r: &[u8]) -> (Option<usize>, Option<i64>) {
         let port = Port::of_record(r);
-        let time = match r.first() {
-            Some(b'$') if r.starts_with(b"$PFOXB") => body(r)
+        let kind = RecordKind::of_record(r);
+        let time = match kind {
+            Some(RecordKind::Pfoxb) => body(r)
                 .and_then(|b| Pfoxb::parse(b).ok())
                 .map(|p| i64::from(p.time.ms_of_day)),
-            Some(b'$') if port == Some(Port::Gps) => body(r)
+            Some(k) if k.framing() == Framing::Sentence && port == Some(Port::Gps) => body(r)
                 .and_then(Sentence::time_of)
                 .map(|t| i64::from(t.ms_of_day)),
-            Some(c) if c.is_ascii_digit() => std::str::from_utf8(r)
+            Some(RecordKind::KrakenCsv) => std::str::from_utf8(r)
                 .ok()
                 .and_then(|s| s.split(',').next())
                 .and_then(|s| s.trim().parse::<i64>().ok())

@@ -3,7 +3,7 @@
 //! each takes from sentences GPSD rejected. The captures and the comparison are those of
 //! serial-bridge/tests/gpsd.rs: TPVs reported right after a sentence the receiver sent.
 //!
-//! Run: cargo run --release -- ../../../../shared/data/gpsd
+//! Run: cargo run --release [-- DIR] (default: the vendored captures, serial-bridge/tests/data/gpsd)
 
 use foxhunt_bridge::nmea::Sentence;
 use foxhunt_bridge::{Demux, Frame};
@@ -132,7 +132,7 @@ fn rejected(chk: &str) -> Vec<String> {
 fn main() {
     let dir = std::env::args()
         .nth(1)
-        .unwrap_or_else(|| "../../../../shared/data/gpsd".into());
+        .unwrap_or_else(|| concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/data/gpsd").into());
     let mut names: Vec<String> = std::fs::read_dir(&dir)
         .expect("data folder")
         .filter_map(|e| {

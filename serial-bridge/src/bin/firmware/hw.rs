@@ -5,7 +5,11 @@
 //! interface read 0 and ignore writes. So everything that only configures (clock enables, pin
 //! functions) is written on both; what waits on those blocks (the PLL locking, the watchdog)
 //! is behind the `board` feature, and every wait is bounded.
-#![allow(unsafe_code)]
+//!
+//! Registers are written through the PAC's typed fields. `unsafe` is allowed item by item,
+//! each block with its reason: three PLL fields whose valid ranges the PAC leaves to the
+//! caller, UART4's block seen as a USART's, the watchdog's key register reached without
+//! owning IWDG, the reset record and the painted stack.
 
 use core::sync::atomic::{AtomicU32, Ordering};
 use stm32f4::stm32f405 as pac;
@@ -63,6 +67,7 @@ pub const BAUD: [u32; 4] = [9600, 4800, 115_200, 115_200];
 /// 84 MHz, five flash wait states). Returns whether it locked; if not the chip stays on the
 /// internal 16 MHz oscillator.
 #[cfg(feature = "board")]
+#[allow(unsafe_code)]
 pub fn start_pll(rcc: &pac::RCC, flash: &pac::FLASH) -> bool {
     const SPINS: u32 = 1_000_000;
     rcc.cr().modify(|_, w| w.hseon().set_bit());
@@ -70,22 +75,32 @@ pub fn start_pll(rcc: &pac::RCC, flash: &pac::FLASH) -> bool {
         return false;
     }
     // PLLM 25, PLLN 336, PLLP 2, PLLQ 7, source HSE: 25 / 25 * 336 / 2 = 168 MHz.
-    rcc.pllcfgr()
-        .write(|w| unsafe { w.bits(25 | (336 << 6) | (1 << 22) | (7 << 24)) });
+    rcc.pllcfgr().write(|w| {
+        // SAFETY: the PAC types PLLM, PLLN and PLLQ as raw bits, their valid ranges (RM0090:
+        // 2-63, 50-432, 2-15) being the caller's to keep; 25, 336 and 7 lie inside them.
+        unsafe { w.pllm().bits(25).plln().bits(336).pllq().bits(7) };
+        w.pllp().div2().pllsrc().hse()
+    });
     // Latency 5, prefetch, instruction and data caches.
-    flash
-        .acr()
-        .write(|w| unsafe { w.bits(5 | (1 << 8) | (1 << 9) | (1 << 10)) });
+    flash.acr().write(|w| {
+        w.latency()
+            .ws5()
+            .prften()
+            .enabled()
+            .icen()
+            .enabled()
+            .dcen()
+            .enabled()
+    });
     // AHB /1, APB1 /4, APB2 /2.
     rcc.cfgr()
-        .write(|w| unsafe { w.bits((0b101 << 10) | (0b100 << 13)) });
+        .write(|w| w.hpre().div1().ppre1().div4().ppre2().div2());
     rcc.cr().modify(|_, w| w.pllon().set_bit());
     if !(0..SPINS).any(|_| rcc.cr().read().pllrdy().bit_is_set()) {
         return false;
     }
-    rcc.cfgr()
-        .modify(|r, w| unsafe { w.bits((r.bits() & !0b11) | 0b10) });
-    (0..SPINS).any(|_| (rcc.cfgr().read().bits() >> 2) & 0b11 == 0b10)
+    rcc.cfgr().modify(|_, w| w.sw().pll());
+    (0..SPINS).any(|_| rcc.cfgr().read().sws().is_pll())
 }
 
 /// APB clock of USART1 (APB2) and of the others (APB1), Hz.
@@ -101,32 +116,38 @@ fn pclk(apb2: bool) -> u32 {
 /// USART2 PA2/PA3, USART3 PB10/PB11 (AF7), UART4 PA0/PA1 (AF8).
 pub fn enable_clocks_and_pins(rcc: &pac::RCC, gpioa: &pac::GPIOA, gpiob: &pac::GPIOB) {
     rcc.ahb1enr()
-        .modify(|r, w| unsafe { w.bits(r.bits() | 0b11) });
-    // USART2 (17), USART3 (18), UART4 (19) on APB1; USART1 (4) on APB2.
-    rcc.apb1enr()
-        .modify(|r, w| unsafe { w.bits(r.bits() | (1 << 17) | (1 << 18) | (1 << 19)) });
-    rcc.apb2enr()
-        .modify(|r, w| unsafe { w.bits(r.bits() | (1 << 4)) });
-    let alt = |pins: &[u32]| pins.iter().fold(0u32, |m, p| m | (0b10 << (2 * p)));
-    let mask = |pins: &[u32]| pins.iter().fold(0u32, |m, p| m | (0b11 << (2 * p)));
-    let a = [0, 1, 2, 3, 9, 10];
-    gpioa
-        .moder()
-        .modify(|r, w| unsafe { w.bits((r.bits() & !mask(&a)) | alt(&a)) });
-    // AFRL: PA0, PA1 AF8; PA2, PA3 AF7. AFRH: PA9, PA10 AF7.
+        .modify(|_, w| w.gpioaen().enabled().gpioben().enabled());
+    rcc.apb1enr().modify(|_, w| {
+        w.usart2en()
+            .enabled()
+            .usart3en()
+            .enabled()
+            .uart4en()
+            .enabled()
+    });
+    rcc.apb2enr().modify(|_, w| w.usart1en().enabled());
+    gpioa.moder().modify(|_, w| {
+        w.moder0()
+            .alternate()
+            .moder1()
+            .alternate()
+            .moder2()
+            .alternate()
+            .moder3()
+            .alternate()
+            .moder9()
+            .alternate()
+            .moder10()
+            .alternate()
+    });
     gpioa
         .afrl()
-        .modify(|r, w| unsafe { w.bits((r.bits() & !0xFFFF) | 0x7788) });
-    gpioa
-        .afrh()
-        .modify(|r, w| unsafe { w.bits((r.bits() & !0xFF0) | 0x770) });
-    let b = [10, 11];
+        .modify(|_, w| w.afrl0().af8().afrl1().af8().afrl2().af7().afrl3().af7());
+    gpioa.afrh().modify(|_, w| w.afrh9().af7().afrh10().af7());
     gpiob
         .moder()
-        .modify(|r, w| unsafe { w.bits((r.bits() & !mask(&b)) | alt(&b)) });
-    gpiob
-        .afrh()
-        .modify(|r, w| unsafe { w.bits((r.bits() & !0xFF00) | 0x7700) });
+        .modify(|_, w| w.moder10().alternate().moder11().alternate());
+    gpiob.afrh().modify(|_, w| w.afrh10().af7().afrh11().af7());
 }
 
 /// The USART register block (USART1-3 and UART4 share its layout).
@@ -134,27 +155,33 @@ pub type Usart = pac::usart1::RegisterBlock;
 
 /// UART4's registers as a USART's (the same layout at the same offsets; it lacks only the
 /// synchronous-mode bits, which the image never touches).
+#[allow(unsafe_code)]
 pub fn uart4(_owned: &pac::UART4) -> &'static Usart {
     // SAFETY: UART4's block is mapped for the program's life, and its SR, DR, BRR and CR1-3
     // sit where USART1's do; holding `pac::UART4` proves the caller owns it.
     unsafe { &*(pac::UART4::ptr() as *const Usart) }
 }
 
-const CR1_UE: u16 = 1 << 13;
-const CR1_RXNEIE: u16 = 1 << 5;
-const CR1_TE: u16 = 1 << 3;
-const CR1_RE: u16 = 1 << 2;
-const SR_ORE: u16 = 1 << 3;
-const SR_RXNE: u16 = 1 << 5;
-const SR_TXE: u16 = 1 << 7;
-
 /// 8N1 at `baud`, receiver and its interrupt on (and the transmitter if `tx`).
 pub fn start_usart(u: &Usart, baud: u32, apb2: bool, tx: bool) {
+    // The divider in sixteenths: mantissa and fraction side by side, as BRR holds them.
     let brr = (pclk(apb2) / baud).min(u32::from(u16::MAX)) as u16;
-    u.brr().write(|w| unsafe { w.bits(brr) });
-    let te = if tx { CR1_TE } else { 0 };
-    u.cr1()
-        .write(|w| unsafe { w.bits(CR1_UE | CR1_RE | CR1_RXNEIE | te) });
+    u.brr().write(|w| {
+        w.div_mantissa()
+            .set(brr >> 4)
+            .div_fraction()
+            .set((brr & 0xF) as u8)
+    });
+    u.cr1().write(|w| {
+        w.ue()
+            .set_bit()
+            .re()
+            .set_bit()
+            .rxneie()
+            .set_bit()
+            .te()
+            .bit(tx)
+    });
 }
 
 /// What a receive interrupt found.
@@ -169,12 +196,13 @@ pub enum Received {
 
 /// Read the receiver (reading DR clears RXNE and ORE).
 pub fn receive(u: &Usart) -> Received {
-    let sr = u.sr().read().bits();
-    if sr & (SR_RXNE | SR_ORE) == 0 {
+    let sr = u.sr().read();
+    let overrun = sr.ore().bit_is_set();
+    if !sr.rxne().bit_is_set() && !overrun {
         return Received::Nothing;
     }
-    let b = u.dr().read().bits() as u8;
-    if sr & SR_ORE != 0 {
+    let b = u.dr().read().dr().bits() as u8;
+    if overrun {
         Received::Overrun(b)
     } else {
         Received::Byte(b)
@@ -183,37 +211,39 @@ pub fn receive(u: &Usart) -> Received {
 
 /// Whether the transmitter can take a byte.
 pub fn tx_ready(u: &Usart) -> bool {
-    u.sr().read().bits() & SR_TXE != 0
+    u.sr().read().txe().bit_is_set()
 }
 
 /// Send a byte (the caller checked [`tx_ready`]).
 pub fn transmit(u: &Usart, b: u8) {
-    u.dr().write(|w| unsafe { w.bits(u16::from(b)) });
+    u.dr().write(|w| w.dr().set(u16::from(b)));
 }
 
 /// The independent watchdog: about a second without a feed resets the chip.
 #[cfg(feature = "board")]
 pub fn start_watchdog(iwdg: &pac::IWDG) {
-    iwdg.kr().write(|w| unsafe { w.bits(0x5555) });
+    iwdg.kr().write(|w| w.key().unlock());
     // LSI 32 kHz / 64 = 500 Hz; 500 counts.
-    iwdg.pr().write(|w| unsafe { w.bits(4) });
-    iwdg.rlr().write(|w| unsafe { w.bits(500) });
-    iwdg.kr().write(|w| unsafe { w.bits(0xCCCC) });
+    iwdg.pr().write(|w| w.pr().divide_by64());
+    iwdg.rlr().write(|w| w.rl().set(500));
+    iwdg.kr().write(|w| w.key().start());
 }
 
 /// Feed the watchdog (from the main loop only: a stuck loop starves it).
 #[cfg(feature = "board")]
+#[allow(unsafe_code)]
 pub fn feed_watchdog() {
-    // SAFETY: a write of the reload key to IWDG's key register, which has no other effect.
-    unsafe { (*pac::IWDG::ptr()).kr().write(|w| w.bits(0xAAAA)) };
+    // SAFETY: the main loop does not own IWDG (init configured it and let it go); it only
+    // writes the reload key to the key register, which has no other effect.
+    let iwdg = unsafe { &*pac::IWDG::ptr() };
+    iwdg.kr().write(|w| w.key().feed());
 }
 
 /// Whether the last reset was the watchdog's (and clear the flags).
 #[cfg(feature = "board")]
 pub fn watchdog_reset(rcc: &pac::RCC) -> bool {
-    let was = rcc.csr().read().bits() & (1 << 29) != 0;
-    rcc.csr()
-        .modify(|r, w| unsafe { w.bits(r.bits() | (1 << 24)) });
+    let was = rcc.csr().read().wdgrstf().bit_is_set();
+    rcc.csr().modify(|_, w| w.rmvf().clear());
     was
 }
 
@@ -228,10 +258,13 @@ pub struct ResetRecord {
 
 const MAGIC: u32 = 0xF0C5_F0C5;
 
+// Placed in RAM the startup code neither zeroes nor initialises, so it survives the reset.
+#[allow(unsafe_code)]
 #[unsafe(link_section = ".uninit.foxhunt")]
 static mut RECORD: core::mem::MaybeUninit<ResetRecord> = core::mem::MaybeUninit::uninit();
 
 /// Record `cause` ('P', 'H') and where, then reset.
+#[allow(unsafe_code)]
 pub fn record_and_reset(cause: u8, at: u32) -> ! {
     // SAFETY: RECORD is plain words in .uninit; only this function and `take_record` touch
     // it, this one with interrupts about to be lost to the reset.
@@ -250,6 +283,7 @@ pub fn record_and_reset(cause: u8, at: u32) -> ! {
 }
 
 /// The record the last reset left (cause letter and where), cleared.
+#[allow(unsafe_code)]
 pub fn take_record() -> Option<(u8, u32)> {
     // SAFETY: as in `record_and_reset`; called once at start, before any interrupt.
     unsafe {
@@ -262,6 +296,8 @@ pub fn take_record() -> Option<(u8, u32)> {
 
 const PAINT: u32 = 0xCCCC_CCCC;
 
+// SAFETY: the linker script defines both symbols; only their addresses are taken.
+#[allow(unsafe_code)]
 unsafe extern "C" {
     static _stack_start: u32;
     static _stack_end: u32;
@@ -279,6 +315,7 @@ fn stack_bounds() -> (usize, usize) {
 /// the big state would otherwise stand as the high-water mark): the mark then says what the
 /// running loop needs. Interrupts are off while it paints.
 #[inline(never)]
+#[allow(unsafe_code)]
 pub fn repaint_stack() {
     let (bottom, _) = stack_bounds();
     cortex_m::interrupt::free(|_| {
@@ -299,6 +336,7 @@ pub fn repaint_stack() {
 pub const STACK_SCAN: usize = 16 * 1024;
 
 /// Peak stack use, bytes: from the top down to the lowest word no longer painted.
+#[allow(unsafe_code)]
 pub fn stack_high_water() -> u32 {
     let (bottom, top) = stack_bounds();
     let mut p = bottom.max(top.saturating_sub(STACK_SCAN));

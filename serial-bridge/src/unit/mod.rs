@@ -16,21 +16,20 @@
 //! The bridge is configured with a bearing sigma of 1 radian, so each bearing's sigma is its
 //! relative weight (1, or the quality weighting's widening); the tracker holds the unit's
 //! sigma, which `SIGMA` then changes without touching the bridge.
-#![deny(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::indexing_slicing,
-    clippy::unreachable,
-    clippy::todo,
-    clippy::unimplemented
-)]
+//!
+//! The fix sentences' cheap inverse projection is in `projection.rs`.
+
+mod projection;
+
+#[cfg(test)]
+mod tests;
+
+pub use projection::Projection;
 
 use crate::bridge::{BearingMeasurement, Bridge, BridgeConfig, Event};
 use crate::command::{self, Command};
-use crate::geo::LocalFrame;
-use crate::nmea::LatLon;
 use crate::nmea::UtcTime;
+use crate::record::{RecordClass, RecordKind};
 use crate::stream::{DEFAULT_CAPACITY, Demux, Frame};
 use crate::telemetry::{FixSentence, LinkSentence, SentenceBuf};
 use crate::track::{Noise, TrackConfig, TrackFix, Tracker};
@@ -63,20 +62,20 @@ impl Port {
         Self::ALL.get(usize::from(i)).copied()
     }
 
-    /// The port a record of a mixed capture belongs to, from its first bytes: `$PFOXC`
-    /// commands the user port; `$PFOXB`, Agrelo `%`, KrakenSDR XML `<` and CSV (a digit) the
+    /// The port a record of a mixed capture belongs to, by its [`RecordKind`]: `$PFOXC`
+    /// commands the user port; bearings (`$PFOXB`, Agrelo `%`, KrakenSDR XML `<` and CSV) the
     /// DF port; other sentences the GPS port; MT frames (`0xFE`) the ZigBee port. `None`: not
     /// the start of a record (the bytes go with the record before them).
     pub fn of_record(record: &[u8]) -> Option<Self> {
-        match record.first() {
-            Some(b'$') if record.starts_with(b"$PFOXC") => Some(Self::User),
-            Some(b'$') if record.starts_with(b"$PFOXB") => Some(Self::Df),
-            Some(b'$') => Some(Self::Gps),
-            Some(b'%' | b'<') => Some(Self::Df),
-            Some(c) if c.is_ascii_digit() => Some(Self::Df),
-            Some(0xFE) => Some(Self::Zigbee),
-            _ => None,
-        }
+        Some(match RecordKind::of_record(record)?.class() {
+            RecordClass::Command => Self::User,
+            RecordClass::Bearing => Self::Df,
+            RecordClass::Mt => Self::Zigbee,
+            RecordClass::Position
+            | RecordClass::Heading
+            | RecordClass::Unit
+            | RecordClass::OtherSentence => Self::Gps,
+        })
     }
 }
 
@@ -111,63 +110,6 @@ pub struct Fed {
     pub frames: u32,
     /// Fix sentences sent.
     pub fixes: u32,
-}
-
-/// Local metres back to latitude and longitude for the fix sentences, cheaply: a quadratic in
-/// (east, north) fitted once per frame to the bridge's exact inverse
-/// ([`LocalFrame::to_geodetic`], about 250 000 instructions of software `f64` on the
-/// Cortex-M4F) at six points 5 km out. Evaluating it is a dozen `f64` multiply-adds. Its error
-/// is of third order in the distance from the origin: under 0.1 m within 10 km, a few metres
-/// at 50 km (the tests measure both), far inside any fix's ellipse at those ranges. Not across
-/// the antimeridian (the fitted longitude does not wrap).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Projection {
-    origin: LatLon,
-    lat: [f64; 6],
-    lon: [f64; 6],
-}
-
-impl Projection {
-    /// Half the fitting stencil, metres.
-    const D: f64 = 5000.0;
-
-    /// The quadratic of `frame`'s inverse, or `None` if the inverse fails at a stencil point.
-    pub fn new(frame: &LocalFrame) -> Option<Self> {
-        let d = Self::D;
-        let g = |e: f64, n: f64| frame.to_geodetic([e, n]).ok();
-        let p = [
-            g(0.0, 0.0)?,
-            g(d, 0.0)?,
-            g(-d, 0.0)?,
-            g(0.0, d)?,
-            g(0.0, -d)?,
-            g(d, d)?,
-        ];
-        let fit = |f: [f64; 6]| {
-            let [f0, fx, fmx, fy, fmy, fxy] = f;
-            let a1 = (fx - fmx) / (2.0 * d);
-            let a3 = (fx + fmx - 2.0 * f0) / (2.0 * d * d);
-            let a2 = (fy - fmy) / (2.0 * d);
-            let a5 = (fy + fmy - 2.0 * f0) / (2.0 * d * d);
-            let a4 = (fxy - f0 - a1 * d - a2 * d - a3 * d * d - a5 * d * d) / (d * d);
-            [f0, a1, a2, a3, a4, a5]
-        };
-        Some(Self {
-            origin: frame.origin,
-            lat: fit(p.map(|q| q.lat)),
-            lon: fit(p.map(|q| q.lon)),
-        })
-    }
-
-    /// The position at east `e`, north `n` metres.
-    pub fn at(&self, e: f64, n: f64) -> LatLon {
-        let q =
-            |a: &[f64; 6]| a[0] + a[1] * e + a[2] * n + a[3] * e * e + a[4] * e * n + a[5] * n * n;
-        LatLon {
-            lat: q(&self.lat),
-            lon: q(&self.lon),
-        }
-    }
 }
 
 /// Counters of bridges replaced by a reconfiguration.
@@ -539,130 +481,5 @@ impl State {
                 reference(ack);
             }
         }
-    }
-}
-
-#[cfg(test)]
-#[allow(clippy::unwrap_used, clippy::indexing_slicing, clippy::panic)]
-mod tests {
-    use super::*;
-    use crate::telemetry::UnitSentence;
-
-    const CAPTURE: &[u8] = include_bytes!("../captures/aoa-drive.nmea");
-
-    fn bodies(out: &[u8]) -> std::vec::Vec<String> {
-        let mut d = Demux::<DEFAULT_CAPACITY>::new();
-        let mut v = std::vec::Vec::new();
-        d.feed(out, &mut |f| {
-            if let Frame::Nmea(t) = f {
-                v.push(t.to_string());
-            }
-        });
-        v
-    }
-
-    fn command(c: &str) -> std::vec::Vec<u8> {
-        let sum = crate::nmea::checksum(c);
-        format!("${c}*{sum:02X}\r\n").into_bytes()
-    }
-
-    /// The bundled drive split by sentence kind into the GPS and DF ports, in its own order.
-    fn run(unit: &mut Unit, out: &mut std::vec::Vec<u8>) {
-        for line in CAPTURE.split_inclusive(|b| *b == b'\n') {
-            let port = Port::of_record(line).unwrap_or(Port::Gps);
-            unit.feed(port, line, &mut |s| {
-                out.extend_from_slice(s);
-                true
-            });
-        }
-    }
-
-    #[test]
-    fn the_drive_gives_a_fix_per_bearing_and_ends_inside_its_ellipse() {
-        let mut unit = Unit::default();
-        let mut out = std::vec::Vec::new();
-        run(&mut unit, &mut out);
-        let fixes: std::vec::Vec<_> = bodies(&out)
-            .iter()
-            .filter_map(|b| match UnitSentence::parse(b) {
-                Ok(UnitSentence::Fix(f)) => Some(f),
-                _ => None,
-            })
-            .collect();
-        assert_eq!(fixes.len(), 60);
-        assert_eq!(unit.link().fixes, 60);
-        let last = unit.last_fix().copied().unwrap();
-        assert_eq!(last.status, crate::track::Status::Valid, "{last:?}");
-        // aoa-drive's emitter is at (1200, 800) from the first fix: inside the 95 % ellipse
-        // (its semi-major axis bounds the distance).
-        let err = libm::hypotf(last.position[0] - 1200.0, last.position[1] - 800.0);
-        assert!(err < last.major, "{err} m from the emitter: {last:?}");
-    }
-
-    #[test]
-    fn the_projection_follows_the_exact_inverse() {
-        let frame = LocalFrame::new(
-            LatLon {
-                lat: 47.0,
-                lon: 8.0,
-            },
-            0.0,
-        )
-        .unwrap();
-        let p = Projection::new(&frame).unwrap();
-        let worst = |r: f64| {
-            let mut w = 0.0f64;
-            for k in 0..72 {
-                let a = (k as f64 * 5.0).to_radians();
-                let (e, n) = (r * a.cos(), r * a.sin());
-                let exact = frame.to_geodetic([e, n]).unwrap();
-                let q = p.at(e, n);
-                let dn = (q.lat - exact.lat) * 111_200.0;
-                let de = (q.lon - exact.lon) * 111_200.0 * 47f64.to_radians().cos();
-                w = w.max(dn.hypot(de));
-            }
-            w
-        };
-        // Third order in the distance: centimetres at 10 km, metres at 50 km.
-        let (w10, w50) = (worst(10_000.0), worst(50_000.0));
-        assert!(w10 < 0.1, "{w10} m at 10 km");
-        assert!(w50 < 5.0, "{w50} m at 50 km");
-        eprintln!("projection error: {w10:.4} m at 10 km, {w50:.3} m at 50 km");
-    }
-
-    #[test]
-    fn commands_are_acknowledged_and_kept() {
-        let mut unit = Unit::default();
-        let mut out = std::vec::Vec::new();
-        let mut send = |unit: &mut Unit, c: &str| {
-            unit.feed(Port::User, &command(c), &mut |s| {
-                out.extend_from_slice(s);
-                true
-            });
-        };
-        send(&mut unit, "PFOXC,SIGMA,1.5");
-        send(&mut unit, "PFOXC,WINDOW,30,60");
-        send(&mut unit, "PFOXC,MOUNT,-2.5");
-        send(&mut unit, "PFOXC,GATE,101");
-        send(&mut unit, "PFOXC,REF,4700.0000,N,00800.0000,E");
-        send(&mut unit, "PFOXC,SHOW");
-        let acks = bodies(&out);
-        assert_eq!(
-            acks,
-            [
-                "PFOXA,SIGMA,OK,1.50",
-                "PFOXA,WINDOW,OK,30,60",
-                "PFOXA,MOUNT,OK,-2.5",
-                "PFOXA,GATE,ERR,ARGUMENT",
-                "PFOXA,REF,OK,4700.000000,N,00800.000000,E",
-                "PFOXA,SHOW,OK,1.50,40.0,-2.5,30,60,OFF,4700.000000,N,00800.000000,E",
-            ]
-        );
-        assert_eq!(unit.config().track.window, 30);
-        let mut out = std::vec::Vec::new();
-        run(&mut unit, &mut out);
-        let last = unit.last_fix().copied().unwrap();
-        assert_eq!(last.window, 30);
-        assert!((last.sigma - 1.5f32.to_radians()).abs() < 1e-6);
     }
 }
