@@ -27,7 +27,7 @@ fn grid(lo: f32, hi: f32, n: u32) -> impl Iterator<Item = f32> {
 #[test]
 fn fastmath_is_within_ulps_where_micromath_is_not() {
     // atan2 around the whole circle at radius 1 and 1e4 (the bearing residual's inputs).
-    let angles = || grid(-3.14159, 3.14159, 200_000);
+    let angles = || grid(-std::f32::consts::PI, std::f32::consts::PI, 200_000);
     let mut ours = 0.0f64;
     let mut theirs = 0.0f64;
     for r in [1.0f32, 1.0e4] {

@@ -55,8 +55,11 @@ enum Command {
     Track(commands::track::Args),
     /// Every decoded frame of a capture as a JSON line, then the counters.
     ///
-    /// Kinds: gga, rmc, pfoxb, af_incoming_msg, mt (other MT frames), nmea (other sentences);
-    /// the last line has kind counters.
+    /// Kinds: positions gga, rmc, gll, gns; headings vtg, hdt, ths, hdg, hdm; bearings pfoxb,
+    /// agrelo, kraken_csv, kraken_xml; a DF unit's own sentences pfoxf (fix), pfoxs (status),
+    /// pfoxl (link), pfoxr (ready), pfoxa (acknowledgement) and pfoxc (command); ZigBee
+    /// af_incoming_msg, mt (other MT frames); nmea (any other sentence). The last line,
+    /// `counters`, has the demultiplexer's counters and `kinds`, the lines of each kind.
     ///
     /// Example:
     ///   foxhunt frames drive.nmea | grep pfoxb

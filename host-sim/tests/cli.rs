@@ -1016,3 +1016,13 @@ fn locate_reads_back_what_the_df_unit_said() {
     );
     assert_eq!(r["used"], 60, "the unit's sentences are not bearings: {r}");
 }
+
+#[test]
+fn frames_help_names_every_kind_it_prints() {
+    let out = foxhunt(&["frames", "--help"]);
+    let help = String::from_utf8_lossy(&out.stdout);
+    for k in foxhunt_bridge::record::RecordKind::ALL {
+        assert!(help.contains(k.name()), "`{}` not in: {help}", k.name());
+    }
+    assert!(help.contains("af_incoming_msg"), "{help}");
+}

@@ -8,6 +8,7 @@ use foxhunt_bridge::bridge::{
     BearingKind, BridgeConfig, BridgeCounters, Event, Receiver, VehicleFix,
 };
 use foxhunt_bridge::geo::LocalFrame;
+use foxhunt_bridge::record::RecordClass;
 use foxhunt_bridge::stream::StreamCounters;
 use foxhunt_core::Bearing;
 use foxhunt_core::fix::locate::Observation;
@@ -67,20 +68,10 @@ enum Kind {
 }
 
 fn kind(f: &Frame<'_>) -> Kind {
-    match f {
-        Frame::Nmea(text) => match text.get(2..5) {
-            _ if text.starts_with('P') => {
-                if text.starts_with("PFOXB") {
-                    Kind::Bearing
-                } else {
-                    Kind::Other
-                }
-            }
-            Some("GGA" | "RMC" | "GLL" | "GNS") => Kind::Gps,
-            _ => Kind::Other,
-        },
-        Frame::Agrelo(_) | Frame::KrakenCsv(_) | Frame::KrakenXml(_) => Kind::Bearing,
-        Frame::Mt(_) => Kind::Other,
+    match f.kind().class() {
+        RecordClass::Position => Kind::Gps,
+        RecordClass::Bearing => Kind::Bearing,
+        _ => Kind::Other,
     }
 }
 

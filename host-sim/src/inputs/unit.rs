@@ -2,6 +2,7 @@
 //! health read back from a capture of its user port (or mixed into any capture), so `locate`
 //! shows what the unit computed beside, or instead of, the host's own fix.
 
+use foxhunt_bridge::record::{RecordClass, RecordKind};
 use foxhunt_bridge::telemetry::{FixSentence, LinkSentence, StatusSentence, UnitSentence};
 use foxhunt_bridge::track::Status;
 use serde::Serialize;
@@ -29,7 +30,7 @@ pub struct UnitLog {
 impl UnitLog {
     /// Take a checked sentence body if it is one of the unit's; false otherwise.
     pub fn push(&mut self, body: &str) -> bool {
-        if !body.starts_with("PFOX") || body.starts_with("PFOXB") || body.starts_with("PFOXC") {
+        if RecordKind::of_sentence(body).class() != RecordClass::Unit {
             return false;
         }
         let parsed = UnitSentence::parse(body);

@@ -7,6 +7,7 @@
 use foxhunt_bridge::agrelo::Agrelo;
 use foxhunt_bridge::mt::{AfIncomingMsg, LinkQualityMap};
 use foxhunt_bridge::nmea::{LatLon, NmeaError, Reference, Sentence, UtcTime};
+use foxhunt_bridge::record::{RecordClass, RecordKind};
 use foxhunt_bridge::{Demux, Frame};
 use serde_json::{Value, json};
 
@@ -47,13 +48,11 @@ fn reference(r: Reference) -> &'static str {
 /// `$PFOXL` link, `$PFOXR` ready, `$PFOXA` acknowledgement), if `text` is one.
 fn unit_json(text: &str) -> Option<Value> {
     use foxhunt_bridge::telemetry::{TelemetryError, UnitSentence};
-    if !["PFOXF", "PFOXS", "PFOXL", "PFOXR", "PFOXA"]
-        .iter()
-        .any(|a| text.starts_with(a))
-    {
+    let kind = RecordKind::of_sentence(text);
+    if kind.class() != RecordClass::Unit {
         return None;
     }
-    let kind = text.get(..5).unwrap_or("pfox").to_ascii_lowercase();
+    let kind = kind.name();
     Some(match UnitSentence::parse(text) {
         Ok(UnitSentence::Fix(f)) => {
             let mut v = json!({"kind": "pfoxf", "time": time(f.time),
@@ -147,19 +146,7 @@ fn sentence_json(text: &str) -> Value {
             v
         }
         Err(e) => {
-            let kind = match text.get(2..5) {
-                _ if text.starts_with("PFOXB") => "pfoxb",
-                Some("GGA") => "gga",
-                Some("RMC") => "rmc",
-                Some("GLL") => "gll",
-                Some("GNS") => "gns",
-                Some("VTG") => "vtg",
-                Some("HDT") => "hdt",
-                Some("THS") => "ths",
-                Some("HDG") => "hdg",
-                Some("HDM") => "hdm",
-                _ => "nmea",
-            };
+            let kind = RecordKind::of_sentence(text).name();
             let error = match e {
                 NmeaError::Unsupported => None,
                 NmeaError::NoFix => Some("no_fix".to_string()),
@@ -224,9 +211,14 @@ pub fn write_frames(bytes: &[u8], out: &mut impl std::io::Write) -> std::io::Res
     let map = LinkQualityMap::default();
     let mut demux = Demux::<600>::new();
     let mut result = Ok(());
+    let mut kinds: std::collections::BTreeMap<String, u64> = Default::default();
     let mut sink = |f: Frame<'_>| {
         if result.is_ok() {
-            result = writeln!(out, "{}", frame_json(&f, &map));
+            let v = frame_json(&f, &map);
+            if let Some(k) = v["kind"].as_str() {
+                *kinds.entry(k.to_string()).or_default() += 1;
+            }
+            result = writeln!(out, "{v}");
         }
     };
     demux.feed(bytes, &mut sink);
@@ -243,7 +235,7 @@ pub fn write_frames(bytes: &[u8], out: &mut impl std::io::Write) -> std::io::Res
             "agrelo": c.agrelo, "agrelo_malformed": c.agrelo_malformed,
             "kraken_csv": c.kraken_csv, "kraken_xml": c.kraken_xml,
             "kraken_bad_field": c.kraken_bad_field, "kraken_too_long": c.kraken_too_long,
-            "kraken_structure": c.kraken_structure})
+            "kraken_structure": c.kraken_structure, "kinds": kinds})
     )
 }
 
@@ -352,5 +344,7 @@ mod tests {
         assert_eq!(bearings[3]["true_bearing_deg"], 240.0);
         assert_eq!(bearings[3]["freq_mhz"], 162.4);
         assert_eq!(lines[13]["kraken_csv"], 1);
+        assert_eq!(lines[13]["kinds"]["gga"], 1);
+        assert_eq!(lines[13]["kinds"]["kraken_xml"], 1);
     }
 }
