@@ -216,8 +216,8 @@ mod tests {
             None,
             "0 is no bearing"
         );
-        // APRS 1.2's padded form and the decimal, backslash and magnetic forms (PROTOCOLS.md
-        // 5.1, after Xastir's notes).
+        // APRS 1.2's padded form and the decimal, backslash and magnetic forms (docs/src/formats/
+        // bearings.md, "Agrelo", after Xastir's notes).
         assert_eq!(Agrelo::parse("%045/7").map(|a| a.bearing()), Ok(Some(45.0)));
         let a = Agrelo::parse("%136.0/9").expect("decimal");
         assert_eq!((a.bearing_deg, a.quality), (136.0, 9));

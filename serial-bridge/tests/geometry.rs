@@ -1,4 +1,4 @@
-//! Geometry and time in the bridge (FIELD.md): bearings carried into the local frame through
+//! Geometry and time in the bridge (docs/src/formats/bridge.md): bearings carried into the local frame through
 //! the meridians' convergence, fixes kept by time span so late bearings are still placed,
 //! and the yaw-rate gate.
 

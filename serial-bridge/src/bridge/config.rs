@@ -55,7 +55,7 @@ pub struct BridgeConfig {
     /// placed (within the [`FIX_HISTORY`](super::FIX_HISTORY) capacity, see [`Bridge`](super::Bridge)).
     pub fix_span_ms: u32,
     /// Bearings turned by a heading are rejected while the vehicle turns faster than this,
-    /// degrees per second (`None`: no gate). FIELD.md: 2 deg/s cut a 0.5 s latency's 42 m
+    /// degrees per second (`None`: no gate). docs/src/formats/bridge.md: 2 deg/s cut a 0.5 s latency's 42 m
     /// shift of the fix to 7.6 m.
     pub yaw_gate_deg_s: Option<f32>,
     /// The yaw rate is the heading's change over at least this long, ms.

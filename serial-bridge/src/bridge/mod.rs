@@ -20,7 +20,7 @@
 //! default) > none: the bearing is rejected and counted "no heading". The mounting offset of
 //! the DF antenna is added in the same place; each bearing records which source turned it.
 //!
-//! Geometry and time (FIELD.md): a true azimuth is measured from north at the vehicle, which
+//! Geometry and time (docs/src/formats/bridge.md): a true azimuth is measured from north at the vehicle, which
 //! is not the local frame's north once the vehicle is kilometres from the origin (the
 //! meridians converge by about Δλ·sin φ), so every bearing is carried into the frame exactly
 //! ([`LocalFrame::azimuth_to_local`]) at the vehicle's own latitude and longitude. The fixes

@@ -43,7 +43,7 @@ fn spec_examples() {
 
 #[test]
 fn protocols_examples_of_the_gpsd_grade_sentences() {
-    // PROTOCOLS.md section 4, each with the checksum the receiver sent.
+    // docs/src/formats/nmea.md's examples, each with the checksum the receiver sent.
     assert_eq!(checksum("GPVTG,330.63,T,345.26,M,0.00,N,0.00,K,A"), 0x20);
     let v = Vtg::parse("GPVTG,330.63,T,345.26,M,0.00,N,0.00,K,A").expect("VTG");
     assert_eq!(
