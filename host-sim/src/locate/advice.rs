@@ -2,32 +2,10 @@
 //! latitude and longitude, each emitter's verdict and the advice in one line.
 
 use crate::estimate::options::LocateOptions;
-use crate::guidance::AdviceReport;
-use crate::guidance::guide::{Guide, VerdictReport};
+use crate::guidance::guide::Guide;
 use crate::inputs::capture::Decoded;
-use crate::locate::report::{LatLonReport, geodetic};
+use crate::locate::report::{LatLonReport, LocatedAdvice, geodetic};
 use foxhunt_core::fix::locate::Source;
-use serde::Serialize;
-
-/// The advice as `foxhunt locate` reports it: the advice's fields, the point to drive to and
-/// the next turn in latitude and longitude, and the one-line form.
-#[derive(Debug, Clone, Serialize)]
-pub struct LocatedAdvice {
-    /// The advice's fields.
-    #[serde(flatten)]
-    pub report: AdviceReport,
-    /// The point to drive to (the end of the first move).
-    pub target: LatLonReport,
-    /// Where the next road turn is (on roads).
-    pub turn_at: Option<LatLonReport>,
-    /// Each emitter's verdict, in the order of the report's emitters (empty before a fix).
-    pub emitters: Vec<VerdictReport>,
-    /// The emitters the move is for (numbered as the report's emitters, from 1): those not
-    /// yet good enough (empty when all are, or before a fix).
-    pub for_emitters: Vec<usize>,
-    /// The advice in one line.
-    pub line: String,
-}
 
 /// [`Guide::advise_every`] as `foxhunt locate` reports it.
 pub fn located_advice(

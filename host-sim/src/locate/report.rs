@@ -1,9 +1,10 @@
 //! What `locate` reports (the `--json` object; field names are stable) and what the maps
 //! draw, in latitude and longitude and in the drive's local metres.
 
+use crate::guidance::AdviceReport;
+use crate::guidance::guide::VerdictReport;
 use crate::inputs::capture::Decoded;
 use crate::inputs::unit::UnitReport;
-use crate::locate::advice::LocatedAdvice;
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;
 use foxhunt_core::fix::ellipse::Ellipse;
@@ -203,4 +204,24 @@ pub fn geodetic(frame: &LocalFrame, p: [f32; 2]) -> LatLon {
     frame
         .to_geodetic([f64::from(p[0]), f64::from(p[1])])
         .unwrap_or(frame.origin)
+}
+
+/// The advice as `foxhunt locate` reports it: the advice's fields, the point to drive to and
+/// the next turn in latitude and longitude, and the one-line form.
+#[derive(Debug, Clone, Serialize)]
+pub struct LocatedAdvice {
+    /// The advice's fields.
+    #[serde(flatten)]
+    pub report: AdviceReport,
+    /// The point to drive to (the end of the first move).
+    pub target: LatLonReport,
+    /// Where the next road turn is (on roads).
+    pub turn_at: Option<LatLonReport>,
+    /// Each emitter's verdict, in the order of the report's emitters (empty before a fix).
+    pub emitters: Vec<VerdictReport>,
+    /// The emitters the move is for (numbered as the report's emitters, from 1): those not
+    /// yet good enough (empty when all are, or before a fix).
+    pub for_emitters: Vec<usize>,
+    /// The advice in one line.
+    pub line: String,
 }

@@ -1,7 +1,7 @@
 //! The terminal's words for what `locate` found: the report, and one line per live update.
 
 use crate::inputs::unit::UnitReport;
-use crate::locate::advice::LocatedAdvice;
+use crate::locate::report::LocatedAdvice;
 use crate::locate::report::{LocateReport, NoFix, SourceReport};
 use std::fmt::Write;
 
