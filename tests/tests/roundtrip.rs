@@ -84,8 +84,9 @@ fn the_reported_ellipse_is_honest_over_many_drives() {
 
 #[test]
 fn indoor_capture_is_tracked_through_the_bytes() {
-    use foxhunt_sim::track::indoor::{simulate_capture, track};
-    let (bytes, anchors, truth) = simulate_capture("rssi-sim", 0).expect("capture");
+    use foxhunt_sim::runs::simulate::indoor_capture;
+    use foxhunt_sim::track::indoor::track;
+    let (bytes, anchors, truth) = indoor_capture("rssi-sim", 0).expect("capture");
     let t = track(&bytes, &anchors, 1).expect("track");
     assert_eq!(t.points.len(), truth.len());
     assert_eq!(t.unknown.0, 0);
@@ -115,7 +116,7 @@ fn the_bundled_captures_are_what_simulate_writes_today() {
     let written = drive_capture(&drive, &CaptureOptions::default()).expect("capture");
     assert!(written == read("aoa-drive.nmea"), "aoa-drive.nmea is stale");
     let (bytes, anchors, _) =
-        foxhunt_sim::track::indoor::simulate_capture("rssi-sim", 0).expect("capture");
+        foxhunt_sim::runs::simulate::indoor_capture("rssi-sim", 0).expect("capture");
     assert!(bytes == read("rssi-sim.znp"), "rssi-sim.znp is stale");
     let text = anchors.to_toml("rssi-sim").expect("toml");
     assert_eq!(

@@ -18,7 +18,7 @@ pub struct Args {
     /// The roads and the stop rule's target.
     #[command(flatten)]
     pub guidance: GuidanceArgs,
-    /// Online map tiles, a URL template such as https://tile.example/{z}/{x}/{y}.png.
+    /// Online map tiles, a URL template such as `https://tile.example/{z}/{x}/{y}.png`.
     #[arg(long)]
     pub tiles: Option<String>,
     /// Replay: lines of the capture per update.

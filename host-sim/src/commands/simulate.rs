@@ -4,8 +4,8 @@ use crate::outputs::files::Outputs;
 use crate::outputs::terminal::{Outcome, note};
 use crate::runs::field::Condition;
 use crate::runs::scenario::{NAMES, Scenario, ScenarioModel};
+use crate::runs::simulate::indoor_capture;
 use crate::runs::simulate::{CaptureFormat, CaptureOptions, drive_capture};
-use crate::track::indoor::simulate_capture;
 use foxhunt_bridge::nmea::{Date, LatLon, UtcTime};
 use std::path::PathBuf;
 
@@ -174,7 +174,7 @@ pub fn run(a: &Args) -> Outcome {
                 return Err("the anchors file and the capture cannot be one file".into());
             }
             outputs.check(&anchors_path, named)?;
-            let (bytes, anchors, _) = simulate_capture(&scenario.name, a.run)?;
+            let (bytes, anchors, _) = indoor_capture(&scenario.name, a.run)?;
             let text = anchors.to_toml(&scenario.name)?;
             outputs.write(&a.out, &bytes, true)?;
             outputs.write(&anchors_path, text.as_bytes(), named)?;

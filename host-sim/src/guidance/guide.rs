@@ -186,7 +186,7 @@ impl Guide {
     /// yet; the move then crosses the line of bearing), with the bearings' noise, offset prior
     /// and channel width of `o`. Only the fix's own channel's bearings count: another
     /// channel's bearings say nothing about this emitter. "Good enough" needs the stop rule
-    /// (the bound at the noise the fix found, [`noise_scale`]) and the fix's own CEP50 below
+    /// (the bound at the noise the fix found, `noise_scale`) and the fix's own CEP50 below
     /// the target.
     pub fn advise(
         &mut self,

@@ -12,7 +12,6 @@
 
 pub mod advice;
 pub mod explain;
-pub mod live;
 mod method;
 mod pipeline;
 pub mod report;

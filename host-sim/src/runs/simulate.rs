@@ -18,11 +18,13 @@
 //! and the capture's origin, which the bridge turns back. The first record's position is the
 //! route's first point in every format, so the capture's local origin is that point.
 
-use crate::runs::scenario::{Drive, Scenario};
+use crate::runs::scenario::{Drive, Scenario, ScenarioModel};
 use crate::runs::writer::CaptureWriter;
+use crate::track::indoor::{Anchor, AnchorsFile, PathLossEntry};
 use foxhunt_bridge::agrelo::Agrelo;
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::kraken::{ArrayType, KrakenCsv, KrakenXml, SPECTRUM_LEN, Station};
+use foxhunt_bridge::mt::{AfIncomingMsg, LinkQualityMap};
 use foxhunt_bridge::nmea::{Date, Hdt, LatLon, Pfoxb, Reference, UtcTime};
 use foxhunt_core::model::bearing::{predicted, theta_to_azimuth, wrap};
 use foxhunt_core::random;
@@ -390,6 +392,71 @@ fn damage(bytes: &mut Vec<u8>, o: &CaptureOptions, rng: &mut rand_xorshift::XorS
         }
     }
     *bytes = kept;
+}
+
+/// A simulated indoor capture: its bytes, its anchors file and the node's true positions.
+pub type IndoorCapture = (Vec<u8>, AnchorsFile, Vec<[f32; 2]>);
+
+/// A simulated indoor capture: AF_INCOMING_MSG frames of every anchor each epoch, and the
+/// node's true positions.
+pub fn indoor_capture(name: &str, run: usize) -> Result<IndoorCapture, String> {
+    let s = Scenario::named(name)
+        .ok_or_else(|| format!("`{name}` is not an RSSI scenario (rssi-sim, rssi-lab)"))?;
+    let ScenarioModel::Rssi {
+        tracker: t,
+        start,
+        steps,
+    } = s.model
+    else {
+        return Err(format!(
+            "`{name}` is not an RSSI scenario (rssi-sim, rssi-lab)"
+        ));
+    };
+    let file = AnchorsFile {
+        room: t.room,
+        dt_s: t.dt,
+        sigma_db: t.sigma[0],
+        process_q: t.q,
+        path_loss: PathLossEntry {
+            p0_dbm: t.path_loss.p0,
+            d0_m: t.path_loss.d0,
+            eta: t.path_loss.eta,
+        },
+        anchor: (0..3)
+            .map(|i| Anchor {
+                addr: 0x0101 + i as u16,
+                x: t.anchors[i][0],
+                y: t.anchors[i][1],
+            })
+            .collect(),
+    };
+    let (states, readings) =
+        crate::runs::tracking::simulate_rssi(&t, start, steps, &mut s.rng(run));
+    let dbm: Vec<[f32; 3]> = readings.iter().map(|m| m.dbm).collect();
+    let map = LinkQualityMap::default();
+    let mut w = CaptureWriter::new();
+    let mut seq = 0u8;
+    for (k, z) in dbm.iter().enumerate() {
+        for (i, a) in file.anchor.iter().enumerate() {
+            let msg = AfIncomingMsg {
+                group_id: 0,
+                cluster_id: 0x0402,
+                src_addr: a.addr,
+                src_endpoint: 1,
+                dst_endpoint: 1,
+                was_broadcast: false,
+                link_quality: map.link_quality(z[i]),
+                security_use: false,
+                timestamp: (k as f32 * t.dt * 1000.0) as u32,
+                trans_seq: seq,
+                data: &[0x18, seq, 0x0a],
+            };
+            seq = seq.wrapping_add(1);
+            w.af_incoming_msg(&msg)?;
+        }
+    }
+    let truth = states.iter().map(|x| [x[0], x[2]]).collect();
+    Ok((w.into_bytes(), file, truth))
 }
 
 #[cfg(test)]

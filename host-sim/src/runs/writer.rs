@@ -1,11 +1,12 @@
 //! A capture written record by record as the radios send them: NMEA sentences framed with
 //! their checksum and CR LF, Agrelo bearings, KrakenSDR CSV lines and XML records, each with the
-//! line end its device uses. `foxhunt simulate`, the field conditions' captures and the
-//! firmware's QEMU tests all write through this one writer, so a framing rule lives here
-//! only.
+//! line end its device uses, and ZigBee coordinators' MT frames. `foxhunt simulate` (drives and
+//! indoor captures), the field conditions' captures and the firmware's QEMU tests all write
+//! through this one writer, so a framing rule lives here only.
 
 use foxhunt_bridge::agrelo::Agrelo;
 use foxhunt_bridge::kraken::{KrakenCsv, KrakenXml};
+use foxhunt_bridge::mt::AfIncomingMsg;
 use foxhunt_bridge::nmea::{
     Date, Hdt, LatLon, Line, Pfoxb, UtcTime, gga_body, pfoxb_body, rmc_body, write_sentence,
 };
@@ -16,8 +17,9 @@ pub const TOO_LONG: &str = "record longer than its buffer";
 /// The bytes of a capture, written in order.
 #[derive(Debug, Default, Clone)]
 pub struct CaptureWriter {
-    out: String,
+    out: Vec<u8>,
     line: Line,
+    text: String,
 }
 
 impl CaptureWriter {
@@ -28,7 +30,23 @@ impl CaptureWriter {
 
     /// Frame the sentence body in `self.line` (`$`, checksum, CR LF).
     fn frame(&mut self) -> Result<(), String> {
-        write_sentence(&mut self.out, &self.line).map_err(|_| TOO_LONG.to_string())
+        self.text.clear();
+        write_sentence(&mut self.text, &self.line).map_err(|_| TOO_LONG.to_string())?;
+        self.out.extend_from_slice(self.text.as_bytes());
+        Ok(())
+    }
+
+    /// Append a text record `write` makes, then `end`.
+    fn text_record(
+        &mut self,
+        write: impl FnOnce(&mut String) -> core::fmt::Result,
+        end: &str,
+    ) -> Result<(), String> {
+        self.text.clear();
+        write(&mut self.text).map_err(|_| TOO_LONG.to_string())?;
+        self.text.push_str(end);
+        self.out.extend_from_slice(self.text.as_bytes());
+        Ok(())
     }
 
     /// A GPS fix as a receiver reports it: GGA (9 satellites, HDOP 0.9).
@@ -69,21 +87,27 @@ impl CaptureWriter {
 
     /// An Agrelo bearing (`%BBB/Q`, CR LF).
     pub fn agrelo(&mut self, a: &Agrelo) -> Result<(), String> {
-        a.emit(&mut self.out).map_err(|_| TOO_LONG.to_string())?;
-        self.out.push_str("\r\n");
-        Ok(())
+        self.text_record(|t| a.emit(t), "\r\n")
     }
 
     /// A KrakenSDR CSV line with its DoA spectrum (the line writes its own end).
     pub fn kraken_csv(&mut self, c: &KrakenCsv, spectrum: &[f32]) -> Result<(), String> {
-        c.emit(spectrum, &mut self.out)
-            .map_err(|_| TOO_LONG.to_string())
+        self.text_record(|t| c.emit(spectrum, t), "")
     }
 
     /// A KrakenSDR XML record on one line.
     pub fn kraken_xml(&mut self, x: &KrakenXml) -> Result<(), String> {
-        x.emit(&mut self.out).map_err(|_| TOO_LONG.to_string())?;
-        self.out.push('\n');
+        self.text_record(|t| x.emit(t), "\n")
+    }
+
+    /// A ZigBee coordinator's AF_INCOMING_MSG frame (UNPI: start byte, length, command, data,
+    /// check byte).
+    pub fn af_incoming_msg(&mut self, m: &AfIncomingMsg<'_>) -> Result<(), String> {
+        let mut buf = [0u8; 300];
+        let n = m
+            .encode(&mut buf)
+            .map_err(|_| "an AF_INCOMING_MSG frame did not fit its buffer".to_string())?;
+        self.out.extend_from_slice(buf.get(..n).unwrap_or(&[]));
         Ok(())
     }
 
@@ -99,6 +123,6 @@ impl CaptureWriter {
 
     /// The capture's bytes.
     pub fn into_bytes(self) -> Vec<u8> {
-        self.out.into_bytes()
+        self.out
     }
 }

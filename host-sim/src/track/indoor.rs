@@ -8,7 +8,7 @@
 
 use crate::estimate::Steps;
 use foxhunt_bridge::bridge::{Bridge, BridgeConfig, Event, RssiReading};
-use foxhunt_bridge::mt::{AfIncomingMsg, LinkQualityMap};
+use foxhunt_bridge::mt::AfIncomingMsg;
 use foxhunt_core::estimator::with_particle_filter;
 use foxhunt_core::{Estimate, Method, ParticleSet, PathLoss, RssiMeasurement, RssiTracker, random};
 use rand_core::SeedableRng;
@@ -332,76 +332,6 @@ fn track_with<const A: usize>(
         points,
         unknown: (unknown_frames, unknown),
     })
-}
-
-/// A simulated indoor capture: its bytes, its anchors file and the node's true positions.
-pub type IndoorCapture = (Vec<u8>, AnchorsFile, Vec<[f32; 2]>);
-
-/// A simulated indoor capture: AF_INCOMING_MSG frames of every anchor each epoch, and the
-/// node's true positions.
-pub fn simulate_capture(name: &str, run: usize) -> Result<IndoorCapture, String> {
-    use crate::runs::scenario::{Scenario, ScenarioModel};
-    let s = Scenario::named(name)
-        .ok_or_else(|| format!("`{name}` is not an RSSI scenario (rssi-sim, rssi-lab)"))?;
-    let ScenarioModel::Rssi {
-        tracker: t,
-        start,
-        steps,
-    } = s.model
-    else {
-        return Err(format!(
-            "`{name}` is not an RSSI scenario (rssi-sim, rssi-lab)"
-        ));
-    };
-    let file = AnchorsFile {
-        room: t.room,
-        dt_s: t.dt,
-        sigma_db: t.sigma[0],
-        process_q: t.q,
-        path_loss: PathLossEntry {
-            p0_dbm: t.path_loss.p0,
-            d0_m: t.path_loss.d0,
-            eta: t.path_loss.eta,
-        },
-        anchor: (0..3)
-            .map(|i| Anchor {
-                addr: 0x0101 + i as u16,
-                x: t.anchors[i][0],
-                y: t.anchors[i][1],
-            })
-            .collect(),
-    };
-    let (states, readings) =
-        crate::runs::tracking::simulate_rssi(&t, start, steps, &mut s.rng(run));
-    let dbm: Vec<[f32; 3]> = readings.iter().map(|m| m.dbm).collect();
-    let map = LinkQualityMap::default();
-    let mut out = Vec::new();
-    let mut seq = 0u8;
-    for (k, z) in dbm.iter().enumerate() {
-        for (i, a) in file.anchor.iter().enumerate() {
-            let msg = AfIncomingMsg {
-                group_id: 0,
-                cluster_id: 0x0402,
-                src_addr: a.addr,
-                src_endpoint: 1,
-                dst_endpoint: 1,
-                was_broadcast: false,
-                link_quality: map.link_quality(z[i]),
-                security_use: false,
-                timestamp: (k as f32 * t.dt * 1000.0) as u32,
-                trans_seq: seq,
-                data: &[0x18, seq, 0x0a],
-            };
-            seq = seq.wrapping_add(1);
-            let mut buf = [0u8; 64];
-            let n = msg
-                .encode(&mut buf)
-                .map_err(|_| "an AF_INCOMING_MSG frame did not fit 64 bytes".to_string())?;
-            out.extend_from_slice(&buf[..n]);
-        }
-    }
-    let truth = states.iter().map(|x| [x[0], x[2]]).collect();
-    Ok((out, file, truth))
 }
 
 impl Track {

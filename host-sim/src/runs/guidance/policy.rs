@@ -8,9 +8,9 @@
 //! - `greedy-d`, `greedy-a`: the free heading (16 directions, 300 m) with the largest one-step
 //!   D- or A-optimal gain;
 //! - `lookahead`: the core planner's sequence that reaches the target in the fewest metres
-//!   ([`Cost::Distance`], the benchmark's measure) over a horizon (60 s of free
+//!   ([`foxhunt_core::guidance::plan::Cost::Distance`], the benchmark's measure) over a horizon (60 s of free
 //!   headings; on roads 150 s, at most 8 segments, of reachable road segments), planned to
-//!   [`PLAN_TARGET_SHARE`] of the goal.
+//!   [`crate::guidance::PLAN_TARGET_SHARE`] of the goal.
 //!
 //! On a road network every policy but `lookahead` picks the road out of the junction nearest
 //! its free heading: the free-heading greedy policies "forced onto roads". `lookahead` scores

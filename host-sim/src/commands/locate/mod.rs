@@ -1,6 +1,8 @@
 //! `foxhunt locate`: the fix of a recorded drive, of a live serial line or of standard input,
 //! with its maps.
 
+pub mod live;
+
 use super::{GuidanceArgs, method};
 use crate::estimate::options::{LocateOptions, PARTICLES};
 use crate::inputs::calibration::Calibration;
@@ -8,7 +10,6 @@ use crate::inputs::capture::{Decoded, Decoder};
 use crate::inputs::files::{Source, stream};
 use crate::inputs::gpsd::GpsdAddress;
 use crate::inputs::kraken_http::KrakenUrl;
-use crate::locate::live::{LiveOptions, LiveSource};
 use crate::locate::report::Located;
 use crate::locate::{locate, locate_guided};
 use crate::outputs::files::Outputs;
@@ -16,12 +17,13 @@ use crate::outputs::maps;
 use crate::outputs::terminal::{Out, Outcome, Stop, note};
 use foxhunt_bridge::BridgeConfig;
 use foxhunt_core::Method;
+use live::{LiveOptions, LiveSource};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 /// The bundled sample drive (`foxhunt simulate --scenario aoa-drive --out
 /// serial-bridge/captures/aoa-drive.nmea`).
-pub const SAMPLE_DRIVE: &[u8] = include_bytes!("../../../serial-bridge/captures/aoa-drive.nmea");
+pub const SAMPLE_DRIVE: &[u8] = include_bytes!("../../../../serial-bridge/captures/aoa-drive.nmea");
 
 /// Options of `foxhunt locate`.
 #[derive(Debug, clap::Args)]
@@ -266,7 +268,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
                 json: a.json,
                 keep_track,
             };
-            let d = crate::locate::live::run(&o, &mut guide, out)?;
+            let d = live::run(&o, &mut guide, out)?;
             // The live updates were the output; a final fix goes only to the maps.
             if keep_track && let Ok(l) = locate(&d, &options) {
                 write_maps(&l, &d, &paths, &outputs)?;

@@ -10,12 +10,12 @@
 //! When no byte comes for 100 ms the demultiplexer is told the line is idle (a frame waiting
 //! on look-ahead is delivered), and `--quiet-exit` counts from the last byte.
 //!
-//! The bearings' line may be a KrakenSDR's web page ([`crate::kraken_http`]: its new whole
+//! The bearings' line may be a KrakenSDR's web page ([`crate::inputs::kraken_http`]: its new whole
 //! records are the line's bytes), and positions and headings may come from gpsd beside it
-//! ([`crate::gpsd`]: its reports become sentences pushed into the same bridge between the
+//! ([`crate::inputs::gpsd`]: its reports become sentences pushed into the same bridge between the
 //! line's chunks). Either way only new bearings make an update line, or a new `$PFOXF` of a DF
 //! unit running foxhunt's firmware: every line (`--json`: `unit`, also when there is no fix
-//! yet) carries what the unit said ([`crate::unit`]).
+//! yet) carries what the unit said ([`crate::inputs::unit`]).
 
 use crate::estimate::options::LocateOptions;
 use crate::guidance::guide::Guide;
