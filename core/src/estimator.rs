@@ -65,6 +65,10 @@ pub enum Method {
     /// position and the DF unit's offset, noise estimated, consistency checked, F-scaled
     /// ellipses, one emitter per channel and other sources.
     MlRobust,
+    /// The DF unit's windowed fix ([`crate::fix::window`]), what the firmware runs on every
+    /// bearing: the last 120 bearings, Tukey's loss by Levenberg-Marquardt from a pair search,
+    /// the noise estimated from the inliers; no offset, one emitter.
+    Unit,
 }
 
 /// What a filter is built on.
@@ -81,6 +85,9 @@ pub enum Base {
     /// The field pipeline ([`crate::fix::locate`]): emitters per channel, other sources and
     /// consistency, from bearings with their times; it needs working storage lent to it.
     Pipeline,
+    /// The windowed fix ([`crate::fix::window`]): bearings one at a time with their times, the
+    /// answer the last update's.
+    Window,
 }
 
 /// The swarm move between prediction and weighting.
@@ -158,7 +165,7 @@ const fn spec(
 }
 
 /// Every estimator, in table order ([`Method::spec`] indexes it by the enum's order).
-const SPECS: [Spec; 17] = {
+const SPECS: [Spec; 18] = {
     use Base as B;
     use SwarmMove as S;
     [
@@ -179,12 +186,13 @@ const SPECS: [Spec; 17] = {
         spec("ml", B::Batch, S::None, TUNED, false),
         spec("ml-huber", B::Batch, S::None, TUNED, false),
         spec("ml-robust", B::Pipeline, S::None, TUNED, false),
+        spec("unit", B::Window, S::None, TUNED, false),
     ]
 };
 
 impl Method {
     /// Every method, in table order.
-    pub const ALL: [Method; 17] = [
+    pub const ALL: [Method; 18] = [
         Method::SirSeed,
         Method::Sir,
         Method::SirRobust,
@@ -202,6 +210,7 @@ impl Method {
         Method::Ml,
         Method::MlHuber,
         Method::MlRobust,
+        Method::Unit,
     ];
 
     /// What the method is made of.
@@ -231,12 +240,12 @@ impl Method {
     }
 
     /// Whether its likelihood or loss down-weights wild bearings (Huber, Gaussian + uniform,
-    /// widened Cauchy, the pipeline's Tukey): the noise its residuals give is then estimated
+    /// widened Cauchy, the pipeline's and the unit's Tukey): the noise its residuals give is then estimated
     /// robustly, from the inliers.
     pub const fn robust_loss(self) -> bool {
         matches!(
             self,
-            Method::SirRobust | Method::SirWide | Method::MlHuber | Method::MlRobust
+            Method::SirRobust | Method::SirWide | Method::MlHuber | Method::MlRobust | Method::Unit
         )
     }
 
@@ -319,7 +328,8 @@ where
         | Method::Wiv
         | Method::Ml
         | Method::MlHuber
-        | Method::MlRobust => {
+        | Method::MlRobust
+        | Method::Unit => {
             return Err(Error::Unsupported);
         }
     })

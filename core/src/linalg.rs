@@ -34,10 +34,20 @@ pub fn eigen2(m: &[[f32; 2]; 2]) -> Option<(f32, f32, f32)> {
     let b = 0.5 * (m[0][1] + m[1][0]);
     let c = m[1][1];
     let half_trace = 0.5 * (a + c);
-    let radius = libm::hypotf(0.5 * (a - c), b);
+    // hypot(h, b) in f32 alone (libm's hypotf computes in f64, which the MCU emulates in
+    // software): scaled by the larger so the squares cannot overflow.
+    let h = 0.5 * (a - c);
+    let (ah, ab) = (libm::fabsf(h), libm::fabsf(b));
+    let big = if ah > ab { ah } else { ab };
+    let radius = if big > 0.0 {
+        let (x, y) = (h / big, b / big);
+        big * libm::sqrtf(x * x + y * y)
+    } else {
+        0.0
+    };
     let l1 = half_trace + radius;
     let l2 = half_trace - radius;
-    let angle = 0.5 * libm::atan2f(2.0 * b, a - c);
+    let angle = 0.5 * crate::fastmath::atan2(2.0 * b, a - c);
     (l1.is_finite() && l2.is_finite() && angle.is_finite()).then_some((l1, l2, angle))
 }
 

@@ -19,7 +19,7 @@
 //! bearings were placed in the old frame or turned by the old offset.
 
 use crate::nmea::{LatLon, angle, number};
-use crate::track::WINDOW;
+use foxhunt_core::fix::window::WINDOW;
 
 /// A decoded command.
 #[derive(Debug, Clone, Copy, PartialEq)]

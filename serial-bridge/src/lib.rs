@@ -5,9 +5,9 @@
 //! tells what a record is from its first bytes, [`nmea`], [`mt`], [`agrelo`] and [`kraken`]
 //! decode and encode them, [`geo`] puts positions in local metres, and [`bridge`] turns
 //! fixes, headings, bearings and link qualities into core measurements. The DF unit's own
-//! side: [`track`] keeps a fix on one emitter for ever in fixed memory, [`telemetry`] writes
-//! and reads the unit's sentences, [`command`] its configuration commands,
-//! [`unit`](mod@unit) puts ports, bridge and tracker together as the MCU runs them, and
+//! side: [`telemetry`] writes and reads the unit's sentences, [`command`] its configuration
+//! commands, [`unit`](mod@unit) puts ports, bridge and the core's windowed fix
+//! (`foxhunt_core::fix::window`) together as the MCU runs them, and
 //! [`replay`] runs the MCU's logged order of frames again on the host.
 //! Nothing allocates; every buffer has a fixed capacity; every rejection is counted by reason.
 //!
@@ -71,7 +71,6 @@ pub mod record;
 pub mod replay;
 pub mod stream;
 pub mod telemetry;
-pub mod track;
 pub mod unit;
 
 pub use bridge::{Bridge, BridgeConfig, BridgeCounters, Event, Receiver};

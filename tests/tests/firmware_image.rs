@@ -14,8 +14,8 @@
 //!   float formatting (what remains is the integer `Display` that core's own bounds-check
 //!   panic message references).
 //! - **No `f64` on the per-bearing fix path**: nothing reachable by direct calls from
-//!   `Tracker::push` is software double precision or an f64 libm function (but for the core's
-//!   `sincos` fallback, dead for the tracker's angles: see the walk).
+//!   `WindowFix::push` (the core's windowed fix) is software double precision or an f64 libm function (but for the core's
+//!   `sincos` fallback, dead for the window's angles: see the walk).
 
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::path::PathBuf;
@@ -187,11 +187,12 @@ const DECODERS: [&str; 6] = [
     "stream/",
 ];
 
-/// Whether a call site is the image's own code: the firmware, or the bridge library but for
-/// its decoders.
+/// Whether a call site is the image's own code: the firmware, the core's windowed fix it runs
+/// on every bearing, or the bridge library but for its decoders.
 fn own(site: &str) -> bool {
     const LIB: &str = "serial-bridge/src/";
     site.contains("serial-bridge/src/bin/firmware")
+        || site.contains("core/src/fix/window/")
         || site.find(LIB).is_some_and(|i| {
             let file = &site[i + LIB.len()..];
             !file.starts_with("bin/") && !DECODERS.iter().any(|d| file.starts_with(d))
@@ -255,17 +256,17 @@ fn the_image_fits_panics_nowhere_of_its_own_and_keeps_f64_off_the_fix_path() {
         .collect();
     assert!(fmt_made.is_empty(), "core::fmt in the image: {fmt_made:#?}");
 
-    // Everything Tracker::push reaches by direct calls.
+    // Everything WindowFix::push reaches by direct calls.
     let roots: Vec<&String> = img
         .calls
         .keys()
-        .filter(|f| f.starts_with("foxhunt_bridge::track::Tracker::push"))
+        .filter(|f| f.starts_with("foxhunt_core::fix::window::WindowFix::push"))
         .collect();
-    assert!(!roots.is_empty(), "Tracker::push not found as a function");
+    assert!(!roots.is_empty(), "WindowFix::push not found as a function");
     let mut seen: BTreeSet<String> = BTreeSet::new();
     let mut queue: VecDeque<String> = roots.into_iter().cloned().collect();
     // The core's `fastmath::sincos` falls back to libm's `sincosf` (f64 kernels) for
-    // |x| > 8192 or NaN; the tracker passes only angles it holds in (-pi, pi] (its `sin_cos`
+    // |x| > 8192 or NaN; the window passes only angles it holds in (-pi, pi] (its `sin_cos`
     // maps anything else to 0), so that branch is dead, though the compiler keeps it. The
     // walk stops there; a fallback-free core variant would let it go on.
     const DEAD: &str = "libm::math::sincosf::sincosf";
@@ -302,6 +303,6 @@ fn the_image_fits_panics_nowhere_of_its_own_and_keeps_f64_off_the_fix_path() {
             eprintln!("  {f} calls {bad:?}");
         }
     }
-    eprintln!("Tracker::push reaches {} functions", seen.len());
+    eprintln!("WindowFix::push reaches {} functions", seen.len());
     assert!(f64s.is_empty(), "f64 on the fix path: {f64s:#?}");
 }

@@ -15,9 +15,9 @@ use foxhunt_bridge::nmea::{Date, Pfoxb, Reference, UtcTime, write_sentence};
 use foxhunt_bridge::replay::{Step, replay};
 use foxhunt_bridge::stream::{DEFAULT_CAPACITY, Demux, Frame};
 use foxhunt_bridge::telemetry::{LinkSentence, StatusSentence, UnitSentence};
-use foxhunt_bridge::track::Status;
-use foxhunt_bridge::unit::Unit;
+use foxhunt_bridge::unit::{Port, Unit};
 use foxhunt_core::fix::ellipse::mahalanobis;
+use foxhunt_core::fix::window::Status;
 use foxhunt_core::random;
 use foxhunt_sim::runs::writer::CaptureWriter;
 use rand_core::SeedableRng;
@@ -313,6 +313,22 @@ fn the_bundled_drive_gives_the_hosts_fixes_and_ends_inside_its_ellipse() {
     let run = run_mcu("aoa-drive", &capture, 12.0, false);
     let (unit, _, link) = check("aoa-drive", &run);
     assert_eq!(link.fixes, 60, "one fix per bearing");
+    // The capture fed in its own order, record by record (what `foxhunt locate --method unit`
+    // computes: host-sim/tests/unit_method.rs), ends on the image's fix, bit for bit.
+    let mut in_order = Unit::default();
+    let mut port = Port::Gps;
+    for record in capture.split_inclusive(|&b| b == b'\n') {
+        port = Port::of_record(record).unwrap_or(port);
+        in_order.feed(port, record, &mut |_: &[u8]| true);
+    }
+    for p in Port::ALL {
+        in_order.idle(p, &mut |_: &[u8]| true);
+    }
+    assert_eq!(
+        in_order.last_fix(),
+        unit.last_fix(),
+        "file order against the image's"
+    );
     // aoa-drive's emitter, in the frame whose origin is its first fix.
     inside("aoa-drive", &unit, [1200.0, 800.0]);
 }
@@ -508,10 +524,7 @@ fn every_df_format_gives_the_hosts_fixes() {
     // Every record but the first few Agrelo ones (no course held 3 s yet) and the last (its
     // fix never comes) is a bearing.
     assert!(link.bearings >= 230, "{link:?}");
-    let c = unit
-        .demux(foxhunt_bridge::unit::Port::Df)
-        .expect("port")
-        .counters();
+    let c = unit.demux(Port::Df).expect("port").counters();
     // 240 records: a quarter each PFOXB and Agrelo, CSV for k = 2 mod 20, XML for the rest.
     assert_eq!(
         (c.sentences, c.agrelo, c.kraken_csv, c.kraken_xml),

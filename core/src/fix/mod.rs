@@ -18,6 +18,7 @@ pub mod pcrb;
 pub mod ple;
 pub mod reach;
 pub mod robust;
+pub mod window;
 
 use crate::error::Error;
 use crate::model::bearing::Bearing;

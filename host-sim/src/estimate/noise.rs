@@ -120,6 +120,11 @@ pub fn with_estimated_noise(
     keep_cloud: bool,
     rng: &mut XorShiftRng,
 ) -> Result<(BearingFix, Noise), Error> {
+    if method == Method::Unit {
+        // The unit estimates its noise itself, from its window's inliers.
+        let times: Vec<i64> = (0..bearings.len() as i64).map(|k| 1000 * k).collect();
+        return super::window::unit_fix(bearings, &times, None).map(|u| (u.fix, u.noise));
+    }
     let with =
         |sigma: f32| -> Vec<Bearing> { bearings.iter().map(|b| Bearing { sigma, ..*b }).collect() };
     let nominal = with(1.0f32.to_radians());

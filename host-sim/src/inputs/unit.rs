@@ -4,7 +4,7 @@
 
 use foxhunt_bridge::record::{RecordClass, RecordKind};
 use foxhunt_bridge::telemetry::{FixSentence, LinkSentence, StatusSentence, UnitSentence};
-use foxhunt_bridge::track::Status;
+use foxhunt_core::fix::window::Status;
 use serde::Serialize;
 
 /// The unit's sentences seen so far: counts and the latest of each (memory stays constant

@@ -3,16 +3,17 @@
 
 use crate::estimate::noise::{claim, with_estimated_noise};
 use crate::estimate::options::{LocateOptions, SEEDS_JITTER_M2};
+use crate::estimate::window::unit_fix;
 use crate::estimate::{locate_bearings, pool};
 use crate::inputs::capture::Decoded;
 use crate::locate::Parts;
 use crate::locate::explain::explain;
 use crate::locate::report::{ChannelSummary, Drawn, EllipseReport, SourceReport, geodetic};
 use foxhunt_bridge::geo::LocalFrame;
-use foxhunt_core::Bearing;
 use foxhunt_core::fix::consistency::check_cloud;
 use foxhunt_core::fix::crlb::crlb;
 use foxhunt_core::fix::ellipse::Ellipse;
+use foxhunt_core::{Bearing, Method};
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 use std::collections::BTreeMap;
@@ -24,48 +25,71 @@ pub(crate) fn located_by(
     rejected: &mut BTreeMap<&'static str, u32>,
 ) -> Result<Parts, String> {
     let mut rng = XorShiftRng::seed_from_u64(o.seed);
-    let (s, sigma, estimated) = match o.sigma_deg {
-        Some(deg) => {
-            let bearings = d.bearings_with_sigma(deg.to_radians());
-            let fix = pool().install(|| {
-                locate_bearings(
-                    o.method,
-                    o.particles,
-                    SEEDS_JITTER_M2,
-                    &bearings,
-                    true,
-                    &mut rng,
-                )
-            });
-            (fix, deg.to_radians(), false)
+    // The unit's own ellipse, when the unit's method made the fix.
+    let mut unit_ellipse = None;
+    let (s, sigma, estimated) = if o.method == Method::Unit {
+        // The unit's computation: the bearings at their capture times, its own noise model.
+        let times: Vec<i64> = d
+            .observations
+            .iter()
+            .map(|x| (f64::from(x.time_s) * 1000.0).round() as i64)
+            .collect();
+        let bearings = d.bearings_with_sigma(1.0);
+        match unit_fix(&bearings, &times, o.sigma_deg.map(f32::to_radians)) {
+            Ok(u) => {
+                unit_ellipse = Some(u.ellipse);
+                let estimated = u.fix.dof.is_some();
+                (Ok(u.fix), u.noise.sigma, estimated)
+            }
+            Err(e) => (Err(e), o.sigma_deg.unwrap_or(2.0).to_radians(), true),
         }
-        None => {
-            let bearings = d.bearings_with_sigma(1.0f32.to_radians());
-            let r = pool().install(|| {
-                with_estimated_noise(
-                    o.method,
-                    o.particles,
-                    SEEDS_JITTER_M2,
-                    &bearings,
-                    true,
-                    &mut rng,
-                )
-            });
-            match r {
-                Ok((fix, noise)) => (Ok(fix), noise.sigma, true),
-                Err(e) => (Err(e), 1.0f32.to_radians(), true),
+    } else {
+        match o.sigma_deg {
+            Some(deg) => {
+                let bearings = d.bearings_with_sigma(deg.to_radians());
+                let fix = pool().install(|| {
+                    locate_bearings(
+                        o.method,
+                        o.particles,
+                        SEEDS_JITTER_M2,
+                        &bearings,
+                        true,
+                        &mut rng,
+                    )
+                });
+                (fix, deg.to_radians(), false)
+            }
+            None => {
+                let bearings = d.bearings_with_sigma(1.0f32.to_radians());
+                let r = pool().install(|| {
+                    with_estimated_noise(
+                        o.method,
+                        o.particles,
+                        SEEDS_JITTER_M2,
+                        &bearings,
+                        true,
+                        &mut rng,
+                    )
+                });
+                match r {
+                    Ok((fix, noise)) => (Ok(fix), noise.sigma, true),
+                    Err(e) => (Err(e), 1.0f32.to_radians(), true),
+                }
             }
         }
     };
     let bearings = d.bearings_with_sigma(sigma);
     let mut s = s.map_err(|e| explain(e, &bearings))?;
-    if !estimated {
+    if !estimated && o.method != Method::Unit {
         // With the noise given the claim is chi-square's, still no tighter than the bound.
         claim(&mut s, &bearings).map_err(|e| explain(e, &bearings))?;
     }
     // Chi-square with the stated noise, 2 F(2, dof) with an estimated one (the fix says which).
-    let ellipse = Ellipse::with_scale(&s.covariance, s.ellipse_scale, 0.95)
-        .map_err(|e| explain(e, &bearings))?;
+    let ellipse = match unit_ellipse {
+        Some(e) => e,
+        None => Ellipse::with_scale(&s.covariance, s.ellipse_scale, 0.95)
+            .map_err(|e| explain(e, &bearings))?,
+    };
     let cep = s.cep50;
     let bound = crlb(&s.position, &bearings).map_err(|e| explain(e, &bearings))?;
     rejected.insert("outlier", s.outliers);

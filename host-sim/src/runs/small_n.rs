@@ -27,7 +27,7 @@ use rayon::prelude::*;
 pub const SIZES: [usize; 6] = [4, 5, 7, 10, 20, 50];
 
 /// The methods that estimate the noise, as `foxhunt locate` runs them.
-pub const METHODS: [Method; 7] = [
+pub const METHODS: [Method; 8] = [
     Method::Ml,
     Method::MlHuber,
     Method::Sir,
@@ -35,6 +35,7 @@ pub const METHODS: [Method; 7] = [
     Method::Gpf,
     Method::Ekf,
     Method::MlRobust,
+    Method::Unit,
 ];
 
 /// Particles of the particle methods (what `locate` uses).

@@ -33,7 +33,7 @@ mod tests;
 pub use writer::SentenceBuf;
 
 use crate::nmea::{LatLon, UtcTime};
-use crate::track::Status;
+use foxhunt_core::fix::window::Status;
 
 /// Why the unit last reset.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

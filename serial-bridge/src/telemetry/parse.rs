@@ -5,7 +5,7 @@ use super::{
     TelemetryError, UnitSentence,
 };
 use crate::nmea::{LatLon, angle, number, time};
-use crate::track::Status;
+use foxhunt_core::fix::window::Status;
 
 struct Fields<'a> {
     all: [&'a str; 16],

@@ -6,15 +6,15 @@
 //! coordinator's MT frames when configured ([`Port::Zigbee`]), and the user port
 //! ([`Port::User`]), which carries configuration commands in ([`crate::command`]) and the
 //! unit's sentences out ([`crate::telemetry`]). The first three feed one bridge; every bearing
-//! it places goes to the [`Tracker`], and every update goes out as a `$PFOXF` sentence.
+//! it places goes to the core's windowed fix ([`WindowFix`]), and every update goes out as a `$PFOXF` sentence.
 //!
 //! Everything the unit says is a function of the order in which the ports' frames reach it
-//! (and of nothing else: no clock, no randomness but the tracker's fixed sequence). So the
+//! (and of nothing else: no clock, no randomness but the pair search's generator, seeded with [`SEARCH_SEED`]). So the
 //! MCU logs, for each read that completed a frame, the port and its byte count so far, and
 //! [`crate::replay`] feeds the same bytes in the same order on the host: identical bits.
 //!
 //! The bridge is configured with a bearing sigma of 1 radian, so each bearing's sigma is its
-//! relative weight (1, or the quality weighting's widening); the tracker holds the unit's
+//! relative weight (1, or the quality weighting's widening); the windowed fix holds the unit's
 //! sigma, which `SIGMA` then changes without touching the bridge.
 //!
 //! The fix sentences' cheap inverse projection is in `projection.rs`.
@@ -32,10 +32,14 @@ use crate::nmea::UtcTime;
 use crate::record::{RecordClass, RecordKind};
 use crate::stream::{DEFAULT_CAPACITY, Demux, Frame};
 use crate::telemetry::{FixSentence, LinkSentence, SentenceBuf};
-use crate::track::{Noise, TrackConfig, TrackFix, Tracker};
+use foxhunt_core::fix::window::{Noise, Status, Update, WindowConfig, WindowError, WindowFix};
 use heapless::Deque;
+use rand_core::SeedableRng;
+use rand_xorshift::XorShiftRng;
 
 const DAY_MS: i64 = 86_400_000;
+/// The seed of the windowed fix's pair search.
+pub const SEARCH_SEED: u64 = 0x9E37_79B9;
 /// Bearings one frame can release at most (a GPS fix places every bearing waiting for it).
 const RELEASED: usize = 24;
 
@@ -84,8 +88,8 @@ impl Port {
 pub struct UnitConfig {
     /// The bridge's (its `sigma_rad` is kept at 1: see the module doc).
     pub bridge: BridgeConfig,
-    /// The tracker's.
-    pub track: TrackConfig,
+    /// The windowed fix's.
+    pub window: WindowConfig,
     /// Whether the ZigBee port is read.
     pub zigbee: bool,
 }
@@ -97,7 +101,7 @@ impl Default for UnitConfig {
                 sigma_rad: 1.0,
                 ..BridgeConfig::default()
             },
-            track: TrackConfig::default(),
+            window: WindowConfig::default(),
             zigbee: false,
         }
     }
@@ -131,13 +135,15 @@ pub struct Unit {
 #[derive(Debug, Clone)]
 struct State {
     config: UnitConfig,
-    tracker: Tracker,
+    window: WindowFix,
+    /// The pair search's generator: seeded, so the host's replay draws what the MCU drew.
+    search: XorShiftRng,
     retired: Retired,
     fixes: u32,
     dropped: u32,
     /// Frames on the user port that are not commands.
     ignored: u32,
-    last: Option<TrackFix>,
+    last: Option<Update>,
     released: Deque<BearingMeasurement, RELEASED>,
     overflow: u32,
     projection: Option<Projection>,
@@ -173,7 +179,8 @@ impl Unit {
             bridge: Bridge::new(config.bridge, []),
             state: State {
                 config,
-                tracker: Tracker::new(config.track),
+                window: WindowFix::new(config.window),
+                search: XorShiftRng::seed_from_u64(SEARCH_SEED),
                 retired: Retired::default(),
                 fixes: 0,
                 dropped: 0,
@@ -206,13 +213,13 @@ impl Unit {
         self.demux.get(port as usize)
     }
 
-    /// The tracker.
-    pub fn tracker(&self) -> &Tracker {
-        &self.state.tracker
+    /// The windowed fix.
+    pub fn window(&self) -> &WindowFix {
+        &self.state.window
     }
 
     /// The latest update of the fix.
-    pub fn last_fix(&self) -> Option<&TrackFix> {
+    pub fn last_fix(&self) -> Option<&Update> {
         self.state.last.as_ref()
     }
 
@@ -232,7 +239,7 @@ impl Unit {
             rejected: stream
                 .wrapping_add(rejected_by(self.bridge.counters()))
                 .wrapping_add(s.retired.rejected)
-                .wrapping_add(s.tracker.counters().refused)
+                .wrapping_add(s.window.counters().refused)
                 .wrapping_add(s.ignored)
                 .wrapping_add(s.overflow),
             bearings: self
@@ -314,7 +321,7 @@ impl State {
             self.projection = Projection::new(frame);
         }
         while let Some(m) = self.released.pop_front() {
-            let Ok(fix) = self.tracker.push(&m.bearing, m.time_ms) else {
+            let Ok(fix) = self.window.push(&m.bearing, m.time_ms, &mut self.search) else {
                 continue;
             };
             self.last = Some(fix);
@@ -337,7 +344,7 @@ impl State {
                 status: if position.is_some() || !fix.status.has_position() {
                     fix.status
                 } else {
-                    crate::track::Status::Degenerate
+                    Status::Degenerate
                 },
             };
             if self.send(sentence.write(), out) {
@@ -388,32 +395,28 @@ impl State {
         self.send(ack, out);
     }
 
-    fn apply(
-        &mut self,
-        c: Command,
-        bridge: &mut Bridge<0>,
-    ) -> Result<(), crate::track::TrackError> {
-        let track = self.config.track;
+    fn apply(&mut self, c: Command, bridge: &mut Bridge<0>) -> Result<(), WindowError> {
+        let window = self.config.window;
         match c {
             Command::Sigma(s) => {
                 let noise = match s {
                     Some(deg) => Noise::Known(deg.to_radians()),
-                    None => Noise::Estimated(match track.noise {
+                    None => Noise::Estimated(match window.noise {
                         Noise::Known(s) | Noise::Estimated(s) => s,
                     }),
                 };
-                let t = TrackConfig { noise, ..track };
-                self.tracker.set_config(t)?;
-                self.config.track = t;
+                let t = WindowConfig { noise, ..window };
+                self.window.set_config(t)?;
+                self.config.window = t;
             }
             Command::Window { count, seconds } => {
-                let t = TrackConfig {
+                let t = WindowConfig {
                     window: count,
                     max_age_ms: seconds.saturating_mul(1000),
-                    ..track
+                    ..window
                 };
-                self.tracker.set_config(t)?;
-                self.config.track = t;
+                self.window.set_config(t)?;
+                self.config.window = t;
             }
             Command::Gate(q) => {
                 self.config.bridge.min_quality = q;
@@ -422,12 +425,12 @@ impl State {
             Command::Mount(deg) => {
                 self.config.bridge.mount_offset_deg = deg;
                 self.rebuild(bridge, true);
-                self.tracker.clear();
+                self.window.clear();
             }
             Command::Reference(r) => {
                 self.config.bridge.reference = r;
                 self.rebuild(bridge, false);
-                self.tracker.clear();
+                self.window.clear();
             }
             Command::Zigbee(on) => self.config.zigbee = on,
             Command::Show => {}
@@ -438,7 +441,7 @@ impl State {
     /// The acknowledgement's detail: the setting as applied (every setting for `SHOW`).
     fn describe(&self, c: Command, ack: &mut SentenceBuf) {
         let cfg = &self.config;
-        let sigma = |ack: &mut SentenceBuf| match cfg.track.noise {
+        let sigma = |ack: &mut SentenceBuf| match cfg.window.noise {
             Noise::Known(s) => {
                 ack.fixed(s.to_degrees(), 2);
             }
@@ -447,8 +450,8 @@ impl State {
             }
         };
         let window = |ack: &mut SentenceBuf| {
-            ack.uint(u32::from(cfg.track.window), 1)
-                .uint(cfg.track.max_age_ms / 1000, 1);
+            ack.uint(u32::from(cfg.window.window), 1)
+                .uint(cfg.window.max_age_ms / 1000, 1);
         };
         let reference = |ack: &mut SentenceBuf| match cfg.bridge.reference {
             Some(p) => {

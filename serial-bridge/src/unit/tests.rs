@@ -47,7 +47,11 @@ fn the_drive_gives_a_fix_per_bearing_and_ends_inside_its_ellipse() {
     assert_eq!(fixes.len(), 60);
     assert_eq!(unit.link().fixes, 60);
     let last = unit.last_fix().copied().unwrap();
-    assert_eq!(last.status, crate::track::Status::Valid, "{last:?}");
+    assert_eq!(
+        last.status,
+        foxhunt_core::fix::window::Status::Valid,
+        "{last:?}"
+    );
     // aoa-drive's emitter is at (1200, 800) from the first fix: inside the 95 % ellipse
     // (its semi-major axis bounds the distance).
     let err = libm::hypotf(last.position[0] - 1200.0, last.position[1] - 800.0);
@@ -113,7 +117,7 @@ fn commands_are_acknowledged_and_kept() {
             "PFOXA,SHOW,OK,1.50,40.0,-2.5,30,60,OFF,4700.000000,N,00800.000000,E",
         ]
     );
-    assert_eq!(unit.config().track.window, 30);
+    assert_eq!(unit.config().window.window, 30);
     let mut out = std::vec::Vec::new();
     run(&mut unit, &mut out);
     let last = unit.last_fix().copied().unwrap();

@@ -20,13 +20,14 @@ use super::judge::truth_geometry;
 /// The estimators the field bench compares: the pipeline, and for context the plain fixes and
 /// filters a user could ask `locate` for (run as `locate` runs them: noise estimated from the
 /// residuals, no offset, one emitter from all bearings).
-pub const BENCH_METHODS: [Method; 6] = [
+pub const BENCH_METHODS: [Method; 7] = [
     Method::MlRobust,
     Method::Ml,
     Method::MlHuber,
     Method::SirRobust,
     Method::Gpf,
     Method::Ekf,
+    Method::Unit,
 ];
 
 /// Particles of the particle methods in the field bench (what `locate` uses).

@@ -1,16 +1,25 @@
-//! Tracking one emitter for ever in fixed memory: a window of recent bearings and a robust fix
-//! updated after every bearing, started from the previous fix.
+//! The windowed fix: one still emitter followed for ever in fixed memory, a window of recent
+//! bearings and a robust fix updated after every bearing, started from the previous fix. The
+//! DF unit's firmware runs it, and the host runs the same code (`foxhunt locate --method
+//! unit`), so both give the same bits.
 //!
-//! The DF unit's MCU cannot re-solve a whole drive per bearing, and must never stall on what
+//! It is not the field pipeline ([`super::locate`]): that one re-solves the whole capture, finds
+//! several emitters per channel, estimates each DF unit's mounting offset and checks the noise
+//! it was told; the unit cannot afford any of that per bearing within its budgets (a fix within
+//! 20 ms of its bearing at 168 MHz, 32 KiB of RAM with the stack). What the window leaves out:
+//! no offset (a mounting error moves the fix), one emitter per channel, no evidence step, and the
+//! past beyond the window forgotten.
+//!
+//! The MCU cannot re-solve a whole drive per bearing, and must never stall on what
 //! arrives, so every step here has a hard bound:
 //!
-//! - **Window**: at most [`WINDOW`] bearings (fewer by [`TrackConfig::window`]), and none older
-//!   than [`TrackConfig::max_age_ms`] behind the newest. A ring: no allocation, no shifting.
+//! - **Window**: at most [`WINDOW`] bearings (fewer by [`WindowConfig::window`]), and none older
+//!   than [`WindowConfig::max_age_ms`] behind the newest. A ring: no allocation, no shifting.
 //! - **Start**: the previous fix. Without one (at the start, after a lost lock or a
 //!   reconfiguration) a pair search: at most [`PAIR_ATTEMPTS`] bearing pairs drawn, at most
 //!   [`HYPOTHESES`] crossings scored, each by how many window bearings pass within three sigmas
 //!   of it (O(window) each).
-//! - **Refinement**: Levenberg-Marquardt on Tukey's biweight (wild bearings get no say), at most
+//! - **Refinement**: Levenberg-Marquardt on Tukey's biweight ([`Tukey`]) (wild bearings get no say), at most
 //!   [`MAX_PASSES`] passes over the window per update; what is left unconverged continues at
 //!   the next bearing. With the noise estimated, its scale is re-estimated from the inliers'
 //!   residuals once per update.
@@ -20,12 +29,44 @@
 //!   Degenerate geometry (parallel bearings, a vehicle that has not moved, a range without
 //!   bound) is a status, never a position.
 //!
+//! - **Randomness**: the pair search draws from the caller's generator, as every estimator
+//!   of the core does.
+//!
 //! Only `f32` arithmetic, with the core's branch-free `atan2` and `sincos` (libm's `sinf`,
 //! `cosf` and `hypotf` compute in `f64`, which the Cortex-M4F emulates in software), so the
 //! host and the MCU compute the same bits.
 
-use foxhunt_core::Bearing;
-use foxhunt_core::fastmath::{atan2, sincos};
+// The MCU image runs this module on every bearing: no unwrap, expect, panic, unreachable or
+// unchecked indexing (tests/tests/firmware_image.rs checks the linked image for panic calls
+// here as in the bridge).
+#![deny(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing,
+    clippy::unreachable,
+    clippy::todo,
+    clippy::unimplemented
+)]
+
+mod answer;
+mod settings;
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests;
+
+pub use answer::{Status, Update, WindowCounters};
+pub use settings::{Noise, WindowConfig, WindowError};
+
+use crate::Bearing;
+use crate::fastmath::{atan2, sincos};
+use crate::fix::consistency::ellipse_scale;
+use crate::fix::init::CLOUD_MAX_RANGE_M;
+use crate::likelihood::{Likelihood, Tukey};
+use crate::linalg::{eigen2, inverse2, solve2};
+use crate::model::bearing::wrap;
+use core::f32::consts::PI;
+use rand_core::Rng;
 
 /// (sin, cos) of an angle the tracker holds in (-pi, pi] (anything else, NaN included, reads
 /// as 0): within the core's fast range, so its libm fallback (computed in `f64`) is never taken
@@ -35,11 +76,6 @@ fn sin_cos(a: f32) -> (f32, f32) {
     let a = if libm::fabsf(a) <= 4.0 { a } else { 0.0 };
     sincos(a)
 }
-use foxhunt_core::fix::consistency::ellipse_scale;
-use foxhunt_core::linalg::{inverse2, solve2};
-use foxhunt_core::model::bearing::wrap;
-
-use core::f32::consts::PI;
 
 /// Bearings the window holds at most.
 pub const WINDOW: usize = 128;
@@ -49,10 +85,9 @@ pub const HYPOTHESES: u32 = 32;
 pub const PAIR_ATTEMPTS: u32 = 128;
 /// Passes over the window at most per update (each a normal-equation or a cost pass).
 pub const MAX_PASSES: u32 = 12;
-/// Tukey's biweight constant, in sigmas.
-pub const TUKEY_C: f32 = 4.685;
-/// A crossing farther than this from the window's centroid is no hypothesis, metres.
-pub const MAX_RANGE_M: f32 = 50_000.0;
+/// A crossing farther than this from the window's centroid is no hypothesis, metres (the
+/// search range of the pipeline's start cloud).
+pub const MAX_RANGE_M: f32 = CLOUD_MAX_RANGE_M;
 /// An ellipse longer than this (semi-major axis, metres) is no fix: the range is unbounded.
 pub const MAX_AXIS_M: f32 = 20_000.0;
 /// Smallest noise scale the estimate may reach, radians (exact bearings must not collapse it).
@@ -60,6 +95,7 @@ pub const MIN_SIGMA: f32 = 0.05 * PI / 180.0;
 /// Confidence of the reported ellipse.
 pub const CONFIDENCE: f32 = 0.95;
 
+/// One degree, radians.
 const DEG: f32 = PI / 180.0;
 /// Vehicle positions within this of each other count as one position, metres.
 const STATIONARY_M: f32 = 1.0;
@@ -67,160 +103,6 @@ const STATIONARY_M: f32 = 1.0;
 const PARALLEL_RAD: f32 = 0.1 * DEG;
 /// The sine of the shallowest crossing a pair may make.
 const MIN_CROSSING_SIN: f32 = 0.017_452_4;
-
-/// How the bearings' noise is taken.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Noise {
-    /// Every bearing's sigma is this (radians) times its relative weight; the residuals only
-    /// check it (a unit clearly noisier than it claims gets the estimated scale).
-    Known(f32),
-    /// Estimated from the residuals; this (radians) is where the estimate starts.
-    Estimated(f32),
-}
-
-impl Noise {
-    fn start(self) -> f32 {
-        match self {
-            Self::Known(s) | Self::Estimated(s) => s,
-        }
-    }
-}
-
-/// Tracker settings (the unit's configuration commands change them at run time).
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct TrackConfig {
-    /// Bearings kept at most (1 to [`WINDOW`]).
-    pub window: u16,
-    /// Bearings older than the newest by more than this are dropped, ms.
-    pub max_age_ms: u32,
-    /// The noise model.
-    pub noise: Noise,
-    /// An estimated noise above this (radians) makes the fix "noisy", not valid.
-    pub max_sigma: f32,
-}
-
-impl Default for TrackConfig {
-    fn default() -> Self {
-        Self {
-            window: 120,
-            max_age_ms: 300_000,
-            noise: Noise::Estimated(2.0 * DEG),
-            max_sigma: 10.0 * DEG,
-        }
-    }
-}
-
-impl TrackConfig {
-    /// `Ok` when every setting is usable.
-    pub fn check(&self) -> Result<(), TrackError> {
-        let sigma = self.noise.start();
-        let ok = (1..=WINDOW as u16).contains(&self.window)
-            && self.max_age_ms > 0
-            && sigma.is_finite()
-            && (MIN_SIGMA..=45.0 * DEG).contains(&sigma)
-            && self.max_sigma.is_finite()
-            && self.max_sigma > 0.0;
-        if ok { Ok(()) } else { Err(TrackError::Setting) }
-    }
-}
-
-/// Why a bearing or a setting was refused.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum TrackError {
-    /// A non-finite value or a non-positive sigma.
-    BadBearing,
-    /// A setting out of range.
-    Setting,
-}
-
-impl core::fmt::Display for TrackError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.write_str(match self {
-            Self::BadBearing => "bearing not finite or without a positive sigma",
-            Self::Setting => "tracker setting out of range",
-        })
-    }
-}
-
-/// What a fix is worth.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Status {
-    /// A fix whose residuals agree with its noise.
-    Valid,
-    /// A fix, but the bearings scatter more than [`TrackConfig::max_sigma`]: not to be trusted.
-    Noisy,
-    /// The geometry gives no fix: parallel bearings, a vehicle that has not moved, a range
-    /// without bound.
-    Degenerate,
-    /// Fewer than three bearings.
-    TooFew,
-    /// No pair of bearings crosses in front of the vehicle within range yet.
-    Searching,
-}
-
-impl Status {
-    /// The sentence letter: A, E, D, N, S.
-    pub fn letter(self) -> u8 {
-        match self {
-            Self::Valid => b'A',
-            Self::Noisy => b'E',
-            Self::Degenerate => b'D',
-            Self::TooFew => b'N',
-            Self::Searching => b'S',
-        }
-    }
-
-    /// The status a letter names.
-    pub fn from_letter(c: u8) -> Option<Self> {
-        Some(match c {
-            b'A' => Self::Valid,
-            b'E' => Self::Noisy,
-            b'D' => Self::Degenerate,
-            b'N' => Self::TooFew,
-            b'S' => Self::Searching,
-            _ => return None,
-        })
-    }
-
-    /// Whether the fix carries a position.
-    pub fn has_position(self) -> bool {
-        matches!(self, Self::Valid | Self::Noisy)
-    }
-}
-
-/// One update's answer.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TrackFix {
-    /// Time of the newest bearing on the bridge's clock, ms.
-    pub time_ms: i64,
-    /// What the fix is worth; position and ellipse mean something only when
-    /// [`Status::has_position`].
-    pub status: Status,
-    /// Emitter position (east, north) in the bridge's local frame, metres.
-    pub position: [f32; 2],
-    /// Position covariance, m^2 (at the noise used).
-    pub covariance: [[f32; 2]; 2],
-    /// Semi-major axis of the [`CONFIDENCE`] ellipse, metres.
-    pub major: f32,
-    /// Semi-minor axis, metres.
-    pub minor: f32,
-    /// Direction of the major axis, degrees clockwise from true north, in [0, 180).
-    pub orientation_deg: f32,
-    /// Circular error probable, metres.
-    pub cep50: f32,
-    /// Bearings with weight in the fix.
-    pub used: u32,
-    /// Bearings in the window.
-    pub window: u32,
-    /// Bearing noise used, radians (the stated sigma, or the estimate).
-    pub sigma: f32,
-    /// Passes over the window this update took.
-    pub passes: u32,
-}
 
 /// A bearing in the window.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -239,6 +121,9 @@ const EMPTY: Entry = Entry {
     time_ms: 0,
 };
 
+/// The robust loss: Tukey's biweight at its 95 %-efficiency constant, as the pipeline's.
+const TUKEY: Tukey = Tukey { c: 4.685 };
+
 /// The previous update's solution.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Lock {
@@ -248,24 +133,10 @@ struct Lock {
     lambda: f32,
 }
 
-/// Counters of the tracker's work.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct TrackCounters {
-    /// Bearings taken into the window.
-    pub bearings: u32,
-    /// Bearings refused (non-finite, bad sigma).
-    pub refused: u32,
-    /// Pair searches run.
-    pub searches: u32,
-    /// Locks dropped (too few inliers, behind the vehicle, no bound).
-    pub lost: u32,
-}
-
-/// The tracker: the window, the lock and the quantile caches.
+/// The windowed fix: the window, the lock and the quantile caches.
 #[derive(Debug, Clone)]
-pub struct Tracker {
-    config: TrackConfig,
+pub struct WindowFix {
+    config: WindowConfig,
     ring: [Entry; WINDOW],
     /// Index of the oldest entry.
     head: usize,
@@ -274,13 +145,12 @@ pub struct Tracker {
     /// 2 F(2, dof; 0.95) and (0.5) by dof (0: not computed yet).
     k95: [f32; WINDOW + 1],
     k50: [f32; WINDOW + 1],
-    rng: u32,
-    counters: TrackCounters,
+    counters: WindowCounters,
 }
 
-impl Default for Tracker {
+impl Default for WindowFix {
     fn default() -> Self {
-        Self::new(TrackConfig::default())
+        Self::new(WindowConfig::default())
     }
 }
 
@@ -298,24 +168,6 @@ struct Pass {
     inliers: u32,
     chi2: f32,
     front: f32,
-}
-
-fn tukey_rho(u: f32) -> f32 {
-    let c2 = TUKEY_C * TUKEY_C;
-    if u * u >= c2 {
-        return c2 / 6.0;
-    }
-    let t = 1.0 - u * u / c2;
-    c2 / 6.0 * (1.0 - t * t * t)
-}
-
-fn tukey_weight(u: f32) -> f32 {
-    let c2 = TUKEY_C * TUKEY_C;
-    if u * u >= c2 {
-        return 0.0;
-    }
-    let t = 1.0 - u * u / c2;
-    t * t
 }
 
 /// `m + k n` for 2 x 2 matrices.
@@ -337,24 +189,14 @@ fn fold(a: f32) -> f32 {
     }
 }
 
-/// Eigenvalues (descending) and the major axis' angle (radians from east, counter-clockwise)
-/// of a symmetric 2 x 2 matrix, in f32 alone.
-fn eigen(m: &[[f32; 2]; 2]) -> (f32, f32, f32) {
-    let (a, b, c) = (m[0][0], 0.5 * (m[0][1] + m[1][0]), m[1][1]);
-    let h = 0.5 * (a - c);
-    let r = libm::sqrtf(h * h + b * b);
-    let mid = 0.5 * (a + c);
-    (mid + r, mid - r, 0.5 * atan2(2.0 * b, a - c))
-}
-
-impl Tracker {
+impl WindowFix {
     /// An empty tracker. A setting out of range is replaced by the default.
-    pub fn new(config: TrackConfig) -> Self {
+    pub fn new(config: WindowConfig) -> Self {
         Self {
             config: if config.check().is_ok() {
                 config
             } else {
-                TrackConfig::default()
+                WindowConfig::default()
             },
             ring: [EMPTY; WINDOW],
             head: 0,
@@ -362,18 +204,17 @@ impl Tracker {
             lock: None,
             k95: [0.0; WINDOW + 1],
             k50: [0.0; WINDOW + 1],
-            rng: 0x9E37_79B9,
-            counters: TrackCounters::default(),
+            counters: WindowCounters::default(),
         }
     }
 
     /// The settings.
-    pub fn config(&self) -> &TrackConfig {
+    pub fn config(&self) -> &WindowConfig {
         &self.config
     }
 
     /// Counters so far.
-    pub fn counters(&self) -> &TrackCounters {
+    pub fn counters(&self) -> &WindowCounters {
         &self.counters
     }
 
@@ -389,7 +230,7 @@ impl Tracker {
 
     /// New settings, from the next update on: the window is cut to the new length now, and a
     /// new noise model restarts the scale from its value.
-    pub fn set_config(&mut self, config: TrackConfig) -> Result<(), TrackError> {
+    pub fn set_config(&mut self, config: WindowConfig) -> Result<(), WindowError> {
         config.check()?;
         let noise_changed = config.noise != self.config.noise;
         self.config = config;
@@ -424,22 +265,17 @@ impl Tracker {
         }
     }
 
-    fn random(&mut self) -> u32 {
-        // xorshift32: a fixed sequence, the same on the host and the MCU.
-        let mut x = self.rng;
-        x ^= x << 13;
-        x ^= x >> 17;
-        x ^= x << 5;
-        self.rng = x;
-        x
-    }
-
     /// Take a bearing (its sigma is its relative weight, see [`Noise`]) taken at `time_ms`,
-    /// and update the fix.
-    pub fn push(&mut self, bearing: &Bearing, time_ms: i64) -> Result<TrackFix, TrackError> {
+    /// and update the fix; a pair search (when there is no lock) draws from `rng`.
+    pub fn push<R: Rng + ?Sized>(
+        &mut self,
+        bearing: &Bearing,
+        time_ms: i64,
+        rng: &mut R,
+    ) -> Result<Update, WindowError> {
         if bearing.check().is_err() {
             self.counters.refused += 1;
-            return Err(TrackError::BadBearing);
+            return Err(WindowError::BadBearing);
         }
         self.counters.bearings += 1;
         if self.len >= usize::from(self.config.window) {
@@ -460,7 +296,7 @@ impl Tracker {
         while self.entry(0).is_some_and(|e| newest - e.time_ms > age) {
             self.pop_oldest();
         }
-        Ok(self.update(newest))
+        Ok(self.update(newest, rng))
     }
 
     fn centroid(&self) -> [f32; 2] {
@@ -504,10 +340,10 @@ impl Tracker {
             let r = fold(e.theta - atan2(dy, dx));
             let sd = sigma * e.rel;
             let u = r / sd;
-            s.cost += tukey_rho(u);
+            s.cost -= TUKEY.ln(r, sd);
             let inv_var = 1.0 / (sd * sd);
-            let w = inv_var * tukey_weight(u);
-            let inlier = u * u < TUKEY_C * TUKEY_C;
+            let w = inv_var * TUKEY.irls_weight(r, sd);
+            let inlier = u * u < TUKEY.c * TUKEY.c;
             let (jx, jy) = (-dy / d2, dx / d2);
             let outer = [[jx * jx, jx * jy], [jx * jy, jy * jy]];
             s.h = add(s.h, outer, w);
@@ -567,7 +403,12 @@ impl Tracker {
     }
 
     /// The pair search: the crossing most window bearings agree with.
-    fn search(&mut self, origin: [f32; 2], sigma: f32) -> Option<[f32; 2]> {
+    fn search<R: Rng + ?Sized>(
+        &mut self,
+        origin: [f32; 2],
+        sigma: f32,
+        rng: &mut R,
+    ) -> Option<[f32; 2]> {
         self.counters.searches += 1;
         let n = self.len as u32;
         let mut best: Option<(u32, f32, [f32; 2])> = None;
@@ -576,8 +417,8 @@ impl Tracker {
             if scored >= HYPOTHESES {
                 break;
             }
-            let i = (self.random() % n) as usize;
-            let j = (self.random() % n) as usize;
+            let i = (rng.next_u32() % n) as usize;
+            let j = (rng.next_u32() % n) as usize;
             if i == j {
                 continue;
             }
@@ -612,8 +453,8 @@ impl Tracker {
         Some((k95, k50))
     }
 
-    fn empty_fix(&self, time_ms: i64, status: Status, sigma: f32, passes: u32) -> TrackFix {
-        TrackFix {
+    fn empty_fix(&self, time_ms: i64, status: Status, sigma: f32, passes: u32) -> Update {
+        Update {
             time_ms,
             status,
             position: [0.0; 2],
@@ -635,7 +476,7 @@ impl Tracker {
         }
     }
 
-    fn update(&mut self, time_ms: i64) -> TrackFix {
+    fn update<R: Rng + ?Sized>(&mut self, time_ms: i64, rng: &mut R) -> Update {
         let noise = self.config.noise;
         let start_sigma = self.lock.map(|l| l.sigma).unwrap_or(noise.start());
         if self.len < 3 {
@@ -654,7 +495,7 @@ impl Tracker {
             },
             None => {
                 passes += 1;
-                match self.search(origin, start_sigma) {
+                match self.search(origin, start_sigma, rng) {
                     Some(p) => Lock {
                         position: p,
                         sigma: start_sigma,
@@ -738,7 +579,10 @@ impl Tracker {
             self.lose();
             return self.empty_fix(time_ms, Status::Degenerate, scale, passes);
         };
-        let (l1, l2, angle) = eigen(&cov);
+        let Some((l1, l2, angle)) = eigen2(&cov) else {
+            self.lose();
+            return self.empty_fix(time_ms, Status::Degenerate, scale, passes);
+        };
         let (l1, l2) = (l1.max(0.0), l2.max(0.0));
         let major = libm::sqrtf(k95 * l1);
         let minor = libm::sqrtf(k95 * l2);
@@ -765,7 +609,7 @@ impl Tracker {
         } else {
             Status::Valid
         };
-        TrackFix {
+        Update {
             time_ms,
             status,
             position,
@@ -782,146 +626,20 @@ impl Tracker {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use foxhunt_core::model::bearing::predicted;
-    use foxhunt_core::random;
-    use rand_core::SeedableRng;
-    use rand_xorshift::XorShiftRng;
-
-    const EMITTER: [f32; 2] = [1200.0, 800.0];
-
-    fn drive(k: usize) -> [f32; 2] {
-        // An L: east for 60 s at 10 m/s, then north.
-        let s = 10.0 * k as f32;
-        if s < 600.0 {
-            [s, 0.0]
-        } else {
-            [600.0, s - 600.0]
+/// The windowed fix over a whole capture's bearings in order (each with its time, ms), as the
+/// unit runs it one bearing at a time with `config`: the last update, `None` when no bearing
+/// was taken. Bearings the fix refuses (non-finite) are skipped, as the unit skips them.
+pub fn over<R: Rng + ?Sized>(
+    config: WindowConfig,
+    bearings: impl IntoIterator<Item = (Bearing, i64)>,
+    rng: &mut R,
+) -> Option<Update> {
+    let mut window = WindowFix::new(config);
+    let mut last = None;
+    for (b, time_ms) in bearings {
+        if let Ok(u) = window.push(&b, time_ms, rng) {
+            last = Some(u);
         }
     }
-
-    fn bearing(k: usize, sd: f32, rng: &mut XorShiftRng) -> Bearing {
-        let v = drive(k % 200);
-        Bearing {
-            vehicle: v,
-            theta: predicted(&EMITTER, &v) + sd * random::normal(rng),
-            sigma: 1.0,
-        }
-    }
-
-    #[test]
-    fn a_drive_converges_and_the_ellipse_holds_the_emitter() {
-        let mut rng = XorShiftRng::seed_from_u64(7);
-        let mut t = Tracker::default();
-        let mut last = None;
-        for k in 0..150 {
-            let f = t
-                .push(&bearing(k, 1.5 * DEG, &mut rng), k as i64 * 1000)
-                .unwrap();
-            assert!(f.passes <= MAX_PASSES, "{f:?}");
-            last = Some(f);
-        }
-        let f = last.unwrap();
-        assert_eq!(f.status, Status::Valid, "{f:?}");
-        let err = libm::hypotf(f.position[0] - EMITTER[0], f.position[1] - EMITTER[1]);
-        // 120 bearings of 1.5 degrees at about 1 km: tens of metres; the 95 % ellipse's
-        // semi-major axis bounds the error here (one seed, a loose check of the scale).
-        assert!(err < f.major, "{err} m against {f:?}");
-        assert!(
-            (1.0 * DEG..2.2 * DEG).contains(&f.sigma),
-            "{}",
-            f.sigma / DEG
-        );
-        assert_eq!(f.window, 120);
-    }
-
-    #[test]
-    fn wild_bearings_get_no_say() {
-        let mut rng = XorShiftRng::seed_from_u64(8);
-        let mut t = Tracker::default();
-        let mut f = None;
-        for k in 0..150 {
-            let mut b = bearing(k, 1.0 * DEG, &mut rng);
-            if k % 5 == 0 {
-                b.theta = random::uniform_in(&mut rng, -PI, PI);
-            }
-            f = Some(t.push(&b, k as i64 * 1000).unwrap());
-        }
-        let f = f.unwrap();
-        let err = libm::hypotf(f.position[0] - EMITTER[0], f.position[1] - EMITTER[1]);
-        assert!(err < 60.0 && f.status == Status::Valid, "{err} m: {f:?}");
-        assert!(f.used < 110, "{f:?}");
-    }
-
-    #[test]
-    fn parallel_bearings_and_a_parked_vehicle_are_degenerate() {
-        let mut t = Tracker::default();
-        for k in 0..20 {
-            // Driving straight at the emitter: one line.
-            let v = [60.0 * k as f32, 40.0 * k as f32];
-            let b = Bearing {
-                vehicle: v,
-                theta: predicted(&[6000.0, 4000.0], &v),
-                sigma: 1.0,
-            };
-            let f = t.push(&b, k * 1000).unwrap();
-            assert!(
-                matches!(f.status, Status::TooFew | Status::Degenerate),
-                "{f:?}"
-            );
-        }
-        let mut t = Tracker::default();
-        let mut rng = XorShiftRng::seed_from_u64(9);
-        for k in 0..20 {
-            let b = Bearing {
-                vehicle: [5.0, 5.0],
-                theta: random::uniform_in(&mut rng, -PI, PI),
-                sigma: 1.0,
-            };
-            let f = t.push(&b, k * 1000).unwrap();
-            assert!(!f.status.has_position(), "{f:?}");
-        }
-    }
-
-    #[test]
-    fn the_window_is_bounded_by_count_and_age() {
-        let mut rng = XorShiftRng::seed_from_u64(10);
-        let mut t = Tracker::new(TrackConfig {
-            window: 50,
-            max_age_ms: 30_000,
-            ..TrackConfig::default()
-        });
-        for k in 0..100 {
-            let f = t.push(&bearing(k, DEG, &mut rng), k as i64 * 500).unwrap();
-            assert!(f.window <= 50);
-        }
-        // 30 s at two a second: 61 would fit the age; the count cuts first.
-        assert_eq!(t.len(), 50);
-        for k in 100..110 {
-            t.push(&bearing(k, DEG, &mut rng), k as i64 * 5000).unwrap();
-        }
-        assert_eq!(t.len(), 7, "30 s of bearings 5 s apart, both ends in");
-        assert!(
-            t.set_config(TrackConfig {
-                window: 0,
-                ..TrackConfig::default()
-            })
-            .is_err()
-        );
-    }
-
-    #[test]
-    fn bad_bearings_are_refused_and_counted() {
-        let mut t = Tracker::default();
-        let b = Bearing {
-            vehicle: [f32::NAN, 0.0],
-            theta: 0.0,
-            sigma: 1.0,
-        };
-        assert_eq!(t.push(&b, 0), Err(TrackError::BadBearing));
-        assert_eq!(t.counters().refused, 1);
-        assert!(t.is_empty());
-    }
+    last
 }
