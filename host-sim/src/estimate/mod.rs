@@ -135,8 +135,8 @@ pub fn locate_bearings(
     rng: &mut XorShiftRng,
 ) -> Result<BearingFix, Error> {
     if method == Method::Unit {
-        // One bearing a second, as the benches' drives give them; the unit's own noise model.
-        let times: Vec<i64> = (0..bearings.len() as i64).map(|k| 1000 * k).collect();
+        // The unit's own noise model.
+        let times = window::one_a_second(bearings.len());
         return window::unit_fix(bearings, &times, None).map(|u| u.fix);
     }
     if method == Method::MlRobust {

@@ -122,7 +122,7 @@ pub fn with_estimated_noise(
 ) -> Result<(BearingFix, Noise), Error> {
     if method == Method::Unit {
         // The unit estimates its noise itself, from its window's inliers.
-        let times: Vec<i64> = (0..bearings.len() as i64).map(|k| 1000 * k).collect();
+        let times = super::window::one_a_second(bearings.len());
         return super::window::unit_fix(bearings, &times, None).map(|u| (u.fix, u.noise));
     }
     let with =

@@ -89,3 +89,8 @@ fn ellipse_scale_of(u: &window::Update) -> Result<f32, Error> {
         Err(Error::DegenerateGeometry)
     }
 }
+
+/// Times for bearings one a second (ms), as the benches' drives give them.
+pub fn one_a_second(n: usize) -> Vec<i64> {
+    (0..n as i64).map(|k| 1000 * k).collect()
+}
