@@ -2,8 +2,9 @@
 //! the bearings (their noise, the DF unit's offset, the channel width). Guidance reads the
 //! same settings, so its advice is about the fix `locate` reports.
 
+use super::Priors;
 use foxhunt_core::Method;
-use foxhunt_core::fix::bias::{BiasPrior, MAX_SOURCES};
+use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::fix::locate::{LocateConfig, NoiseModel};
 
 /// Particles of the sequential methods unless `--particles` says otherwise.
@@ -80,9 +81,11 @@ impl LocateOptions {
         if self.sigma_deg.is_some() {
             c.noise = NoiseModel::Known;
         }
-        if let Some(p) = self.offset {
-            c.priors = [p; MAX_SOURCES];
-        }
         c
+    }
+
+    /// Each station's offset prior for these options: the calibration's, else the default.
+    pub fn priors(&self) -> Priors {
+        Priors::same(self.offset.unwrap_or_default())
     }
 }

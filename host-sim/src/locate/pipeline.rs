@@ -1,7 +1,7 @@
 //! `locate` by the field pipeline (`ml-robust`): every channel's emitter and other sources.
 
 use crate::estimate::options::LocateOptions;
-use crate::estimate::{Pipeline, pipeline, pool};
+use crate::estimate::{PipelineRun, pipeline, pool};
 use crate::inputs::capture::Decoded;
 use crate::locate::Parts;
 use crate::locate::explain::{explain, no_emitter};
@@ -58,8 +58,8 @@ pub(crate) fn located_by_pipeline(
     };
     // The bearings alone, for the words of an error.
     let bearings = || -> Vec<Bearing> { obs.iter().map(|x| x.bearing).collect() };
-    let r: Pipeline = pool()
-        .install(|| pipeline(&obs, &o.config(), o.seed))
+    let r: PipelineRun = pool()
+        .install(|| pipeline(&obs, &o.config(), &o.priors(), o.seed))
         .map_err(|e| explain(e, &bearings()))?;
     let rj = &r.rejected;
     for (k, v) in [

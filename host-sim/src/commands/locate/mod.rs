@@ -250,7 +250,13 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
         }
         Input::Files(sources) => {
             let mut dec = Decoder::new(BridgeConfig::default(), keep_track);
-            stream(&sources, |b| dec.feed(b))?;
+            // Each file is an input of its own: a unit whose records name no station is one
+            // station per file.
+            for (s, path) in sources.iter().zip(&a.captures) {
+                let name = path.file_name().unwrap_or(path.as_os_str());
+                dec.begin_input(&name.to_string_lossy())?;
+                stream(std::slice::from_ref(s), |b| dec.feed(b))?;
+            }
             dec.finish()
         }
         Input::Live(_) | Input::Gpsd(..) | Input::Kraken(..) => {
