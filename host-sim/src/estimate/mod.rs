@@ -5,6 +5,7 @@
 //! drives it.
 
 pub mod options;
+pub mod stations;
 
 use foxhunt_core::estimator::{batch_fix, with_bearing_filter};
 use foxhunt_core::fix::bias::{BiasPrior, StationSlot};

@@ -3,6 +3,7 @@
 //! same settings, so its advice is about the fix `locate` reports.
 
 use super::Priors;
+use crate::inputs::stations::Network;
 use foxhunt_core::Method;
 use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::fix::locate::{LocateConfig, NoiseModel};
@@ -15,7 +16,7 @@ pub const PARTICLES: usize = 1000;
 pub const SEEDS_JITTER_M2: f32 = 1.0;
 
 /// How `locate` computes the fix.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct LocateOptions {
     /// The estimator.
     pub method: Method,
@@ -30,6 +31,9 @@ pub struct LocateOptions {
     pub offset: Option<BiasPrior>,
     /// Bearings within this many MHz share a channel.
     pub channel_width_mhz: f32,
+    /// What is known of the network's stations and reference transmitters (`--stations`,
+    /// `--reference`; docs/src/networks.md).
+    pub network: Option<std::sync::Arc<Network>>,
 }
 
 impl Default for LocateOptions {
@@ -41,6 +45,7 @@ impl Default for LocateOptions {
             seed: 1,
             offset: None,
             channel_width_mhz: LocateConfig::default().channel_width_mhz,
+            network: None,
         }
     }
 }
@@ -87,5 +92,15 @@ impl LocateOptions {
     /// Each station's offset prior for these options: the calibration's, else the default.
     pub fn priors(&self) -> Priors {
         Priors::same(self.offset.unwrap_or_default())
+    }
+
+    /// Tell `decoder` where the stations file's surveyed stations stand (before their
+    /// bytes).
+    pub fn survey(&self, decoder: &mut crate::inputs::capture::Decoder) {
+        for s in self.network.iter().flat_map(|n| &n.stations) {
+            if let Some(at) = s.position {
+                decoder.survey(&s.id, at);
+            }
+        }
     }
 }

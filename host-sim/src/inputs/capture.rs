@@ -143,17 +143,20 @@ impl Decoder {
     }
 
     /// Station `id` stands at `at` (a stations file's surveyed position): its bearings are
-    /// placed there. `id` is a KrakenSDR's STATION_ID, or a unit's `INPUT:KIND` label. False
-    /// when the id names no station this decoder can have.
+    /// placed there. `id` is a KrakenSDR's STATION_ID, or a unit's label (`KIND`, or
+    /// `INPUT:KIND` with several inputs). False when the id names no station this decoder can
+    /// have yet (an input not begun) or the station table is full.
     pub fn survey(&mut self, id: &str, at: LatLon) -> bool {
-        let key = self.key_of(id);
-        self.rx.bridge.survey(key, at)
+        match self.key_of(id) {
+            Some(key) => self.rx.bridge.survey(key, at),
+            None => false,
+        }
     }
 
     /// The bridge's key for a station label (the inverse of the labels of
-    /// [`Decoded::stations`]).
-    fn key_of(&self, id: &str) -> StationKey {
-        let unnamed = |input: u8, kind: &str| {
+    /// [`Decoded::stations`]); `None` for the label of an input not begun.
+    fn key_of(&self, id: &str) -> Option<StationKey> {
+        let kind = |name: &str| {
             [
                 BearingKind::Pfoxb,
                 BearingKind::Agrelo,
@@ -161,20 +164,24 @@ impl Decoder {
                 BearingKind::KrakenXml,
             ]
             .into_iter()
-            .find(|k| kind_name(*k) == kind)
-            .map(|kind| StationKey::Unnamed { kind, input })
+            .find(|k| kind_name(*k) == name)
         };
-        let label = match id.rsplit_once(':') {
-            Some((input, kind)) => self
-                .inputs
-                .iter()
-                .position(|n| n == input)
-                .and_then(|i| u8::try_from(i).ok())
-                .and_then(|i| unnamed(i, kind)),
-            None if self.inputs.len() <= 1 => unnamed(0, id),
-            None => None,
-        };
-        label.unwrap_or(StationKey::Named(foxhunt_bridge::kraken::Station::new(id)))
+        let named = || StationKey::Named(foxhunt_bridge::kraken::Station::new(id));
+        match id.rsplit_once(':') {
+            Some((input, k)) if kind(k).is_some() => {
+                let i = self.inputs.iter().position(|n| n == input)?;
+                Some(StationKey::Unnamed {
+                    kind: kind(k)?,
+                    input: u8::try_from(i).ok()?,
+                })
+            }
+            _ => match kind(id) {
+                Some(k) if self.inputs.len() <= 1 => {
+                    Some(StationKey::Unnamed { kind: k, input: 0 })
+                }
+                _ => Some(named()),
+            },
+        }
     }
 
     /// The label of a station of the bridge.

@@ -8,4 +8,5 @@ pub mod files;
 pub mod gpsd;
 pub mod kraken_http;
 pub mod roads;
+pub mod stations;
 pub mod unit;

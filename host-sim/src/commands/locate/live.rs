@@ -178,6 +178,7 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<Decoded,
     o.locate.check()?;
     let rx = reader(&o.source, o.gpsd.as_ref())?;
     let mut dec = Decoder::new(BridgeConfig::default(), o.keep_track);
+    o.locate.survey(&mut dec);
     let mut last_byte = Instant::now();
     let mut reported = (0usize, 0u32);
     let mut ended = false;

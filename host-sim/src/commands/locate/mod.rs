@@ -10,6 +10,7 @@ use crate::inputs::capture::{Decoded, Decoder};
 use crate::inputs::files::{Source, stream};
 use crate::inputs::gpsd::GpsdAddress;
 use crate::inputs::kraken_http::KrakenUrl;
+use crate::inputs::stations::{Network, parse_reference};
 use crate::locate::report::Located;
 use crate::locate::{locate, locate_guided};
 use crate::outputs::files::Outputs;
@@ -110,6 +111,29 @@ pub struct Args {
     /// else doa.xml) or the URL of either page; no CAPTURE.
     #[arg(long, value_name = "URL")]
     pub kraken: Option<String>,
+    /// A stations file (TOML): each DF station's id, surveyed position, offset prior or
+    /// calibration, noise and antenna, and reference transmitters (docs/src/networks.md).
+    #[arg(long, value_name = "FILE")]
+    pub stations: Option<PathBuf>,
+    /// A reference transmitter at LAT,LON on MHZ (repeatable): its channel's bearings
+    /// calibrate every station that hears it.
+    #[arg(long, value_name = "LAT,LON@MHZ", allow_hyphen_values = true)]
+    pub reference: Vec<String>,
+}
+
+/// The network `--stations` and `--reference` describe, if any.
+fn network(a: &Args) -> Result<Option<std::sync::Arc<Network>>, String> {
+    if a.stations.is_none() && a.reference.is_empty() {
+        return Ok(None);
+    }
+    let mut n = match &a.stations {
+        Some(path) => Network::load(path)?,
+        None => Network::default(),
+    };
+    for r in &a.reference {
+        n.add_reference(parse_reference(r)?)?;
+    }
+    Ok(Some(std::sync::Arc::new(n)))
 }
 
 /// Where the maps go: (path, named on the command line).
@@ -216,6 +240,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
         seed: a.seed,
         offset,
         channel_width_mhz: a.channel_width_mhz,
+        network: network(a)?,
     };
     options.check()?;
     let quiet = quiet_exit(a)?;
@@ -232,6 +257,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
     if !calibrating {
         inputs.extend(a.calibration.as_deref());
     }
+    inputs.extend(a.stations.as_deref());
     let outputs = Outputs::new(inputs, false);
     let paths = map_paths(a);
     for p in paths.iter().flatten() {
@@ -245,6 +271,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
     let decoded = match input {
         Input::Sample => {
             let mut dec = Decoder::new(BridgeConfig::default(), keep_track);
+            options.survey(&mut dec);
             dec.feed(SAMPLE_DRIVE);
             dec.finish()
         }
@@ -255,6 +282,8 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
             for (s, path) in sources.iter().zip(&a.captures) {
                 let name = path.file_name().unwrap_or(path.as_os_str());
                 dec.begin_input(&name.to_string_lossy())?;
+                // Now this input's unnamed units have their labels.
+                options.survey(&mut dec);
                 stream(std::slice::from_ref(s), |b| dec.feed(b))?;
             }
             dec.finish()
@@ -270,7 +299,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
                 source,
                 gpsd,
                 quiet_exit: quiet,
-                locate: options,
+                locate: options.clone(),
                 json: a.json,
                 keep_track,
             };
