@@ -54,7 +54,7 @@ pub(super) fn truth_geometry(d: &FieldDrive, t: &Truth) -> Vec<Observation> {
 }
 
 /// The bias-aware bound at truth `t`: every station's offset with the prior the run gave it.
-pub(super) fn bound_at(d: &FieldDrive, t: &Truth, prior: BiasPrior) -> f32 {
+pub fn bound_at(d: &FieldDrive, t: &Truth, prior: BiasPrior) -> f32 {
     let geometry = truth_geometry(d, t);
     let priors = d.priors(prior);
     let n = geometry

@@ -27,7 +27,8 @@ pub use bench::{BENCH_METHODS, bench};
 pub use capture::capture;
 pub use drives::{l600, simulate, u_route};
 pub use judge::{
-    EmitterSummary, RunOutcome, Summary, THREE_SIGMA_TAIL, emitter_for, judge, measure, run_locate,
+    EmitterSummary, RunOutcome, Summary, THREE_SIGMA_TAIL, bound_at, emitter_for, judge, measure,
+    run_locate,
 };
 
 use crate::estimate::Priors;
