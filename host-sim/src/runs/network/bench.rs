@@ -34,6 +34,10 @@ pub struct NetworkRun {
     pub peer_holds: bool,
     /// The peer's ellipse's semi-major axis, m.
     pub peer_major: f32,
+    /// The pipeline's wall time (with the reference's calibration), seconds.
+    pub seconds: f64,
+    /// The peer's wall time, seconds.
+    pub peer_seconds: f64,
 }
 
 /// The stations file of a network drive: each station's stated prior.
@@ -53,6 +57,7 @@ pub fn run_network(c: NetworkCondition, run: usize) -> NetworkRun {
         ..
     } = simulate(c, run);
     let config = LocateConfig::default();
+    let clock = std::time::Instant::now();
     let mut setup = setup_of(&drive);
     if !references.is_empty() {
         let (rest, _) = calibrate_on_references(
@@ -67,6 +72,7 @@ pub fn run_network(c: NetworkCondition, run: usize) -> NetworkRun {
         }
     }
     let r = pipeline(&drive.observations, &config, &setup.priors, run as u64).ok();
+    let seconds = clock.elapsed().as_secs_f64();
     let j = judge(&drive, r.as_ref().map(|r| &r.report), BiasPrior::default());
     let j = j.first().copied();
     let mut known = drive.clone();
@@ -82,7 +88,9 @@ pub fn run_network(c: NetworkCondition, run: usize) -> NetworkRun {
         .copied()
         .collect();
     let moving: Vec<bool> = drive.stations.iter().map(|s| !s.fixed).collect();
+    let clock = std::time::Instant::now();
     let p = peer::locate(&channel, &moving);
+    let peer_seconds = clock.elapsed().as_secs_f64();
     let found = j.filter(|j| j.found);
     NetworkRun {
         error: found.map_or(f32::NAN, |j| j.error),
@@ -96,6 +104,8 @@ pub fn run_network(c: NetworkCondition, run: usize) -> NetworkRun {
         }),
         peer_holds: p.is_some_and(|p| p.holds(&truth.position)),
         peer_major: p.map_or(f32::NAN, |p| p.major()),
+        seconds,
+        peer_seconds,
     }
 }
 
@@ -132,6 +142,10 @@ pub struct NetworkSummary {
     pub median: f64,
     /// The peer's median ellipse semi-major axis, m.
     pub peer_major: f64,
+    /// The pipeline's mean wall time a run, seconds.
+    pub seconds: f64,
+    /// The peer's mean wall time a run, seconds.
+    pub peer_seconds: f64,
 }
 
 impl NetworkSummary {
@@ -180,6 +194,8 @@ pub fn measure_network(c: NetworkCondition, runs: usize) -> NetworkSummary {
         peer_rmse: rms(peer.iter().map(|r| f64::from(r.peer_error))),
         peer_median: median(peer.iter().map(|r| f64::from(r.peer_error)).collect()),
         peer_major: median(peer.iter().map(|r| f64::from(r.peer_major)).collect()),
+        seconds: all.iter().map(|r| r.seconds).sum::<f64>() / runs.max(1) as f64,
+        peer_seconds: all.iter().map(|r| r.peer_seconds).sum::<f64>() / runs.max(1) as f64,
     }
 }
 
@@ -188,12 +204,10 @@ pub fn bench(conditions: &[NetworkCondition], runs: usize) -> Vec<Row> {
     conditions
         .iter()
         .flat_map(|&c| {
-            let t = std::time::Instant::now();
             let s = measure_network(c, runs);
-            let seconds = t.elapsed().as_secs_f64() / runs.max(1) as f64;
             let label = c.name().to_string();
             let mut r = Row::new(label.clone(), Method::MlRobust, 0, runs);
-            r.time_s = seconds;
+            r.time_s = s.seconds;
             r.failures = runs - s.found;
             r.found = Some(s.found as f64 / runs.max(1) as f64);
             if s.found > 0 {
@@ -212,6 +226,7 @@ pub fn bench(conditions: &[NetworkCondition], runs: usize) -> Vec<Row> {
             ));
             let mut p = Row::new(label, Method::MlRobust, 0, runs);
             p.method = "df-aggregator".into();
+            p.time_s = s.peer_seconds;
             p.failures = runs - s.peer_found;
             p.found = Some(s.peer_found as f64 / runs.max(1) as f64);
             if s.peer_found > 0 {
