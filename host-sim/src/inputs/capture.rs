@@ -117,6 +117,8 @@ pub struct Decoder {
     keep_track: bool,
     /// The inputs' names, by input number (none: one unnamed input).
     inputs: Vec<String>,
+    /// The input the bytes come from now.
+    current: u8,
 }
 
 impl Decoder {
@@ -127,6 +129,7 @@ impl Decoder {
             decoded: Decoded::default(),
             keep_track,
             inputs: Vec::new(),
+            current: 0,
         }
     }
 
@@ -139,7 +142,18 @@ impl Decoder {
         self.idle();
         self.inputs.push(name.to_string());
         self.rx.bridge.set_input(i);
+        self.current = i;
         Ok(())
+    }
+
+    /// The bytes from now on come from input `i`, one begun before (live sources polled in
+    /// turn, each handing over whole records).
+    pub fn switch_input(&mut self, i: u8) {
+        if i != self.current && usize::from(i) < self.inputs.len() {
+            self.idle();
+            self.rx.bridge.set_input(i);
+            self.current = i;
+        }
     }
 
     /// Station `id` stands at `at` (a stations file's surveyed position): its bearings are

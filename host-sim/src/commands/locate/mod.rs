@@ -108,9 +108,11 @@ pub struct Args {
     #[command(flatten)]
     pub guidance: GuidanceArgs,
     /// Live: poll a KrakenSDR about twice a second, `http://HOST:8081` (its DOA_value.html,
-    /// else doa.xml) or the URL of either page; no CAPTURE.
+    /// else doa.xml) or the URL of either page; no CAPTURE. Repeatable: every unit is polled
+    /// at once and their bearings fused, each a station of its own (its STATION_ID, else its
+    /// URL).
     #[arg(long, value_name = "URL")]
-    pub kraken: Option<String>,
+    pub kraken: Vec<String>,
     /// A stations file (TOML): each DF station's id, surveyed position, offset prior or
     /// calibration, noise and antenna, and reference transmitters (docs/src/networks.md).
     #[arg(long, value_name = "FILE")]
@@ -159,17 +161,22 @@ enum Input {
     Live(LiveSource),
     /// A live line of bearings with gpsd beside it.
     Gpsd(LiveSource, GpsdAddress),
-    /// A KrakenSDR's web page (and perhaps gpsd).
-    Kraken(KrakenUrl, Option<GpsdAddress>),
+    /// KrakenSDRs' web pages (and perhaps gpsd).
+    Kraken(Vec<KrakenUrl>, Option<GpsdAddress>),
 }
 
 fn input(a: &Args) -> Result<Input, String> {
     let gpsd = a.gpsd.as_deref().map(GpsdAddress::parse).transpose()?;
-    if let Some(url) = &a.kraken {
+    if !a.kraken.is_empty() {
         if !a.captures.is_empty() || a.baud.is_some() {
             return Err("--kraken reads the unit's web page: give no CAPTURE and no --baud".into());
         }
-        return Ok(Input::Kraken(KrakenUrl::parse(url)?, gpsd));
+        let urls = a
+            .kraken
+            .iter()
+            .map(|u| KrakenUrl::parse(u))
+            .collect::<Result<Vec<_>, _>>()?;
+        return Ok(Input::Kraken(urls, gpsd));
     }
     if let Some(g) = gpsd {
         return match line_input(a)? {
