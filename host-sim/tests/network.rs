@@ -1,6 +1,7 @@
 //! A network condition as a user meets it: `simulate --condition network-*` writes every
 //! station's KrakenSDR XML records and the stations file, and `locate --stations` on them
-//! finds the emitter and each station's offset as the simulation drew it.
+//! finds the emitter and each station's offset as the simulation drew it; its GeoJSON and KML
+//! carry every station.
 
 use std::process::Command;
 
@@ -30,12 +31,17 @@ fn a_simulated_network_reads_back_with_its_stations_and_offsets() {
     ]);
     assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
     let stations = dir.join("net.stations.toml");
+    let (geo, kml) = (dir.join("net.geojson"), dir.join("net.kml"));
     let l = foxhunt(&[
         "locate",
         out,
         "--stations",
         stations.to_str().expect("path"),
         "--json",
+        "--geojson",
+        geo.to_str().expect("path"),
+        "--kml",
+        kml.to_str().expect("path"),
     ]);
     assert_eq!(
         l.status.code(),
@@ -71,6 +77,43 @@ fn a_simulated_network_reads_back_with_its_stations_and_offsets() {
         assert!((o - want).abs() < 4.0 * sd.max(0.05), "{}", t.id);
         assert_eq!(r["fixed"], true);
         assert_eq!(r["prior_from"], "reference");
+    }
+    // The maps: each station where it stands, fixed, with its offset.
+    let g: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&geo).expect("geojson")).expect("JSON");
+    let features = g["features"].as_array().expect("features");
+    let on_map: Vec<&serde_json::Value> = features
+        .iter()
+        .filter(|f| f["properties"]["kind"] == "station")
+        .collect();
+    assert_eq!(on_map.len(), truth.len());
+    for f in &on_map {
+        let r = reported
+            .iter()
+            .find(|r| r["id"] == f["properties"]["id"])
+            .expect("a reported station");
+        assert_eq!(f["properties"]["station"], "fixed");
+        let close = |a: &serde_json::Value, b: &serde_json::Value| {
+            (a.as_f64().expect("number") - b.as_f64().expect("number")).abs() < 1e-5
+        };
+        assert!(close(&f["properties"]["offset_deg"], &r["offset_deg"]));
+        assert_eq!(f["geometry"]["coordinates"][0], r["lon"]);
+        assert_eq!(f["geometry"]["coordinates"][1], r["lat"]);
+    }
+    let k = std::fs::read_to_string(&kml).expect("kml");
+    let folder = k
+        .split("<Folder><name>stations</name>")
+        .nth(1)
+        .and_then(|s| s.split("</Folder>").next())
+        .expect("a stations folder");
+    for t in &truth {
+        assert!(
+            folder.contains(&format!(
+                "<name>{}</name><description>fixed station; offset",
+                t.id
+            )),
+            "{folder}"
+        );
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
