@@ -3,7 +3,7 @@
 //! +-inf, 1e30, -0.0, subnormals, ordinary values): nothing panics, and whatever comes back Ok
 //! is finite.
 
-use foxhunt_core::fix::bias::{self, BiasPrior, Start, same_priors};
+use foxhunt_core::fix::bias::{self, BiasPrior, Start, StartOffsets, StationSlot};
 use foxhunt_core::fix::consistency;
 use foxhunt_core::fix::init::{InitOptions, initial_biased_particles};
 use foxhunt_core::fix::locate::{LocateConfig, NoiseModel, Observation, Workspace, locate};
@@ -46,9 +46,10 @@ fn observations() -> impl Strategy<Value = Vec<Observation>> {
         0.005f32..0.1,
         0.0f32..100.0,
         prop_oneof![Just(None), Just(Some(145.0f32)), Just(Some(146.5f32))],
-        0u8..3,
+        0u16..3,
+        any::<bool>(),
     )
-        .prop_map(|(x, y, e, s, t, f, src)| Observation {
+        .prop_map(|(x, y, e, s, t, f, src, stamped)| Observation {
             bearing: Bearing {
                 vehicle: [x, y],
                 theta: (800.0 - y).atan2(500.0 - x) + e,
@@ -56,7 +57,8 @@ fn observations() -> impl Strategy<Value = Vec<Observation>> {
             },
             time_s: t,
             freq_mhz: f,
-            source: src,
+            station: src,
+            stamped,
         });
     let poison = (
         wild(),
@@ -65,9 +67,10 @@ fn observations() -> impl Strategy<Value = Vec<Observation>> {
         wild(),
         wild(),
         prop_oneof![Just(None), wild().prop_map(Some)],
-        any::<u8>(),
+        any::<u16>(),
+        any::<bool>(),
     )
-        .prop_map(|(x, y, th, s, t, f, src)| Observation {
+        .prop_map(|(x, y, th, s, t, f, src, stamped)| Observation {
             bearing: Bearing {
                 vehicle: [x, y],
                 theta: th,
@@ -75,7 +78,8 @@ fn observations() -> impl Strategy<Value = Vec<Observation>> {
             },
             time_s: t,
             freq_mhz: f,
-            source: src,
+            station: src,
+            stamped,
         });
     prop::collection::vec(prop_oneof![6 => sane, 1 => poison], 0..40)
 }
@@ -119,16 +123,16 @@ proptest! {
             for e in r.emitters() { check_source(e); }
             for o in r.others() { check_source(&o.source); }
             let rej = r.rejected;
-            let total = rej.invalid + rej.unknown_source + rej.over_capacity + rej.repeated + rej.time_backwards + r.accepted;
+            let total = rej.invalid + rej.unknown_station + rej.over_capacity + rej.repeated + rej.time_backwards + r.accepted;
             prop_assert_eq!(total as usize, obs.len());
         }
-        // Arbitrary settings are refused, never a panic.
+        // Arbitrary settings and priors are refused, never a panic.
         let odd = LocateConfig {
-            priors: same_priors(BiasPrior { mean: 0.0, sd }),
             channel_width_mhz: width,
             ..LocateConfig::default()
         };
-        let _ = locate::<2, 1, _>(&obs, &odd, work.buffers(), &mut rng);
+        let mut odd_work = Workspace::<32, 3>::with_prior(BiasPrior { mean: 0.0, sd });
+        let _ = locate::<2, 1, _>(&obs, &odd, odd_work.buffers(), &mut rng);
     }
 
     #[test]
@@ -137,21 +141,22 @@ proptest! {
         let prior = BiasPrior { mean, sd };
         for p in [prior, BiasPrior::default(), BiasPrior::calibrated(0.0)] {
             if let Ok(f) = bias::ml(&bs, p, Some(start), &Tukey::default(), Default::default()) {
-                prop_assert!(finite(&f.position) && finite(&f.bias) && finite(&[f.chi2, f.parameters]));
+                prop_assert!(finite(&f.position) && finite(&[f.bias, f.bias_sd, f.chi2, f.parameters]));
             }
-            if let Ok(f) = bias::ml_sources(&obs, &same_priors(p), Start { position: start, bias: [0.0; 4] }, &GaussianUniform::default(), Default::default()) {
+            let mut table = [StationSlot::new(p); 3];
+            if let Ok(f) = bias::ml_sources(&obs, &mut table, Start { position: start, offsets: StartOffsets::Prior }, &GaussianUniform::default(), Default::default()) {
                 prop_assert!(finite(&f.position) && finite(&f.covariance.concat()));
             }
             if let Ok(c) = bias::crlb(&start, &bs, p) { prop_assert!(c.rmse.is_finite() && c.rmse > 0.0); }
             // The profile likelihood and the region's reach, any line, any scale.
             let options = bias::BiasedOptions { scale: sd.abs(), position_sd_m: mean.abs(), ..Default::default() };
-            let begin = Start { position: start, bias: [0.0; 4] };
-            if let Ok(q) = bias::profile(&obs, &same_priors(p), begin, [mean, sd], &Gaussian, options) {
+            let begin = Start { position: start, offsets: StartOffsets::Common(0.0) };
+            if let Ok(q) = bias::profile(&obs, &mut table, begin, [mean, sd], &Gaussian, options) {
                 prop_assert!(finite(&q.position) && finite(&[q.deviance, q.along_sd]));
             }
-            if let Ok(f) = bias::ml_sources(&obs, &same_priors(p), begin, &Gaussian, Default::default()) {
-                let fit = reach::Fit { fix: &f, priors: &same_priors(p), scale: sd, inflation: mean };
-                if let Ok(r) = reach::reach(&obs, fit, &f.covariance, 5.99, 1e5) {
+            if let Ok(f) = bias::ml_sources(&obs, &mut table, begin, &Gaussian, Default::default()) {
+                let fit = reach::Fit { fix: &f, scale: sd, inflation: mean };
+                if let Ok(r) = reach::reach(&obs, &mut table, fit, &f.covariance, 5.99, 1e5) {
                     prop_assert!(finite(&r.covariance.concat()) && r.stretch.is_finite());
                 }
             }
@@ -162,7 +167,8 @@ proptest! {
         if let Ok(c) = robust::ransac(&obs, &RansacOptions::default(), window, &mut rng) {
             prop_assert!(finite(&c.position));
             let mut scratch = obs.clone();
-            if let Ok(f) = robust::refine(&obs, &mut scratch, &same_priors(BiasPrior::default()), &c, RefineOptions::default()) {
+            let mut table = [StationSlot::default(); 3];
+            if let Ok(f) = robust::refine(&obs, &mut scratch, &mut table, &c, RefineOptions::default()) {
                 prop_assert!(finite(&f.fix.position) && f.scale.is_finite());
             }
         }

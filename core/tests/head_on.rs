@@ -11,7 +11,7 @@
 //! kilometres further on: 10 of 40 drives made such a claim, every claim of CEP50 < 100 m wrong.
 
 use foxhunt_core::Error;
-use foxhunt_core::fix::bias::{BiasPrior, same_priors};
+use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::fix::locate::{
     ChannelOutcome, LocateConfig, NoEmitter, NoiseModel, Observation, Workspace, locate,
 };
@@ -57,7 +57,6 @@ fn drive(seed: u64) -> Vec<Observation> {
 fn driving_at_the_emitter_makes_no_confident_wrong_claim() {
     let config = LocateConfig {
         noise: NoiseModel::Known,
-        priors: same_priors(BiasPrior::calibrated(0.0)),
         ..LocateConfig::default()
     };
     let (mut wrong_drives, mut fixes, mut inside, mut unobservable, mut claims) = (0, 0, 0, 0, 0);
@@ -65,7 +64,7 @@ fn driving_at_the_emitter_makes_no_confident_wrong_claim() {
         let o = drive(seed);
         let mut wrong = false;
         for n in (30..=180).step_by(15) {
-            let mut work = Workspace::<180>::new();
+            let mut work = Workspace::<180, 1>::with_prior(BiasPrior::calibrated(0.0));
             let mut rng = XorShiftRng::seed_from_u64(n as u64);
             let report = locate::<1, 1, _>(&o[..n], &config, work.buffers(), &mut rng)
                 .expect("valid settings");

@@ -12,7 +12,7 @@
 //! relative standard error of a root mean square of 400 two-dimensional errors, 1/sqrt(1600)).
 //! The runs are seeded, so every figure is deterministic; each assertion prints the table.
 
-use foxhunt_core::fix::bias::{self, BiasPrior, same_priors};
+use foxhunt_core::fix::bias::{self, BiasPrior};
 use foxhunt_core::fix::consistency::check_cloud;
 use foxhunt_core::fix::ellipse::mahalanobis;
 use foxhunt_core::fix::init::{InitOptions, initial_biased_particles, initial_particles};
@@ -42,7 +42,7 @@ fn table() -> &'static [Summary] {
         let config = LocateConfig::default();
         Condition::ALL
             .iter()
-            .map(|c| measure(*c, RUNS, &config))
+            .map(|c| measure(*c, RUNS, &config, BiasPrior::default()))
             .collect()
     })
 }
@@ -60,12 +60,9 @@ fn shown() -> String {
     format!("\n{}\n", rows.join("\n"))
 }
 
-/// With a calibrated unit (offset known to be 0).
-fn calibrated() -> LocateConfig {
-    LocateConfig {
-        priors: same_priors(BiasPrior::calibrated(0.0)),
-        ..LocateConfig::default()
-    }
+/// A calibrated unit: offset known to be 0.
+fn calibrated() -> BiasPrior {
+    BiasPrior::calibrated(0.0)
 }
 
 #[test]
@@ -210,8 +207,8 @@ fn few_bearings_with_estimated_noise_are_honest_or_refused() {
     let mut by_n = [(0usize, 0usize); 8];
     for run in 0..RUNS {
         let d = simulate(Condition::FewBearings, run);
-        let r = run_locate(&d, &config, run as u64).ok();
-        let j = judge(&d, r.as_ref(), config.priors[0]);
+        let r = run_locate(&d, &config, BiasPrior::default(), run as u64).ok();
+        let j = judge(&d, r.as_ref().map(|r| &r.report), BiasPrior::default());
         by_n[run % 8].0 += 1;
         by_n[run % 8].1 += j[0].found as usize;
     }
@@ -241,7 +238,7 @@ fn wild_bearings_stay_within_1_3_of_the_bound() {
             e.ratio(),
             shown()
         );
-        let cal = measure(c, RUNS, &calibrated());
+        let cal = measure(c, RUNS, &LocateConfig::default(), calibrated());
         let ce = &cal.per_emitter[0];
         assert!(ce.ratio() <= 1.3, "calibrated {cal}");
         assert!((0.90..=0.98).contains(&ce.coverage()), "calibrated {cal}");
@@ -262,7 +259,7 @@ fn clean_accuracy_is_unchanged() {
             let t = d.emitters[0].position;
             let bs: Vec<Bearing> = d.observations.iter().map(|o| o.bearing).collect();
             let f = ml(&bs, None, &Gaussian, MlOptions::default()).expect("ML fix");
-            let r = run_locate(&d, &cal, run as u64).expect("pipeline");
+            let r = run_locate(&d, &LocateConfig::default(), cal, run as u64).expect("pipeline");
             let e = r.emitters().first().expect("an emitter");
             let geometry: Vec<Bearing> = bs
                 .iter()
@@ -393,7 +390,13 @@ fn the_augmented_filters_estimate_the_offset() {
         }
         let s = sir.estimate().expect("initialised");
         // The EKF from the robust search's answer, with the offset's prior.
-        let r = run_locate(&d, &LocateConfig::default(), run as u64).expect("pipeline");
+        let r = run_locate(
+            &d,
+            &LocateConfig::default(),
+            BiasPrior::default(),
+            run as u64,
+        )
+        .expect("pipeline");
         let start = r.emitters()[0].position;
         let mut ekf = BiasedBearingEkf::new(0.0);
         ekf.start(
@@ -504,8 +507,9 @@ fn an_hour_at_20_bearings_a_second_does_not_stall() {
         ghost: None,
         bias: 0.0,
         sigma: 2.0 * DEG,
+        stations: Vec::new(),
     };
-    let r = run_locate(&d, &LocateConfig::default(), 1).expect("pipeline");
+    let r = run_locate(&d, &LocateConfig::default(), BiasPrior::default(), 1).expect("pipeline");
     let total = started.elapsed();
     let f = r.emitters().first().expect("an emitter");
     let err = (f.position[0] - e[0]).hypot(f.position[1] - e[1]);

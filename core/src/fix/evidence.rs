@@ -1,13 +1,17 @@
-//! Evidence counted once: repeated bearings, a capture concatenated or replayed, time going
-//! backwards.
+//! Evidence counted once: repeated bearings, a capture concatenated or replayed, one unit
+//! logged twice, time going backwards.
 //!
 //! A repeated sentence, a capture appended to itself or a replay of part of a drive carries no
 //! new information, yet a fix that counts it twice shrinks its ellipse by sqrt(2). A bearing
-//! that repeats an earlier one exactly (same source, time, vehicle position and angle) is
-//! [`Verdict::Repeated`]; one that is new but older than a bearing the same source already
-//! sent is [`Verdict::Backwards`] (a replay with its times intact, or a clock that jumped): it
-//! cannot be placed in the drive's order, and the correlation estimate needs that order. Both
-//! are counted and never used; the first occurrence is kept.
+//! is [`Verdict::Repeated`] when it repeats an earlier one exactly (same station, time,
+//! channel, vehicle position and angle), or, for a station that stamps its own bearings
+//! ([`Observation::stamped`]), when the same station already sent a bearing at that time on
+//! that channel: the same record arriving by two paths (a KrakenSDR's CSV log and its XML, a
+//! poll and a log), whose angles and positions differ only in their rounding. A new bearing
+//! older than one the same station already sent on its channel is [`Verdict::Backwards`] (a replay with its
+//! times intact, or a clock that jumped): it cannot be placed in the drive's order, and the
+//! correlation estimate needs that order. Both are counted and never used; the first
+//! occurrence is kept. Three sorts, O(n log n), no table per station.
 
 use super::observation::Observation;
 use super::order::heapsort_by;
@@ -20,26 +24,38 @@ pub enum Verdict {
     /// New evidence.
     #[default]
     Fresh = 0,
-    /// An exact repeat of an earlier observation.
+    /// An earlier observation again.
     Repeated = 1,
-    /// New, but older than what its source already sent.
+    /// New, but older than what its station already sent on its channel.
     Backwards = 2,
 }
 
 /// How many observations were set aside, by reason.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct EvidenceCounts {
-    /// Exact repeats of earlier observations.
+    /// Earlier observations again (exact repeats, or a stamped bearing by a second path).
     pub repeated: u32,
-    /// Observations older than their source's latest.
+    /// Observations older than their station's latest on their channel.
     pub backwards: u32,
 }
 
+/// The channel of a frequency to the kHz (two logs of one record round it differently).
+fn channel_key(f: Option<f32>) -> i32 {
+    match f {
+        Some(f) => libm::roundf(f * 1000.0) as i32,
+        None => i32::MIN,
+    }
+}
+
+/// What identifies a stamped bearing: station, time and channel.
+fn stamp(o: &Observation) -> (u16, u32, i32) {
+    (o.station, o.time_s.to_bits(), channel_key(o.freq_mhz))
+}
+
 /// The identity of an observation: two are the same evidence when all of these agree.
-fn key(o: &Observation) -> (u8, u32, u32, u32, u32) {
+fn key(o: &Observation) -> ((u16, u32, i32), u32, u32, u32) {
     (
-        o.source,
-        o.time_s.to_bits(),
+        stamp(o),
         o.bearing.theta.to_bits(),
         o.bearing.vehicle[0].to_bits(),
         o.bearing.vehicle[1].to_bits(),
@@ -59,38 +75,61 @@ pub fn sort_out(
         return Err(Error::OutOfRange);
     }
     let order = &mut order[..n];
-    for (i, slot) in order.iter_mut().enumerate() {
-        *slot = i as u32;
-    }
-    let key_of = |i: u32| obs(i as usize).map(|o| key(&o));
-    heapsort_by(order, |a, b| (key_of(*a), *a) < (key_of(*b), *b));
+    let tags = &mut tags[..n];
     let mut counts = EvidenceCounts::default();
-    for t in tags.iter_mut().take(n) {
+    for t in tags.iter_mut() {
         *t = Verdict::Fresh as u8;
     }
-    for w in order.windows(2) {
-        if key_of(w[0]) == key_of(w[1])
-            && let Some(t) = tags.get_mut(w[1] as usize)
+    let mut repeated = |tags: &mut [u8], i: u32| {
+        if let Some(t) = tags.get_mut(i as usize)
+            && *t == Verdict::Fresh as u8
         {
             *t = Verdict::Repeated as u8;
             counts.repeated += 1;
         }
+    };
+    // Exact repeats: identical keys side by side, in input order.
+    let reset = |order: &mut [u32]| {
+        for (i, slot) in order.iter_mut().enumerate() {
+            *slot = i as u32;
+        }
+    };
+    reset(order);
+    let key_of = |i: u32| obs(i as usize).map(|o| key(&o));
+    heapsort_by(order, |a, b| (key_of(*a), *a) < (key_of(*b), *b));
+    for w in order.windows(2) {
+        if key_of(w[0]) == key_of(w[1]) {
+            repeated(tags, w[1]);
+        }
     }
-    // Time order per source, among the fresh ones (sources index a small table).
-    let mut latest = [f32::NEG_INFINITY; 256];
-    for (i, t) in tags.iter_mut().enumerate().take(n) {
-        let Some(o) = obs(i) else { continue };
-        if *t != Verdict::Fresh as u8 {
+    // A stamped bearing by a second path: the same station, time and channel, in input order.
+    reset(order);
+    let stamp_of = |i: u32| obs(i as usize).filter(|o| o.stamped).map(|o| stamp(&o));
+    heapsort_by(order, |a, b| (stamp_of(*a), *a) < (stamp_of(*b), *b));
+    for w in order.windows(2) {
+        if stamp_of(w[0]).is_some() && stamp_of(w[0]) == stamp_of(w[1]) {
+            repeated(tags, w[1]);
+        }
+    }
+    // Time order per station and channel among the fresh ones: each stream in input order.
+    reset(order);
+    let stream_of = |o: &Observation| (o.station, channel_key(o.freq_mhz));
+    let stream = |i: u32| obs(i as usize).map(|o| stream_of(&o));
+    heapsort_by(order, |a, b| (stream(*a), *a) < (stream(*b), *b));
+    let mut latest: Option<((u16, i32), f32)> = None;
+    for &i in order.iter() {
+        let Some(o) = obs(i as usize) else { continue };
+        if tags.get(i as usize) != Some(&(Verdict::Fresh as u8)) {
             continue;
         }
-        let Some(last) = latest.get_mut(o.source as usize) else {
-            continue;
-        };
-        if o.time_s < *last {
-            *t = Verdict::Backwards as u8;
-            counts.backwards += 1;
-        } else {
-            *last = o.time_s;
+        match latest {
+            Some((s, t)) if s == stream_of(&o) && o.time_s < t => {
+                if let Some(t) = tags.get_mut(i as usize) {
+                    *t = Verdict::Backwards as u8;
+                    counts.backwards += 1;
+                }
+            }
+            _ => latest = Some((stream_of(&o), o.time_s)),
         }
     }
     Ok(counts)
@@ -110,7 +149,8 @@ mod tests {
             },
             time_s: k as f32,
             freq_mhz: None,
-            source: 0,
+            station: 0,
+            stamped: true,
         }
     }
 
@@ -150,8 +190,11 @@ mod tests {
             (v[3], v[6]),
             (Verdict::Repeated as u8, Verdict::Backwards as u8)
         );
-        // Another source keeps its own clock, and equal times are not backwards.
-        drive[6].source = 1;
+        // Another station keeps its own clock, and equal times of a unit that does not stamp
+        // its bearings (an Agrelo's take the GPS second) are neither backwards nor repeats.
+        drive[6].station = 1;
+        drive[4].stamped = false;
+        drive[5].stamped = false;
         drive[5].time_s = drive[4].time_s;
         let c = sort_out(8, |i| drive.get(i).copied(), &mut order, &mut v).unwrap();
         assert_eq!(
@@ -163,5 +206,41 @@ mod tests {
         );
         let short = sort_out(8, |i| drive.get(i).copied(), &mut order[..3], &mut v);
         assert_eq!(short, Err(Error::OutOfRange));
+    }
+
+    #[test]
+    fn one_unit_logged_twice_counts_once() {
+        // The CSV log, then the XML log of the same records: angles rounded to 0.01 degree
+        // against whole degrees, positions to a few centimetres, frequencies in Hz against MHz.
+        let csv: [Observation; 10] = core::array::from_fn(|k| {
+            let mut o = obs(k);
+            o.freq_mhz = Some(433_920_000.0 / 1e6);
+            o
+        });
+        let mut both = [csv[0]; 30];
+        both[..10].copy_from_slice(&csv);
+        for k in 0..10 {
+            let mut x = csv[k];
+            x.bearing.theta += 1e-4;
+            x.bearing.vehicle[0] += 0.03;
+            x.freq_mhz = Some(433.9201);
+            both[10 + k] = x;
+            // A second channel at the same times is other evidence.
+            let mut y = csv[k];
+            y.freq_mhz = Some(433.945);
+            both[20 + k] = y;
+        }
+        let mut order = [0u32; 30];
+        let mut v = [0u8; 30];
+        let c = sort_out(30, |i| both.get(i).copied(), &mut order, &mut v).unwrap();
+        assert_eq!(
+            c,
+            EvidenceCounts {
+                repeated: 10,
+                backwards: 0
+            }
+        );
+        assert!(v[10..20].iter().all(|v| *v == Verdict::Repeated as u8));
+        assert!(v[20..].iter().all(|v| *v == Verdict::Fresh as u8));
     }
 }

@@ -1,4 +1,4 @@
-//! One bearing as a DF unit delivered it: the angle with its time, DF source and frequency.
+//! One bearing as a DF station delivered it: the angle with its time, station and frequency.
 //!
 //! The pipeline's input ([`super::locate`]) and what the evidence checks judge
 //! ([`super::evidence`]): both read it from here, so neither depends on the other for it.
@@ -6,37 +6,45 @@
 use super::bias::Sighting;
 use crate::model::bearing::Bearing;
 
-/// One bearing as a DF unit delivered it.
+/// One bearing as a DF station delivered it (32 bytes: a long capture keeps millions).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Observation {
-    /// The bearing in the local frame (vehicle position, angle, the unit's sigma).
+    /// The bearing in the local frame (the station's position, angle, its sigma).
     pub bearing: Bearing,
     /// When it was taken, seconds (any origin; only the order and equality matter).
     pub time_s: f32,
-    /// The channel's frequency, MHz, if the unit reports one.
+    /// The channel's frequency, MHz, if the station reports one.
     pub freq_mhz: Option<f32>,
-    /// Which DF source took it (< [`MAX_SOURCES`](super::bias::MAX_SOURCES)): each has its own
-    /// offset.
-    pub source: u8,
+    /// Which station took it: its row in the caller's station table (each station has its
+    /// own offset; a station beyond the table is rejected as unknown).
+    pub station: u16,
+    /// Whether `time_s` is the station's own stamp of the bearing (a KrakenSDR's epoch, a
+    /// `$PFOXB` time), so the station, the time and the channel identify it: the same bearing
+    /// arriving twice (a unit's CSV and XML logs) counts once. False where the time is when
+    /// it arrived (an Agrelo unit's bearings take the GPS clock's, several to a second).
+    pub stamped: bool,
 }
+
+const _: () = assert!(core::mem::size_of::<Observation>() == 32);
 
 impl Sighting for Observation {
     fn bearing(&self) -> &Bearing {
         &self.bearing
     }
-    fn source(&self) -> usize {
-        self.source as usize
+    fn station(&self) -> usize {
+        usize::from(self.station)
     }
 }
 
 impl Observation {
-    /// A bearing from source 0 without a frequency.
+    /// A stamped bearing from station 0 without a frequency.
     pub const fn new(bearing: Bearing, time_s: f32) -> Self {
         Self {
             bearing,
             time_s,
             freq_mhz: None,
-            source: 0,
+            station: 0,
+            stamped: true,
         }
     }
 }

@@ -13,7 +13,7 @@
 //! point of the region found, each slice's own width included. A fit whose region runs out to
 //! the search's range limit has no range: [`Reach::bounded`] is false.
 
-use super::bias::{BiasPrior, BiasedFix, BiasedOptions, MAX_SOURCES, Sighting, Start, profile};
+use super::bias::{BiasedFix, BiasedOptions, Sighting, Start, StartOffsets, StationSlot, profile};
 use crate::error::{Error, check_finite};
 use crate::likelihood::Gaussian;
 use crate::linalg;
@@ -45,13 +45,12 @@ pub struct Reach {
     pub bounded: bool,
 }
 
-/// What [`reach`] needs to know about the fit.
+/// What [`reach`] needs to know about the fit (its offsets and their priors are in the station
+/// table it was solved in).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Fit<'a> {
     /// The converged Gaussian fix (at `scale`).
     pub fix: &'a BiasedFix,
-    /// Each offset's prior.
-    pub priors: &'a [BiasPrior; MAX_SOURCES],
     /// The noise scale the fix and the region use.
     pub scale: f32,
     /// Deviance differences are divided by this (N / N_eff of correlated residuals, as the
@@ -61,8 +60,11 @@ pub struct Fit<'a> {
 
 /// The likelihood-ratio region at threshold `k` (the ellipse's scale) along the major axis of
 /// `covariance`, and `covariance` widened to hold it; `max_range` bounds the walk, metres.
+/// `stations` is the table the fit was solved in: its fitted offsets start the walk and are
+/// left as they were.
 pub fn reach<T: Sighting>(
     items: &[T],
+    stations: &mut [StationSlot],
     fit: Fit<'_>,
     covariance: &[[f32; 2]; 2],
     k: f32,
@@ -84,22 +86,28 @@ pub fn reach<T: Sighting>(
         position_sd_m: POSITION_SD_M,
         ..BiasedOptions::default()
     };
-    let slice = |position: [f32; 2], bias: [f32; MAX_SOURCES]| {
+    let slice = |stations: &mut [StationSlot], position: [f32; 2], offsets: StartOffsets| {
         profile(
             items,
-            fit.priors,
-            Start { position, bias },
+            stations,
+            Start { position, offsets },
             n,
             &Gaussian,
             options,
         )
     };
-    let at_fix = slice(centre, fit.fix.bias)?;
+    let at_fix = slice(stations, centre, StartOffsets::Fitted)?;
     let mut cov = *covariance;
     let mut bounded = true;
     let first = libm::sqrtf(k * l1);
+    // Each direction's walk starts from the slice at the fix, whose offsets are kept aside;
+    // each later slice from the one before it (the table's current offsets).
+    for row in stations.iter_mut() {
+        row.keep_current();
+    }
     for sign in [1.0f32, -1.0] {
         let mut last = (0.0f32, 0.0f32, at_fix);
+        let mut offsets = StartOffsets::Saved;
         let mut s = first;
         let mut inside = true;
         for _ in 0..MAX_SLICES {
@@ -113,9 +121,10 @@ pub fn reach<T: Sighting>(
                 last.2.position[0] + step * u[0],
                 last.2.position[1] + step * u[1],
             ];
-            let Ok(p) = slice(from, last.2.bias) else {
+            let Ok(p) = slice(stations, from, offsets) else {
                 break;
             };
+            offsets = StartOffsets::Current;
             let q = [p.position[0] - centre[0], p.position[1] - centre[1]];
             if !(libm::hypotf(q[0], q[1]) <= max_range) {
                 // The slice's best fit ran off sideways past the search's range.
@@ -196,7 +205,7 @@ fn hold(cov: &mut [[f32; 2]; 2], q: [f32; 2], k: f32) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fix::bias::{ml_sources, same_priors};
+    use crate::fix::bias::{BiasPrior, ml_sources};
     use crate::model::bearing::{Bearing, predicted};
 
     /// Bearings without noise from a U round (0, 1000): the Fisher ellipse is a fine picture,
@@ -213,19 +222,25 @@ mod tests {
                 sigma: 0.03,
             }
         });
-        let priors = same_priors(BiasPrior::calibrated(0.0));
+        let mut stations = [StationSlot::new(BiasPrior::calibrated(0.0))];
         let start = Start {
             position: [10.0, 990.0],
-            bias: [0.0; MAX_SOURCES],
+            offsets: StartOffsets::Prior,
         };
-        let fix = ml_sources(&bs, &priors, start, &Gaussian, BiasedOptions::default()).unwrap();
+        let fix = ml_sources(
+            &bs,
+            &mut stations,
+            start,
+            &Gaussian,
+            BiasedOptions::default(),
+        )
+        .unwrap();
         let fit = Fit {
             fix: &fix,
-            priors: &priors,
             scale: 1.0,
             inflation: 1.0,
         };
-        let r = reach(&bs, fit, &fix.covariance, 5.991, 100_000.0).unwrap();
+        let r = reach(&bs, &mut stations, fit, &fix.covariance, 5.991, 100_000.0).unwrap();
         // The quadratic is exact to a few per cent this close: at most 5 % longer.
         assert!(r.bounded && r.stretch < 1.05, "{r:?}");
     }

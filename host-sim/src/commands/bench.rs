@@ -4,6 +4,7 @@ use crate::outputs::tables as report;
 use crate::outputs::terminal::{Out, Outcome};
 use crate::runs::field::Condition;
 use crate::runs::montecarlo::{Progress, bench, total_runs};
+use crate::runs::network::NetworkCondition;
 use crate::runs::scenario::{NAMES, Scenario, ScenarioModel};
 use foxhunt_core::PARTICLE_COUNTS;
 use std::path::PathBuf;
@@ -12,8 +13,9 @@ use std::path::PathBuf;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// A canonical scenario, `all` of them, the field conditions (`field`: every one, or
-    /// `field/NAME`), `small-n` (every noise-estimating method's coverage with 4 to 50
-    /// bearings) or the closed-loop guidance sets (`guidance`: every one, or `guidance/SET`).
+    /// `field/NAME`), the network conditions (`network`: every one, or `network/fixed3` and
+    /// the like: the default pipeline beside df-aggregator's algorithm), `small-n` (every
+    /// noise-estimating method's coverage with 4 to 50 bearings) or the closed-loop guidance sets (`guidance`: every one, or `guidance/SET`).
     #[arg(long, default_value = "aoa-afsa", conflicts_with = "scenario_file",
           value_parser = super::one_of(super::bench_scenarios()))]
     pub scenario: String,
@@ -121,6 +123,20 @@ fn field_conditions(a: &Args) -> Result<Option<Vec<Condition>>, String> {
     }
 }
 
+/// The network conditions `a` asks for, if it asks for them (the names are checked by the
+/// argument parser).
+fn network_conditions(a: &Args) -> Option<Vec<NetworkCondition>> {
+    if a.scenario_file.is_some() {
+        return None;
+    }
+    match a.scenario.strip_prefix("network") {
+        Some("") => Some(NetworkCondition::ALL.to_vec()),
+        Some(rest) => NetworkCondition::named(&format!("network-{}", rest.strip_prefix('/')?))
+            .map(|c| vec![c]),
+        None => None,
+    }
+}
+
 /// Print bench rows as `a` asks.
 fn print(a: &Args, rows: &[crate::outputs::tables::Row], out: &mut Out) -> Outcome {
     if a.json {
@@ -143,6 +159,16 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
             return Err("--particles does not apply to the field conditions (N = 1000)".into());
         }
         let rows = crate::runs::field::bench(&conditions, a.runs.unwrap_or(100));
+        return print(a, &rows, out);
+    }
+    if let Some(conditions) = network_conditions(a) {
+        if a.runs == Some(0) {
+            return Err("--runs must be at least 1, not 0".into());
+        }
+        if a.particles.is_some() {
+            return Err("--particles does not apply to the network conditions".into());
+        }
+        let rows = crate::runs::network::bench(&conditions, a.runs.unwrap_or(100));
         return print(a, &rows, out);
     }
     if a.scenario_file.is_none() && a.scenario == "small-n" {

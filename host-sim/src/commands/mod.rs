@@ -33,6 +33,12 @@ pub fn bench_scenarios() -> Vec<String> {
     names.push("all".into());
     names.push("field".into());
     names.extend(Condition::ALL.iter().map(|c| format!("field/{}", c.name())));
+    names.push("network".into());
+    names.extend(
+        crate::runs::network::NetworkCondition::ALL
+            .iter()
+            .map(|c| format!("network/{}", c.short_name())),
+    );
     names.push("small-n".into());
     names.push("guidance".into());
     names.extend(Set::all().iter().map(|s| s.name()));

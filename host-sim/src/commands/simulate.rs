@@ -3,6 +3,7 @@
 use crate::outputs::files::Outputs;
 use crate::outputs::terminal::{Outcome, note};
 use crate::runs::field::Condition;
+use crate::runs::network::NetworkCondition;
 use crate::runs::scenario::{NAMES, Scenario, ScenarioModel};
 use crate::runs::simulate::indoor_capture;
 use crate::runs::simulate::{CaptureFormat, CaptureOptions, drive_capture};
@@ -20,9 +21,12 @@ pub struct Args {
     #[arg(long)]
     pub scenario_file: Option<PathBuf>,
     /// A field condition instead (see `bench --scenario field`): GGA fixes and $PFOXB
-    /// bearings carrying their own position and frequency.
+    /// bearings carrying their own position and frequency; or a network condition
+    /// (`network-*`, see `bench --scenario network`): KrakenSDR XML records of every station
+    /// with its STATION_ID, and the stations file beside them (OUT with the extension
+    /// `.stations.toml`, which must not exist yet unless --force).
     #[arg(long, conflicts_with_all = ["scenario_file", "format", "wild", "bias_deg"],
-          value_parser = super::one_of(Condition::ALL.iter().map(|c| c.name().to_string()).collect()))]
+          value_parser = super::one_of(condition_names()))]
     pub condition: Option<String>,
     /// Where to write the capture.
     #[arg(long)]
@@ -128,9 +132,46 @@ fn origin(text: &str) -> Result<LatLon, String> {
     }
 }
 
+/// The names `--condition` takes: the field conditions, then the network ones.
+fn condition_names() -> Vec<String> {
+    Condition::ALL
+        .iter()
+        .map(|c| c.name())
+        .chain(NetworkCondition::ALL.iter().map(|c| c.name()))
+        .map(str::to_string)
+        .collect()
+}
+
+/// `simulate --condition network-*`: one run of a network condition, its capture and its
+/// stations file.
+fn network(a: &Args, c: NetworkCondition) -> Outcome {
+    let origin = match &a.origin {
+        Some(text) => origin(text)?,
+        None => crate::runs::simulate::DEFAULT_ORIGIN,
+    };
+    let stations_path = a.out.with_extension("stations.toml");
+    if stations_path == a.out {
+        return Err("the stations file and the capture cannot be one file".into());
+    }
+    let outputs = Outputs::new(std::iter::empty(), a.force);
+    let (bytes, stations, _) = crate::runs::network::capture(c, a.run, origin)?;
+    outputs.write(&a.out, &bytes, true)?;
+    outputs.write(&stations_path, stations.as_bytes(), false)?;
+    note(&format!(
+        "{} bytes; the emitter at {:.6}, {:.6}",
+        bytes.len(),
+        origin.lat,
+        origin.lon
+    ));
+    Ok(())
+}
+
 /// Run `foxhunt simulate`.
 pub fn run(a: &Args) -> Outcome {
     if let Some(name) = &a.condition {
+        if let Some(c) = NetworkCondition::named(name) {
+            return network(a, c);
+        }
         return field(a, name);
     }
     let scenario = match &a.scenario_file {

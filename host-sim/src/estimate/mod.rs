@@ -6,13 +6,17 @@
 
 pub mod noise;
 pub mod options;
+pub mod stations;
 pub mod window;
 
 use foxhunt_core::estimator::{batch_fix, with_bearing_filter};
+use foxhunt_core::fix::bias::{BiasPrior, StationSlot};
 use foxhunt_core::fix::ellipse::cep50;
 use foxhunt_core::fix::init::initial_particles;
 use foxhunt_core::fix::intersection::MIN_CROSSING;
-use foxhunt_core::fix::locate::{Buffers, Item, LocateConfig, Observation, Report, locate};
+use foxhunt_core::fix::locate::{
+    Buffers, Item, LocateConfig, Observation, Report, StationOffset, locate,
+};
 use foxhunt_core::{
     Bearing, Error, Estimate, Filter, Method, ParticleSet, WithFilter, with_particles,
 };
@@ -83,20 +87,88 @@ impl<const D: usize, Z, C: FnMut(usize, &Estimate<D>)> WithFilter<D, Z> for Step
 /// The field pipeline's report on the host: up to 16 channels and 16 other sources.
 pub type Pipeline = Report<16, 16>;
 
-/// Run the core's field pipeline on `observations` with working storage from the heap.
+/// What the field pipeline gave on the host: the report, and the offsets table its emitters'
+/// [`Source::offsets`](foxhunt_core::fix::locate::Source::offsets) index.
+#[derive(Debug, Clone)]
+pub struct PipelineRun {
+    /// The report.
+    pub report: Pipeline,
+    /// Every emitter's per-station offsets ([`Pipeline::offsets_of`]).
+    pub offsets: Vec<StationOffset>,
+}
+
+impl std::ops::Deref for PipelineRun {
+    type Target = Pipeline;
+    fn deref(&self) -> &Pipeline {
+        &self.report
+    }
+}
+
+/// Each station's offset prior: its own where one is known (a stations file, a reference
+/// transmitter's calibration), else the default (the `--calibration` file's, or the 6-degree
+/// one of an uncalibrated unit).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Priors {
+    /// The prior of every station without its own.
+    pub default: BiasPrior,
+    /// Station index to its own prior.
+    pub stations: Vec<Option<BiasPrior>>,
+}
+
+impl Priors {
+    /// The same prior for every station.
+    pub fn same(prior: BiasPrior) -> Self {
+        Self {
+            default: prior,
+            stations: Vec::new(),
+        }
+    }
+
+    /// Station `s`'s prior.
+    pub fn of(&self, s: usize) -> BiasPrior {
+        self.stations
+            .get(s)
+            .copied()
+            .flatten()
+            .unwrap_or(self.default)
+    }
+}
+
+/// Run the core's field pipeline on `observations` with working storage from the heap: one
+/// station row per station the observations name, with its prior from `priors`.
 pub fn pipeline(
     observations: &[Observation],
     config: &LocateConfig,
+    priors: &Priors,
     seed: u64,
-) -> Result<Pipeline, Error> {
+) -> Result<PipelineRun, Error> {
     let n = observations.len();
+    let stations = observations
+        .iter()
+        .map(|o| usize::from(o.station) + 1)
+        .max()
+        .unwrap_or(0)
+        .max(priors.stations.len());
     let mut items = vec![Item::EMPTY; n];
     let mut scratch = vec![Item::EMPTY; n];
     let mut order = vec![0u32; n];
     let mut tags = vec![0u8; n];
-    let work = Buffers::new(&mut items, &mut scratch, &mut order, &mut tags);
+    let mut table: Vec<StationSlot> = (0..stations)
+        .map(|s| StationSlot::new(priors.of(s)))
+        .collect();
+    // Room for every channel's emitter to list every station.
+    let mut offsets = vec![StationOffset::EMPTY; stations * 16];
+    let work = Buffers::new(
+        &mut items,
+        &mut scratch,
+        &mut order,
+        &mut tags,
+        &mut table,
+        &mut offsets,
+    );
     let mut rng = XorShiftRng::seed_from_u64(seed);
-    locate::<16, 16, _>(observations, config, work, &mut rng)
+    let report = locate::<16, 16, _>(observations, config, work, &mut rng)?;
+    Ok(PipelineRun { report, offsets })
 }
 
 /// The 95 % ellipse scale of a Gaussian fix in two dimensions, chi-square(2).
@@ -145,7 +217,12 @@ pub fn locate_bearings(
             .enumerate()
             .map(|(k, b)| Observation::new(*b, k as f32))
             .collect();
-        let r = pipeline(&obs, &LocateConfig::default(), u64::from(rng.next_u32()))?;
+        let r = pipeline(
+            &obs,
+            &LocateConfig::default(),
+            &Priors::default(),
+            u64::from(rng.next_u32()),
+        )?;
         let e = r.emitters().first().ok_or(Error::TooFewMeasurements)?;
         return Ok(BearingFix {
             position: e.position,

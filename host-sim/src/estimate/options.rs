@@ -2,8 +2,10 @@
 //! the bearings (their noise, the DF unit's offset, the channel width). Guidance reads the
 //! same settings, so its advice is about the fix `locate` reports.
 
+use super::Priors;
+use crate::inputs::stations::Network;
 use foxhunt_core::Method;
-use foxhunt_core::fix::bias::{BiasPrior, MAX_SOURCES};
+use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::fix::locate::{LocateConfig, NoiseModel};
 
 /// Particles of the sequential methods unless `--particles` says otherwise.
@@ -14,7 +16,7 @@ pub const PARTICLES: usize = 1000;
 pub const SEEDS_JITTER_M2: f32 = 1.0;
 
 /// How `locate` computes the fix.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct LocateOptions {
     /// The estimator.
     pub method: Method,
@@ -29,6 +31,9 @@ pub struct LocateOptions {
     pub offset: Option<BiasPrior>,
     /// Bearings within this many MHz share a channel.
     pub channel_width_mhz: f32,
+    /// What is known of the network's stations and reference transmitters (`--stations`,
+    /// `--reference`; docs/src/networks.md).
+    pub network: Option<std::sync::Arc<Network>>,
 }
 
 impl Default for LocateOptions {
@@ -40,6 +45,7 @@ impl Default for LocateOptions {
             seed: 1,
             offset: None,
             channel_width_mhz: LocateConfig::default().channel_width_mhz,
+            network: None,
         }
     }
 }
@@ -80,9 +86,21 @@ impl LocateOptions {
         if self.sigma_deg.is_some() {
             c.noise = NoiseModel::Known;
         }
-        if let Some(p) = self.offset {
-            c.priors = [p; MAX_SOURCES];
-        }
         c
+    }
+
+    /// Each station's offset prior for these options: the calibration's, else the default.
+    pub fn priors(&self) -> Priors {
+        Priors::same(self.offset.unwrap_or_default())
+    }
+
+    /// Tell `decoder` where the stations file's surveyed stations stand (before their
+    /// bytes).
+    pub fn survey(&self, decoder: &mut crate::inputs::capture::Decoder) {
+        for s in self.network.iter().flat_map(|n| &n.stations) {
+            if let Some(at) = s.position {
+                decoder.survey(&s.id, at);
+            }
+        }
     }
 }

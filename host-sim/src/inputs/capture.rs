@@ -2,25 +2,57 @@
 //! firmware), keeping the bearings as observations (32 bytes each: memory grows with the
 //! bearings kept, never with the capture), the vehicle track only when a map asks for it, and
 //! every record's refusals attributed to its kind so an error can say which records failed.
+//!
+//! Each bearing names its station, the bridge's (docs/src/networks.md): a KrakenSDR's
+//! STATION_ID, else its record kind on its input (each capture file is an input of its own,
+//! [`Decoder::begin_input`]). The observations' station index is the bridge's, and
+//! [`Decoded::stations`] says who each one is.
 
 use foxhunt_bridge::Frame;
 use foxhunt_bridge::bridge::{
-    BearingKind, BridgeConfig, BridgeCounters, Event, Receiver, VehicleFix,
+    BearingKind, BridgeConfig, BridgeCounters, Event, Receiver, StationKey, StationState,
+    VehicleFix,
 };
 use foxhunt_bridge::geo::LocalFrame;
+use foxhunt_bridge::nmea::LatLon;
 use foxhunt_bridge::record::RecordClass;
 use foxhunt_bridge::stream::StreamCounters;
 use foxhunt_core::Bearing;
 use foxhunt_core::fix::locate::Observation;
 
-/// The DF source of a record kind: each kind of unit has its own mounting offset.
-fn source(kind: BearingKind) -> u8 {
+/// Stations a host's bridge tells apart (the MCU's holds
+/// [`MCU_STATIONS`](foxhunt_bridge::bridge::MCU_STATIONS)).
+pub const HOST_STATIONS: usize = 256;
+
+/// The receiver a host decodes with.
+type HostReceiver = Receiver<0, HOST_STATIONS>;
+
+/// A record kind as the station labels and reports name it.
+pub fn kind_name(kind: BearingKind) -> &'static str {
     match kind {
-        BearingKind::Pfoxb => 0,
-        BearingKind::Agrelo => 1,
-        BearingKind::KrakenCsv => 2,
-        BearingKind::KrakenXml => 3,
+        BearingKind::Pfoxb => "pfoxb",
+        BearingKind::Agrelo => "agrelo",
+        BearingKind::KrakenCsv => "kraken-csv",
+        BearingKind::KrakenXml => "kraken-xml",
     }
+}
+
+/// A station as the capture showed it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StationInfo {
+    /// Its id: a KrakenSDR's STATION_ID, or for a unit that names none its record kind,
+    /// `INPUT:KIND` when the decoder was told of its inputs (`drive.nmea:agrelo`).
+    pub id: String,
+    /// Whether its records name it.
+    pub named: bool,
+    /// Whether it never moved (or stands at a surveyed position).
+    pub fixed: bool,
+    /// Where its first bearing was taken.
+    pub position: Option<LatLon>,
+    /// How far its bearings spread from the first, metres.
+    pub span_m: f32,
+    /// Bearings it handed on.
+    pub bearings: u32,
 }
 
 /// Sentences and records of one kind seen in a capture, and how many the bridge refused as
@@ -58,6 +90,8 @@ pub struct Decoded {
     pub bearing_records: KindTally,
     /// What a DF unit running foxhunt's firmware said (its own sentences in the capture).
     pub unit: crate::inputs::unit::UnitLog,
+    /// The stations, by the observations' station index.
+    pub stations: Vec<StationInfo>,
 }
 
 /// Whether a frame carries a GPS position, a bearing, or something else.
@@ -77,19 +111,104 @@ fn kind(f: &Frame<'_>) -> Kind {
 
 /// The bridge fed byte by byte or chunk by chunk, keeping what a fix needs.
 pub struct Decoder {
-    rx: Receiver<0>,
+    rx: Box<HostReceiver>,
     /// What has been decoded so far.
     pub decoded: Decoded,
     keep_track: bool,
+    /// The inputs' names, by input number (none: one unnamed input).
+    inputs: Vec<String>,
+    /// The input the bytes come from now.
+    current: u8,
 }
 
 impl Decoder {
     /// A decoder; `keep_track` keeps every vehicle fix (for maps).
     pub fn new(config: BridgeConfig, keep_track: bool) -> Self {
         Self {
-            rx: Receiver::new(config, []),
+            rx: Box::new(Receiver::new(config, [])),
             decoded: Decoded::default(),
             keep_track,
+            inputs: Vec::new(),
+            current: 0,
+        }
+    }
+
+    /// The bytes from now on come from input `name` (a capture file): a unit whose records
+    /// name no station is a station of its own on each input. Errors past 256 inputs.
+    pub fn begin_input(&mut self, name: &str) -> Result<(), String> {
+        let i = u8::try_from(self.inputs.len())
+            .map_err(|_| "more than 256 capture files: join them first".to_string())?;
+        // A frame waiting on look-ahead is the last input's: delivered before the switch.
+        self.idle();
+        self.inputs.push(name.to_string());
+        self.rx.bridge.set_input(i);
+        self.current = i;
+        Ok(())
+    }
+
+    /// The bytes from now on come from input `i`, one begun before (live sources polled in
+    /// turn, each handing over whole records).
+    pub fn switch_input(&mut self, i: u8) {
+        if i != self.current && usize::from(i) < self.inputs.len() {
+            self.idle();
+            self.rx.bridge.set_input(i);
+            self.current = i;
+        }
+    }
+
+    /// Station `id` stands at `at` (a stations file's surveyed position): its bearings are
+    /// placed there. `id` is a KrakenSDR's STATION_ID, or a unit's label (`KIND`, or
+    /// `INPUT:KIND` with several inputs). False when the id names no station this decoder can
+    /// have yet (an input not begun) or the station table is full.
+    pub fn survey(&mut self, id: &str, at: LatLon) -> bool {
+        match self.key_of(id) {
+            Some(key) => self.rx.bridge.survey(key, at),
+            None => false,
+        }
+    }
+
+    /// The bridge's key for a station label (the inverse of the labels of
+    /// [`Decoded::stations`]); `None` for the label of an input not begun.
+    fn key_of(&self, id: &str) -> Option<StationKey> {
+        let kind = |name: &str| {
+            [
+                BearingKind::Pfoxb,
+                BearingKind::Agrelo,
+                BearingKind::KrakenCsv,
+                BearingKind::KrakenXml,
+            ]
+            .into_iter()
+            .find(|k| kind_name(*k) == name)
+        };
+        let named = || StationKey::Named(foxhunt_bridge::kraken::Station::new(id));
+        match id.rsplit_once(':') {
+            Some((input, k)) if kind(k).is_some() => {
+                let i = self.inputs.iter().position(|n| n == input)?;
+                Some(StationKey::Unnamed {
+                    kind: kind(k)?,
+                    input: u8::try_from(i).ok()?,
+                })
+            }
+            _ => match kind(id) {
+                Some(k) if self.inputs.len() <= 1 => {
+                    Some(StationKey::Unnamed { kind: k, input: 0 })
+                }
+                _ => Some(named()),
+            },
+        }
+    }
+
+    /// The label of a station of the bridge.
+    fn label(&self, s: &StationState) -> (String, bool) {
+        match s.key() {
+            StationKey::Named(id) => (id.as_str().to_string(), true),
+            StationKey::Unnamed { kind, input } => {
+                let kind = kind_name(kind);
+                match self.inputs.get(usize::from(input)) {
+                    Some(name) if self.inputs.len() > 1 => (format!("{name}:{kind}"), false),
+                    _ => (kind.to_string(), false),
+                }
+            }
         }
     }
 
@@ -133,12 +252,31 @@ impl Decoder {
         push(&mut self.rx.bridge, &Frame::Nmea(body), d, keep);
     }
 
-    /// Bring the frame and counters up to date (before a fix is computed mid-stream).
+    /// Bring the frame, counters and stations up to date (before a fix is computed
+    /// mid-stream).
     pub fn snapshot(&mut self) {
         self.decoded.frame = self.rx.bridge.local_frame().copied();
         let (s, b) = self.rx.counters();
         self.decoded.stream = *s;
         self.decoded.bridge = *b;
+        let stations = self
+            .rx
+            .bridge
+            .stations()
+            .iter()
+            .map(|s| {
+                let (id, named) = self.label(s);
+                StationInfo {
+                    id,
+                    named,
+                    fixed: s.fixed(),
+                    position: s.surveyed().or(s.first_position()),
+                    span_m: s.span_m(),
+                    bearings: s.bearings(),
+                }
+            })
+            .collect();
+        self.decoded.stations = stations;
     }
 }
 
@@ -150,7 +288,9 @@ fn absorb(d: &mut Decoded, e: Event, keep_track: bool) {
                 bearing: b.bearing,
                 time_s: (b.time_ms - t0) as f32 / 1000.0,
                 freq_mhz: (b.freq_mhz > 0.0).then_some(b.freq_mhz as f32),
-                source: source(b.kind),
+                station: b.station,
+                // An Agrelo bearing takes the GPS clock's time when it arrives.
+                stamped: b.kind != BearingKind::Agrelo,
             });
         }
         Event::Fix(f) => {
@@ -164,7 +304,12 @@ fn absorb(d: &mut Decoded, e: Event, keep_track: bool) {
 }
 
 /// One frame into the bridge, its refusals attributed to its kind.
-fn push(bridge: &mut foxhunt_bridge::Bridge<0>, f: &Frame<'_>, d: &mut Decoded, keep_track: bool) {
+fn push(
+    bridge: &mut foxhunt_bridge::Bridge<0, HOST_STATIONS>,
+    f: &Frame<'_>,
+    d: &mut Decoded,
+    keep_track: bool,
+) {
     if let Frame::Nmea(text) = f
         && d.unit.push(text)
     {

@@ -9,4 +9,5 @@ pub mod gpsd;
 pub mod kraken_http;
 pub mod osm_pbf;
 pub mod roads;
+pub mod stations;
 pub mod unit;

@@ -86,16 +86,18 @@ pub fn explain(e: Error, bearings: &[Bearing]) -> String {
                 .into()
         }
         Error::TooFewMeasurements => "too few usable bearings for a fix".into(),
-        Error::ParallelBearings => "all bearings are parallel: they never cross, so the range is \
-             unknown; drive across the line of bearing"
-            .into(),
         Error::StationaryVehicle => {
             "the vehicle never moved: bearings from one place give a direction, not a position"
                 .into()
         }
+        // Before "parallel": mirrored bearings of a good drive leave a likelihood region that
+        // runs out of range (the fit finds no side of the vehicle to settle on).
         _ if points_away(bearings) => "the bearings point away from where their lines cross \
              (they meet behind the vehicle): is the DF unit's angle convention reversed (180 \
              degrees) or mirrored?"
+            .into(),
+        Error::ParallelBearings => "all bearings are parallel: they never cross, so the range is \
+             unknown; drive across the line of bearing"
             .into(),
         Error::ShallowCrossing => {
             "the bearings cross too shallowly for a fix; drive further across the line of bearing"

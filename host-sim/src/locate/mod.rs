@@ -15,8 +15,10 @@ pub mod explain;
 mod method;
 mod pipeline;
 pub mod report;
+pub mod stations;
 
 pub use crate::estimate::options::LocateOptions;
+use crate::estimate::stations::station_setup;
 use crate::guidance::guide::Guide;
 use crate::inputs::capture::Decoded;
 use crate::inputs::unit::UnitReport;
@@ -27,6 +29,7 @@ use foxhunt_core::fix::locate::Source;
 use report::{
     ChannelSummary, Drawn, LatLonReport, LocateReport, Located, NoFix, SourceReport, rejections,
 };
+use stations::station_reports;
 
 /// Locate every emitter of a decoded capture.
 pub fn locate(d: &Decoded, o: &LocateOptions) -> Result<Located, String> {
@@ -46,12 +49,19 @@ pub fn locate(d: &Decoded, o: &LocateOptions) -> Result<Located, String> {
         return Err(no_bearing(d));
     }
     let mut rejected = rejections(d);
-    let (emitters, other_sources, channels, drawn, cloud, sources) = if o.method == Method::MlRobust
-    {
-        pipeline::located_by_pipeline(d, o, &frame, &mut rejected)?
-    } else {
-        method::located_by(d, o, &frame, &mut rejected)?
-    };
+    let ((emitters, other_sources, channels, drawn, cloud, sources), stations) =
+        if o.method == Method::MlRobust {
+            pipeline::located_by_pipeline(d, o, &frame, &mut rejected)?
+        } else {
+            let setup = station_setup(
+                d.stations.iter().map(|s| s.id.as_str()),
+                o.network.as_deref(),
+                o.offset.unwrap_or_default(),
+                o.offset.is_some(),
+            );
+            let stations = station_reports(d, o.network.as_deref(), &setup, &[], &[], &[]);
+            (method::located_by(d, o, &frame, &mut rejected)?, stations)
+        };
     Ok(Located {
         report: LocateReport {
             method: o.method.name(),
@@ -67,6 +77,7 @@ pub fn locate(d: &Decoded, o: &LocateOptions) -> Result<Located, String> {
             advice: None,
             advice_error: None,
             unit,
+            stations,
         },
         drawn,
         cloud,
@@ -98,6 +109,7 @@ fn unit_only(d: &Decoded, o: &LocateOptions, u: UnitReport) -> Located {
             unit: Some(u),
             advice: None,
             advice_error: None,
+            stations: Vec::new(),
         },
         drawn: Vec::new(),
         cloud: Vec::new(),

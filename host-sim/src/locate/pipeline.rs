@@ -1,14 +1,19 @@
 //! `locate` by the field pipeline (`ml-robust`): every channel's emitter and other sources.
 
 use crate::estimate::options::LocateOptions;
-use crate::estimate::{Pipeline, pipeline, pool};
+use crate::estimate::stations::{LocalReference, calibrate_on_references, station_setup};
+use crate::estimate::{PipelineRun, pipeline, pool};
 use crate::inputs::capture::Decoded;
+use crate::inputs::stations::Reference;
 use crate::locate::Parts;
 use crate::locate::explain::{explain, no_emitter};
 use crate::locate::report::{ChannelSummary, Drawn, EllipseReport, SourceReport, geodetic};
+use crate::locate::stations::{StationReport, station_reports};
 use foxhunt_bridge::geo::LocalFrame;
+use foxhunt_core::fix::locate::Observation;
 use foxhunt_core::fix::locate::{ChannelOutcome, Source};
 use foxhunt_core::{Bearing, Error};
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 
 /// A pipeline source as the report has it.
@@ -41,27 +46,67 @@ pub(crate) fn located_by_pipeline(
     o: &LocateOptions,
     frame: &LocalFrame,
     rejected: &mut BTreeMap<&'static str, u32>,
-) -> Result<Parts, String> {
-    // A copy only when the user's noise replaces the bearings' own: a long capture's
-    // observations are most of the memory.
-    let obs: std::borrow::Cow<'_, [_]> = match o.sigma_deg {
-        None => std::borrow::Cow::Borrowed(&d.observations),
-        Some(s) => std::borrow::Cow::Owned(
-            d.observations
-                .iter()
-                .map(|x| {
-                    let mut x = *x;
-                    x.bearing.sigma = s.to_radians();
-                    x
-                })
-                .collect(),
-        ),
+) -> Result<(Parts, Vec<StationReport>), String> {
+    // Each station's prior and noise (the stations file's, else the defaults), then the
+    // reference transmitters' channels calibrate the stations that hear them.
+    let network = o.network.as_deref();
+    let mut setup = station_setup(
+        d.stations.iter().map(|s| s.id.as_str()),
+        network,
+        o.offset.unwrap_or_default(),
+        o.offset.is_some(),
+    );
+    let references: Vec<Reference> = network.map_or_else(Vec::new, |n| n.references.clone());
+    let local: Vec<LocalReference> = references
+        .iter()
+        .filter_map(|r| {
+            let p = frame.to_local(r.position).ok()?;
+            Some(LocalReference {
+                position: [p[0] as f32, p[1] as f32],
+                freq_mhz: r.freq_mhz as f32,
+            })
+        })
+        .collect();
+    if local.len() < references.len() {
+        return Err("a reference transmitter cannot be put in the drive's frame".into());
+    }
+    // The user's noise replaces every bearing's own; else a station's stated noise its own.
+    // A copy only when something changes: a long capture's observations are most of the
+    // memory.
+    let noise = |x: &Observation| match o.sigma_deg {
+        Some(s) => Some(s.to_radians()),
+        None => setup.noise.get(usize::from(x.station)).copied().flatten(),
+    };
+    let with_noise: Cow<'_, [Observation]> =
+        if o.sigma_deg.is_some() || setup.noise.iter().any(Option::is_some) {
+            Cow::Owned(
+                d.observations
+                    .iter()
+                    .map(|x| {
+                        let mut x = *x;
+                        if let Some(s) = noise(&x) {
+                            x.bearing.sigma = s;
+                        }
+                        x
+                    })
+                    .collect(),
+            )
+        } else {
+            Cow::Borrowed(&d.observations)
+        };
+    let (obs, fixes) = if local.is_empty() {
+        (with_noise, Vec::new())
+    } else {
+        let (rest, fixes) =
+            calibrate_on_references(&with_noise, &local, o.channel_width_mhz, &mut setup);
+        (Cow::Owned(rest), fixes)
     };
     // The bearings alone, for the words of an error.
     let bearings = || -> Vec<Bearing> { obs.iter().map(|x| x.bearing).collect() };
-    let r: Pipeline = pool()
-        .install(|| pipeline(&obs, &o.config(), o.seed))
+    let r: PipelineRun = pool()
+        .install(|| pipeline(&obs, &o.config(), &setup.priors, o.seed))
         .map_err(|e| explain(e, &bearings()))?;
+    let stations = station_reports(d, network, &setup, &r.offsets, &fixes, &references);
     let rj = &r.rejected;
     for (k, v) in [
         ("outlier", rj.outliers),
@@ -100,6 +145,18 @@ pub(crate) fn located_by_pipeline(
             outcome,
         });
     }
+    for (i, r) in references.iter().enumerate() {
+        let heard = fixes.iter().filter(|f| f.reference == i);
+        channels.push(ChannelSummary {
+            freq_mhz: Some(r.freq_mhz as f32),
+            bearings: heard.clone().map(|f| f.calibration.used).sum(),
+            outcome: format!(
+                "reference transmitter {}: calibrated {} stations",
+                r.name,
+                heard.count()
+            ),
+        });
+    }
     if r.emitters().is_empty() {
         return Err(why_none.unwrap_or_else(|| "no consistent emitter".into()));
     }
@@ -127,11 +184,14 @@ pub(crate) fn located_by_pipeline(
         })
         .collect();
     Ok((
-        emitters,
-        others,
-        channels,
-        drawn,
-        Vec::new(),
-        r.emitters().to_vec(),
+        (
+            emitters,
+            others,
+            channels,
+            drawn,
+            Vec::new(),
+            r.emitters().to_vec(),
+        ),
+        stations,
     ))
 }

@@ -129,6 +129,9 @@ pub struct LocateReport {
     /// holds its sentences.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub unit: Option<UnitReport>,
+    /// Every station that handed on bearings: who, where, and its offset with where that
+    /// came from (docs/src/networks.md).
+    pub stations: Vec<crate::locate::stations::StationReport>,
 }
 
 /// A source as the maps draw it, in local metres.
@@ -195,6 +198,7 @@ pub fn rejections(d: &Decoded) -> BTreeMap<&'static str, u32> {
         ("stale_fix", b.stale_fix),
         ("late", b.late),
         ("turning", b.turning),
+        ("stations_full", b.stations_full),
         ("outlier", 0),
         ("repeated", 0),
         ("time_backwards", 0),

@@ -108,6 +108,18 @@ impl LocateReport {
                 c.bearings, c.outcome
             );
         }
+        // A network's stations, or a unit's whose prior came from somewhere: each one's
+        // offset and where it came from.
+        let told = self.stations.iter().any(|s| {
+            s.prior_from != crate::estimate::stations::PriorOrigin::Default
+                || !s.references.is_empty()
+        });
+        if self.stations.len() > 1 || told {
+            let _ = writeln!(out, "stations:");
+            for s in &self.stations {
+                s.line(&mut out);
+            }
+        }
         match (&self.advice, &self.advice_error) {
             (Some(a), _) => {
                 let _ = writeln!(out, "advice: {}", a.line);

@@ -1,10 +1,11 @@
 //! Simulated drives and benchmarks: the canonical scenarios, captures written as the radios
-//! would send them, seeded parallel Monte Carlo runs, the field conditions, the closed-loop
-//! guidance benchmark, tracking scenarios and the speed measurements.
+//! would send them, seeded parallel Monte Carlo runs, the field conditions, the network
+//! conditions, the closed-loop guidance benchmark, tracking scenarios and the speed measurements.
 
 pub mod field;
 pub mod guidance;
 pub mod montecarlo;
+pub mod network;
 pub mod perf;
 pub mod run;
 pub mod scenario;

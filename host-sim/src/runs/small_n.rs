@@ -78,6 +78,7 @@ pub fn drive(n: usize, run: usize) -> FieldDrive {
         ghost: None,
         bias: 0.0,
         sigma,
+        stations: Vec::new(),
     }
 }
 
@@ -89,8 +90,9 @@ fn one(m: Method, n: usize, run: usize) -> Judged {
     let d = drive(n, run);
     if m == Method::MlRobust {
         let config = LocateConfig::default();
-        let r = run_locate(&d, &config, run as u64).ok();
-        let j = judge(&d, r.as_ref(), config.priors[0]);
+        let prior = BiasPrior::default();
+        let r = run_locate(&d, &config, prior, run as u64).ok();
+        let j = judge(&d, r.as_ref().map(|r| &r.report), prior);
         let j = j.first().filter(|j| j.found)?;
         return Some((
             f64::from(j.error),

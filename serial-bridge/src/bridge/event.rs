@@ -63,6 +63,8 @@ pub struct BearingMeasurement {
     pub kind: BearingKind,
     /// What turned it to true.
     pub heading: HeadingSource,
+    /// Its station: its place in [`Bridge::stations`](super::Bridge::stations).
+    pub station: u16,
 }
 
 /// An RSSI reading from a known anchor.
@@ -124,8 +126,11 @@ pub struct BridgeCounters {
     /// Bearings older than the fixes kept (further behind the newest fix than
     /// [`BridgeConfig::fix_span_ms`](super::BridgeConfig::fix_span_ms), or than the history holds).
     pub late: u32,
-    /// Bearings turned by a heading while the vehicle turned faster than the yaw gate.
+    /// Bearings turned by a heading while the vehicle (or the station whose record carried
+    /// the heading) turned faster than the yaw gate.
     pub turning: u32,
+    /// Bearings of a station beyond the station table's capacity.
+    pub stations_full: u32,
     /// Valid MT frames of other commands.
     pub other_mt: u32,
     /// AF_INCOMING_MSG frames too short for their fields.

@@ -1,6 +1,7 @@
 //! The heading rule (see the bridge's module doc) and the yaw rate the turning gate reads:
 //! the latest heading of each kind, the course over ground behind its speed gate, and the
-//! heading samples of the best fresh source.
+//! vehicle's heading samples of the best fresh source (a record's own heading is its
+//! station's: `stations.rs`).
 
 use super::{Bridge, HeadingSource};
 
@@ -40,7 +41,7 @@ fn rank(s: HeadingSource) -> u8 {
     }
 }
 
-impl<const A: usize> Bridge<A> {
+impl<const A: usize, const S: usize> Bridge<A, S> {
     pub(super) fn true_heading(&mut self, deg: f64) {
         self.counters.headings += 1;
         let time_ms = self.clock.unwrap_or(i64::MIN / 2);
@@ -90,44 +91,12 @@ impl<const A: usize> Bridge<A> {
         let _ = self.turns.push(Stamped { deg, time_ms });
     }
 
-    /// The vehicle's yaw rate at `time_ms`, degrees per second, from the heading samples: the
-    /// heading's total change (summed sample to sample, so a fast spin is not aliased) from
-    /// the last sample at least [`BridgeConfig::yaw_window_ms`](super::BridgeConfig::yaw_window_ms) before the first sample at or
-    /// after `time_ms` (the newest if none is yet) to that one. `None` when the samples do
-    /// not tell: none fresh at `time_ms`, or none a window before, or a gap between them.
+    /// The vehicle's yaw rate at `time_ms`, degrees per second, from the heading samples of
+    /// its heading sensors and course ([`yaw_rate`]).
     pub fn yaw_rate_at(&self, time_ms: i64) -> Option<f32> {
         let age = i64::from(self.config.heading_max_age_ms);
-        let window = i64::from(self.config.yaw_window_ms).max(1);
-        let last = self.turns.len().checked_sub(1)?;
-        let bi = self
-            .turns
-            .iter()
-            .position(|s| s.time_ms >= time_ms)
-            .unwrap_or(last);
-        let b = self.turns.get(bi)?;
-        if (b.time_ms - time_ms).abs() > age {
-            return None;
-        }
-        let ai = self
-            .turns
-            .get(..bi)?
-            .iter()
-            .rposition(|s| s.time_ms <= b.time_ms - window)?;
-        let a = self.turns.get(ai)?;
-        let span = b.time_ms - a.time_ms;
-        if span > window + age {
-            return None;
-        }
-        let turn: f32 = self
-            .turns
-            .get(ai..=bi)?
-            .windows(2)
-            .map(|w| match w {
-                [p, q] => wrap_half(q.deg - p.deg),
-                _ => 0.0,
-            })
-            .sum();
-        Some(libm::fabsf(turn) * 1000.0 / span as f32)
+        let window = i64::from(self.config.yaw_window_ms);
+        yaw_rate(&self.turns, time_ms, age, window)
     }
 
     /// Speed and course at `time_ms`: the speed gate's state and the latest course.
@@ -176,4 +145,45 @@ impl<const A: usize> Bridge<A> {
             _ => None,
         }
     }
+}
+
+/// The yaw rate at `time_ms`, degrees per second, from heading `samples` (oldest first): the
+/// heading's total change (summed sample to sample, so a fast spin is not aliased) from the
+/// last sample at least `window_ms` (at least 1) before the first sample at or after
+/// `time_ms` (the newest if none is yet) to that one. `None` when the samples do not tell:
+/// none within `age_ms` of `time_ms`, or none a window before, or a gap between them.
+pub(super) fn yaw_rate(
+    samples: &[Stamped],
+    time_ms: i64,
+    age_ms: i64,
+    window_ms: i64,
+) -> Option<f32> {
+    let window = window_ms.max(1);
+    let last = samples.len().checked_sub(1)?;
+    let bi = samples
+        .iter()
+        .position(|s| s.time_ms >= time_ms)
+        .unwrap_or(last);
+    let b = samples.get(bi)?;
+    if (b.time_ms - time_ms).abs() > age_ms {
+        return None;
+    }
+    let ai = samples
+        .get(..bi)?
+        .iter()
+        .rposition(|s| s.time_ms <= b.time_ms - window)?;
+    let a = samples.get(ai)?;
+    let span = b.time_ms - a.time_ms;
+    if span > window + age_ms {
+        return None;
+    }
+    let turn: f32 = samples
+        .get(ai..=bi)?
+        .windows(2)
+        .map(|w| match w {
+            [p, q] => wrap_half(q.deg - p.deg),
+            _ => 0.0,
+        })
+        .sum();
+    Some(libm::fabsf(turn) * 1000.0 / span as f32)
 }

@@ -32,15 +32,22 @@
 //! GPS-DF delay δ turns into a bearing error ω·δ at yaw rate ω, and a DF unit averaging over
 //! a turn mixes bearings taken at different headings.
 //!
+//! Every bearing names its station (`stations`): a KrakenSDR's STATION_ID, else its record
+//! kind on its input; a station's own headings (a record's HEADING) feed its own yaw rate,
+//! the vehicle's (HDT, HDG, course) the vehicle's, and a surveyed station is placed where it
+//! stands.
+//!
 //! The files: `config` (the settings), `event` (what the bridge hands on, and its counters),
 //! `heading` (the heading rule and the yaw rate), `placement` (the fix history and a bearing's
-//! place in it) and `receiver` (a serial line end to end); the frames come in here.
+//! place in it), `stations` (who took each bearing) and `receiver` (a serial line end to end);
+//! the frames come in here.
 
 mod config;
 mod event;
 mod heading;
 mod placement;
 mod receiver;
+mod stations;
 
 pub use config::{BridgeConfig, QualityWeighting};
 pub use event::{
@@ -50,6 +57,8 @@ use heading::Stamped;
 pub use heading::{TURN_HISTORY, TURN_SPACING_MS};
 pub use placement::FIX_HISTORY;
 pub use receiver::Receiver;
+use stations::Stations;
+pub use stations::{FIXED_WITHIN_M, MCU_STATIONS, STATION_TURNS, StationKey, StationState};
 
 use crate::agrelo::Agrelo;
 use crate::geo::{GeoError, LocalFrame};
@@ -84,6 +93,7 @@ struct Pending {
     freq_mhz: f64,
     kind: BearingKind,
     heading: HeadingSource,
+    station: u16,
 }
 
 /// A bearing as it arrives, before the heading rule and the placement.
@@ -99,18 +109,23 @@ struct Incoming {
     freq_mhz: f64,
     position: Option<LatLon>,
     kind: BearingKind,
+    /// Who took it.
+    key: StationKey,
 }
 
 const DAY_MS_U64: u64 = 86_400_000;
 /// Bearings that may wait for a fix at once.
 const WAITING: usize = 16;
 
-/// Frames to measurements, with `A` anchors for RSSI (0 for a bearing-only vehicle).
+/// Frames to measurements, with `A` anchors for RSSI (0 for a bearing-only vehicle) and room
+/// for `S` stations (`stations.rs`; the MCU's [`MCU_STATIONS`], a host's as many as it
+/// wants).
 ///
-/// Fixed memory: [`FIX_HISTORY`] fixes, [`TURN_HISTORY`] heading samples and 16 bearings
-/// waiting for their next fix, about 5 KB in all.
+/// Fixed memory: [`FIX_HISTORY`] fixes, [`TURN_HISTORY`] heading samples, 16 bearings
+/// waiting for their next fix and `S` stations of about 340 bytes, about 5 KB and the
+/// stations in all.
 #[derive(Debug, Clone)]
-pub struct Bridge<const A: usize = 0> {
+pub struct Bridge<const A: usize = 0, const S: usize = MCU_STATIONS> {
     config: BridgeConfig,
     anchors: [(u16, [f32; 2]); A],
     frame: Option<LocalFrame>,
@@ -132,9 +147,13 @@ pub struct Bridge<const A: usize = 0> {
     magnetic: Option<(Stamped, Option<f32>)>,
     waiting: Deque<Pending, WAITING>,
     counters: BridgeCounters,
+    /// The stations seen, each with its own heading samples and motion.
+    stations: Stations<S>,
+    /// The input unnamed records come in on ([`Bridge::set_input`]).
+    input: u8,
 }
 
-impl<const A: usize> Bridge<A> {
+impl<const A: usize, const S: usize> Bridge<A, S> {
     /// A bridge with an anchor table: short address and position (east, north) of each anchor.
     pub fn new(config: BridgeConfig, anchors: [(u16, [f32; 2]); A]) -> Self {
         Self {
@@ -153,6 +172,8 @@ impl<const A: usize> Bridge<A> {
             magnetic: None,
             waiting: Deque::new(),
             counters: BridgeCounters::default(),
+            stations: Stations::new(),
+            input: 0,
         }
     }
 
@@ -238,6 +259,7 @@ impl<const A: usize> Bridge<A> {
                         freq_mhz: r.freq_hz as f64 / 1e6,
                         position: r.position,
                         kind: BearingKind::KrakenCsv,
+                        key: StationKey::of(BearingKind::KrakenCsv, Some(&r.station), self.input),
                     },
                     sink,
                 );
@@ -265,6 +287,7 @@ impl<const A: usize> Bridge<A> {
                         freq_mhz: r.freq_mhz.unwrap_or(0.0),
                         position: r.position,
                         kind: BearingKind::KrakenXml,
+                        key: StationKey::of(BearingKind::KrakenXml, Some(&r.station), self.input),
                     },
                     sink,
                 );
@@ -319,6 +342,7 @@ impl<const A: usize> Bridge<A> {
                         freq_mhz: b.freq_mhz,
                         position: b.position,
                         kind: BearingKind::Pfoxb,
+                        key: StationKey::of(BearingKind::Pfoxb, None, self.input),
                     },
                     sink,
                 );
@@ -363,15 +387,20 @@ impl<const A: usize> Bridge<A> {
                 freq_mhz: 0.0,
                 position: None,
                 kind: BearingKind::Agrelo,
+                key: StationKey::of(BearingKind::Agrelo, None, self.input),
             },
             sink,
         );
     }
 
-    /// Every bearing kind ends here: the heading rule, the mounting offset, the placement.
+    /// Every bearing kind ends here: its station, the heading rule, the mounting offset, the
+    /// placement.
     fn bearing_in(&mut self, b: Incoming, sink: &mut impl FnMut(Event)) {
+        let Some(station) = self.station_of(b.key) else {
+            return;
+        };
         if let Some(h) = b.record_heading {
-            self.turn_sample(HeadingSource::Record, h, b.time_ms);
+            self.station_turn(station, h, b.time_ms);
         }
         let (azimuth_deg, heading) = if b.relative {
             match self.heading_at(b.time_ms, b.record_heading) {
@@ -394,8 +423,9 @@ impl<const A: usize> Bridge<A> {
             freq_mhz: b.freq_mhz,
             kind: b.kind,
             heading,
+            station,
         };
-        if let Some(p) = b.position {
+        if let Some(p) = self.surveyed_at(station).or(b.position) {
             match self.local(p) {
                 Ok(v) => self.emit(&pending, v, p, sink),
                 Err(_) => self.counters.bad_position += 1,
@@ -418,12 +448,17 @@ impl<const A: usize> Bridge<A> {
     /// Hand on a placed bearing at local `vehicle`, geodetic `at`: the yaw gate, then the
     /// azimuth carried from north at `at` into the local frame.
     fn emit(&mut self, p: &Pending, vehicle: [f32; 2], at: LatLon, sink: &mut impl FnMut(Event)) {
-        if p.heading != HeadingSource::TrueBearing
-            && let Some(gate) = self.config.yaw_gate_deg_s
-            && self.yaw_rate_at(p.time_ms).is_some_and(|r| r > gate)
-        {
-            self.counters.turning += 1;
-            return;
+        if let Some(gate) = self.config.yaw_gate_deg_s {
+            // A record's own heading turns with its station; the others with the vehicle.
+            let rate = match p.heading {
+                HeadingSource::TrueBearing => None,
+                HeadingSource::Record => self.station_yaw_rate(p.station, p.time_ms),
+                _ => self.yaw_rate_at(p.time_ms),
+            };
+            if rate.is_some_and(|r| r > gate) {
+                self.counters.turning += 1;
+                return;
+            }
         }
         let scale = match self.config.weighting {
             QualityWeighting::Uniform => 1.0,
@@ -445,6 +480,7 @@ impl<const A: usize> Bridge<A> {
         };
         let azimuth = signed.to_radians() as f32;
         self.counters.bearings += 1;
+        self.station_placed(p.station, vehicle, at);
         sink(Event::Bearing(BearingMeasurement {
             time_ms: p.time_ms,
             bearing: Bearing::from_azimuth(vehicle, azimuth, self.config.sigma_rad * scale),
@@ -452,6 +488,7 @@ impl<const A: usize> Bridge<A> {
             freq_mhz: p.freq_mhz,
             kind: p.kind,
             heading: p.heading,
+            station: p.station,
         }));
     }
 

@@ -30,7 +30,7 @@ fn lerp_position(p: LatLon, q: LatLon, w: f64) -> LatLon {
     }
 }
 
-impl<const A: usize> Bridge<A> {
+impl<const A: usize, const S: usize> Bridge<A, S> {
     pub(super) fn fix(
         &mut self,
         time: UtcTime,

@@ -1,18 +1,18 @@
 //! A serial line end to end: the demultiplexer and the bridge.
 
-use super::{Bridge, BridgeConfig, BridgeCounters, Event};
+use super::{Bridge, BridgeConfig, BridgeCounters, Event, MCU_STATIONS};
 use crate::stream::{DEFAULT_CAPACITY, Demux, StreamCounters};
 
 /// A serial line end to end: the demultiplexer and the bridge.
 #[derive(Debug, Clone)]
-pub struct Receiver<const A: usize = 0> {
+pub struct Receiver<const A: usize = 0, const S: usize = MCU_STATIONS> {
     /// The byte-stream demultiplexer.
     pub demux: Demux<DEFAULT_CAPACITY>,
     /// The bridge.
-    pub bridge: Bridge<A>,
+    pub bridge: Bridge<A, S>,
 }
 
-impl<const A: usize> Receiver<A> {
+impl<const A: usize, const S: usize> Receiver<A, S> {
     /// A receiver with these settings and anchors.
     pub fn new(config: BridgeConfig, anchors: [(u16, [f32; 2]); A]) -> Self {
         Self {

@@ -1,8 +1,10 @@
 //! The bias-aware bound: the Fisher information about [x, y, b] and the position block of its
 //! inverse.
 
-use super::super::{geometry, usable};
-use super::BiasPrior;
+use super::super::{geometry_of, usable as plain_usable};
+use super::problem::usable;
+use super::stations::{StationSlot, offset_variances, reduce};
+use super::{BiasPrior, Sighting};
 use crate::error::{Error, check_finite};
 use crate::linalg::inverse_scaled;
 use crate::model::bearing::Bearing;
@@ -13,7 +15,7 @@ use crate::model::bearing::Bearing;
 pub fn information(p: &[f32; 2], bearings: &[Bearing], prior: BiasPrior) -> Option<[[f32; 3]; 3]> {
     let mut j = [[0.0f32; 3]; 3];
     let mut any = false;
-    for b in usable(bearings) {
+    for b in plain_usable(bearings) {
         let dx = p[0] - b.vehicle[0];
         let dy = p[1] - b.vehicle[1];
         let d2 = dx * dx + dy * dy;
@@ -57,14 +59,37 @@ pub struct BiasedCrlb {
 /// plain CRLB; on a drive that surrounds the emitter it is close to it; on a straight road
 /// the prior's sd times the range dominates it.
 pub fn crlb(p: &[f32; 2], bearings: &[Bearing], prior: BiasPrior) -> Result<BiasedCrlb, Error> {
-    check_finite(p)?;
     prior.check()?;
+    crlb_stations(p, bearings, &mut [StationSlot::new(prior)])
+}
+
+/// The bias-aware bound for an emitter at `p` seen by the stations of `stations` (one row per
+/// station index, each with its prior in force; sightings of a station beyond the table are
+/// left out): every offset eliminated per station (the station table's arrow, see
+/// [`super::StationSlot`]), so a fixed station's share is its prior's. `bias_sd` is the bound
+/// of the station with most bearings. The rows' fitted offsets are left as they were.
+pub fn crlb_stations<T: Sighting>(
+    p: &[f32; 2],
+    items: &[T],
+    stations: &mut [StationSlot],
+) -> Result<BiasedCrlb, Error> {
+    check_finite(p)?;
+    for s in stations.iter() {
+        s.in_force.check()?;
+    }
     // Centred: the information is translation-invariant, the f32 sums are not.
-    let geo = geometry(bearings)?;
+    let n = stations.len();
+    let geo = geometry_of(usable(items, n).map(|(b, _)| b))?;
     let o = geo.origin;
     let centred = [p[0] - o[0], p[1] - o[1]];
-    let mut j = [[0.0f32; 3]; 3];
-    for b in usable(bearings) {
+    for s in stations.iter_mut() {
+        s.n = 0;
+        s.clear_blocks();
+    }
+    for (b, s) in usable(items, n) {
+        let Some(row) = stations.get_mut(s) else {
+            continue;
+        };
         let (dx, dy) = (
             centred[0] - (b.vehicle[0] - o[0]),
             centred[1] - (b.vehicle[1] - o[1]),
@@ -73,29 +98,29 @@ pub fn crlb(p: &[f32; 2], bearings: &[Bearing], prior: BiasPrior) -> Result<Bias
         if !(d2 > 0.0) {
             return Err(Error::DegenerateGeometry);
         }
-        let k = 1.0 / (b.sigma * b.sigma);
-        let jac = [-dy / d2, dx / d2, 1.0];
-        for r in 0..3 {
-            for c in 0..3 {
-                j[r][c] += k * jac[r] * jac[c];
-            }
-        }
+        row.n += 1;
+        row.add([-dy / d2, dx / d2], 1.0 / (b.sigma * b.sigma), 0.0);
     }
-    let (covariance, bias_sd) = if prior.is_free() {
-        j[2][2] += prior.information();
-        let c = inverse_scaled(&j).ok_or(Error::DegenerateGeometry)?;
-        (
-            [[c[0][0], c[0][1]], [c[1][0], c[1][1]]],
-            libm::sqrtf(c[2][2].max(0.0)),
-        )
-    } else {
-        let m = [[j[0][0], j[0][1]], [j[1][0], j[1][1]]];
-        (inverse_scaled(&m).ok_or(Error::DegenerateGeometry)?, 0.0)
-    };
+    for s in stations.iter_mut() {
+        s.free = s.n > 0 && s.in_force.is_free();
+    }
+    let r = reduce(stations, 0.0).ok_or(Error::DegenerateGeometry)?;
+    let covariance = inverse_scaled(&r.matrix).ok_or(Error::DegenerateGeometry)?;
     let trace = covariance[0][0] + covariance[1][1];
     if !(trace > 0.0) || !trace.is_finite() {
         return Err(Error::DegenerateGeometry);
     }
+    let main = (0..n)
+        .max_by_key(|&i| (stations[i].n, core::cmp::Reverse(i)))
+        .unwrap_or(0);
+    let bias_sd = match stations.get_mut(main..=main) {
+        Some(one) if one[0].free => {
+            let mut row = [one[0]];
+            offset_variances(&mut row, &covariance, true).ok_or(Error::DegenerateGeometry)?;
+            row[0].sd
+        }
+        _ => 0.0,
+    };
     Ok(BiasedCrlb {
         covariance,
         rmse: libm::sqrtf(trace),

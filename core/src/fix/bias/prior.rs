@@ -1,9 +1,9 @@
-//! What is known of each DF source's offset before the drive.
+//! What is known of each DF station's offset before the drive.
 
-use super::{DEFAULT_BIAS_SD, MAX_SOURCES};
+use super::DEFAULT_BIAS_SD;
 use crate::error::{Error, check_finite};
 
-/// What is known of one source's offset before the drive.
+/// What is known of one station's offset before the drive.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BiasPrior {
     /// Expected offset, radians (added to the true bearing by the unit).
@@ -56,9 +56,4 @@ impl BiasPrior {
             0.0
         }
     }
-}
-
-/// Priors of every source, the same for each.
-pub fn same_priors(prior: BiasPrior) -> [BiasPrior; MAX_SOURCES] {
-    [prior; MAX_SOURCES]
 }

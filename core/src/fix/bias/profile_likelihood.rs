@@ -1,19 +1,19 @@
 //! The profile likelihood: the best fit with the position held on a line.
 
-use super::problem::{on_line, set_up};
-use super::solve::descend;
-use super::{BiasPrior, BiasedOptions, MAX_SOURCES, Sighting, Start};
+use super::problem::{At, set_up};
+use super::solve::{descend, marginal};
+use super::stations::StationSlot;
+use super::{BiasedOptions, Sighting, Start};
 use crate::error::{Error, check_finite};
 use crate::likelihood::Likelihood;
-use crate::linalg::inverse_scaled;
 
-/// One point of the profile likelihood: the best fit with the position held on a line.
+/// One point of the profile likelihood: the best fit with the position held on a line (the
+/// offsets there are the table's current ones: [`super::StartOffsets::Current`] starts the
+/// next slice from them).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ProfilePoint {
     /// The best position on the line, metres.
     pub position: [f32; 2],
-    /// The offsets there, radians.
-    pub bias: [f32; MAX_SOURCES],
     /// -2 ln L there (the offsets' prior included), up to a constant shared by every point
     /// of the same sightings, loss and scale: differences are likelihood-ratio statistics.
     pub deviance: f32,
@@ -25,9 +25,10 @@ pub struct ProfilePoint {
 /// `along` through `start.position` (its component across the line held), the offsets free.
 /// Where the Fisher ellipse is a poor picture of the likelihood (a range the bearings barely
 /// observe), walking such slices outward shows how far the data really allow the fix to go.
+/// The table's fitted offsets and sds are left as they were.
 pub fn profile<T: Sighting, L: Likelihood>(
     items: &[T],
-    priors: &[BiasPrior; MAX_SOURCES],
+    stations: &mut [StationSlot],
     start: Start,
     along: [f32; 2],
     loss: &L,
@@ -39,19 +40,18 @@ pub fn profile<T: Sighting, L: Likelihood>(
         return Err(Error::OutOfRange);
     }
     let along = [along[0] / norm, along[1] / norm];
-    let (problem, mut x, geo) = set_up(items, priors, start, loss, options)?;
-    descend(&problem, &mut x, options, Some(along));
-    let (h, g) = problem.normal(&x);
-    let (h, _) = on_line(&h, &g, along);
-    let c = inverse_scaled(&h).ok_or(Error::DegenerateGeometry)?;
+    let (problem, mut p, geo) = set_up(items, stations, start, loss, options)?;
+    descend(&problem, stations, &mut p, options, Some(along));
+    let (c, _) = marginal(&problem, stations, p, Some(along))?;
     let point = ProfilePoint {
-        position: [x[0] + geo.origin[0], x[1] + geo.origin[1]],
-        bias: core::array::from_fn(|s| x[2 + s]),
-        deviance: 2.0 * problem.cost(&x),
+        position: [p[0] + geo.origin[0], p[1] + geo.origin[1]],
+        deviance: 2.0 * problem.cost(stations, p, At::Current),
         along_sd: libm::sqrtf(c[0][0].max(0.0)),
     };
     check_finite(&point.position)?;
-    check_finite(&point.bias)?;
     check_finite(&[point.deviance, point.along_sd])?;
+    for s in stations.iter() {
+        check_finite(&[s.x])?;
+    }
     Ok(point)
 }

@@ -1,6 +1,6 @@
 //! The settings of [`super::locate`].
 
-use super::super::bias::{BiasPrior, BiasedOptions, MAX_SOURCES, same_priors};
+use super::super::bias::BiasedOptions;
 use super::super::robust::RansacOptions;
 use crate::error::{Error, check_finite};
 
@@ -14,13 +14,12 @@ pub enum NoiseModel {
     Known,
 }
 
-/// Settings of [`super::locate`].
+/// Settings of [`super::locate`] (each station's offset prior is in its row of the station
+/// table, [`super::Buffers`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LocateConfig {
     /// Whether the bearings' sigmas are estimated or trusted.
     pub noise: NoiseModel,
-    /// Prior of each DF source's offset ([`BiasPrior::calibrated`] for a calibrated unit).
-    pub priors: [BiasPrior; MAX_SOURCES],
     /// Frequencies within this of a channel's lowest share the channel, MHz
     /// ([`channel::belongs`](super::super::channel::belongs)).
     pub channel_width_mhz: f32,
@@ -48,7 +47,6 @@ impl Default for LocateConfig {
     fn default() -> Self {
         Self {
             noise: NoiseModel::Estimated,
-            priors: same_priors(BiasPrior::default()),
             channel_width_mhz: 0.05,
             confidence: 0.95,
             max_sigma: 10.0 * core::f32::consts::PI / 180.0,
@@ -65,9 +63,6 @@ impl Default for LocateConfig {
 impl LocateConfig {
     /// `Ok` when every setting is usable.
     pub fn check(&self) -> Result<(), Error> {
-        for p in &self.priors {
-            p.check()?;
-        }
         self.ransac.check()?;
         check_finite(&[
             self.channel_width_mhz,

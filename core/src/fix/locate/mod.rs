@@ -1,21 +1,24 @@
 //! One entry point from bearings to emitters, honest about what the bearings hold.
 //!
-//! [`locate`] takes bearings (with their time, DF source and, if known, frequency) and returns
+//! [`locate`] takes bearings (with their time, DF station and, if known, frequency) and returns
 //! one emitter per channel, the other sources the bearings agree on, and what was rejected and
 //! why. In order:
 //!
-//! 1. **Intake**: unusable observations (non-finite, bad sigma, unknown source, no room) are
-//!    counted by reason.
-//! 2. **Evidence counted once** ([`super::evidence`]): exact repeats and bearings older than
-//!    their source's latest are set aside.
+//! 1. **Intake**: unusable observations (non-finite, bad sigma, a station beyond the station
+//!    table, no room) are counted by reason.
+//! 2. **Evidence counted once** ([`super::evidence`]): repeats (exact, or a stamped bearing of
+//!    the same station, time and channel by a second path) and bearings older than their
+//!    station's latest are set aside.
 //! 3. **Channels** ([`super::channel`]): by frequency, one emitter per channel.
 //! 4. **Sequential consensus** per channel ([`super::robust`]): the point most bearings agree
 //!    on (RANSAC over pairs, each hypothesis with its best offset), refined by Tukey then
-//!    trimmed ML over [x, y, offsets] ([`super::bias`]); its bearings are removed and the
+//!    trimmed ML over the position and every station's offset ([`super::bias`], each station
+//!    with the prior of its row in the station table); its bearings are removed and the
 //!    search repeats on the rest. The cluster with most bearings is the channel's emitter; the
 //!    others (a reflection, a second transmitter on the channel) are reported as other sources
 //!    with their own fix, count and span, their offsets' prior taken from the emitter's
-//!    estimate (the same DF unit).
+//!    estimate (the same stations). The emitter's per-station offsets go to the offsets
+//!    table ([`Source::offsets`]).
 //! 5. **Consistency, always**: a cluster that luck could have lined up (uniform bearings, the
 //!    search's size accounted for), or whose estimated noise exceeds
 //!    [`LocateConfig::max_sigma`], is "no consistent emitter", a typed outcome, not a fix. The
@@ -30,7 +33,8 @@
 //!    emitter" with [`Error::ParallelBearings`]: the range is unobservable, not a fix.
 //!
 //! No allocation: the caller lends the working storage ([`Buffers`], or a [`Workspace`] of
-//! fixed capacity `B`), the report holds at most `C` channels and `O` other sources, and every
+//! fixed capacity: `B` observations, `S` stations), the report holds at most `C` channels and
+//! `O` other sources, and every
 //! iterative step has a hard cap (RANSAC's hypotheses and attempts, the solver's iterations,
 //! the trimming rounds, the autocorrelation's lags, the sources per channel).
 //!
@@ -70,10 +74,10 @@ pub use super::observation::Observation;
 pub use config::{LocateConfig, NoiseModel};
 pub use report::{
     ChannelOutcome, ChannelReport, NoEmitter, OtherReason, OtherSource, Rejected, Report, Source,
+    StationOffset,
 };
 pub use workspace::{Buffers, Item, Workspace};
 
-use super::bias::MAX_SOURCES;
 use super::channel::{self, NO_CHANNEL};
 use super::evidence::{self, Verdict};
 use crate::error::{Error, check_finite};
@@ -116,14 +120,19 @@ pub fn locate<const C: usize, const O: usize, R: Rng + ?Sized>(
         scratch,
         order,
         tags,
+        stations,
+        offsets,
     } = work;
+    for s in stations.iter() {
+        s.prior().check()?;
+    }
     let mut report = Report::<C, O>::new();
     let rej = &mut report.rejected;
     // 1. Intake.
     let mut n = 0usize;
     for (i, o) in observations.iter().enumerate() {
-        if (o.source as usize) >= MAX_SOURCES {
-            rej.unknown_source += 1;
+        if usize::from(o.station) >= stations.len() {
+            rej.unknown_station += 1;
         } else if intake(o).is_err() {
             rej.invalid += 1;
         } else if n >= cap || i > u32::MAX as usize {
@@ -200,6 +209,7 @@ pub fn locate<const C: usize, const O: usize, R: Rng + ?Sized>(
         let outcome = sequential::channel_sources(
             &mut items[start..end],
             &mut scratch[start..end],
+            sequential::Tables { stations, offsets },
             freq,
             config,
             &mut report,

@@ -2,7 +2,7 @@
 //! correlated residuals, stretched to the far end of the range interval, then held to the
 //! likelihood's reach ([`super::super::reach`]); its ellipses and CEP50.
 
-use super::super::bias::{BiasPrior, BiasedFix, MAX_SOURCES};
+use super::super::bias::{BiasedFix, StationSlot};
 use super::super::consistency;
 use super::super::ellipse::{Ellipse, cep50_of};
 use super::super::reach;
@@ -43,7 +43,7 @@ pub(super) struct Region {
 /// is no fix: [`Error::ParallelBearings`].
 pub(super) fn confidence_region(
     members: &[Item],
-    priors: &[BiasPrior; MAX_SOURCES],
+    stations: &mut [StationSlot],
     at_scale: &BiasedFix,
     position: &[f32; 2],
     noise: Noise,
@@ -64,12 +64,18 @@ pub(super) fn confidence_region(
     // it, and a region that runs out to the search's range is no fix.
     let fit = reach::Fit {
         fix: at_scale,
-        priors,
         scale: noise.scale,
         inflation: tau,
     };
-    let held = reach::reach(members, fit, &stretched, k, config.ransac.max_range)
-        .map_err(NoEmitter::Geometry)?;
+    let held = reach::reach(
+        members,
+        stations,
+        fit,
+        &stretched,
+        k,
+        config.ransac.max_range,
+    )
+    .map_err(NoEmitter::Geometry)?;
     if !held.bounded {
         return Err(NoEmitter::Geometry(Error::ParallelBearings));
     }

@@ -1,6 +1,7 @@
 //! What [`super::locate`] reports: the sources found (emitters and others), each channel's
 //! outcome, and the observations set aside by reason.
 
+use super::super::bias::BiasPrior;
 use super::super::channel;
 use super::super::ellipse::Ellipse;
 use crate::error::Error;
@@ -32,12 +33,16 @@ pub struct Source {
     /// The bias-aware bound at the fix: sqrt(trace) of the marginal position block of the
     /// inverse information, at the noise used, metres.
     pub crlb: f32,
-    /// Offset of the source's main DF unit (the one with most bearings), radians.
+    /// Offset of the source's main station (the one with most bearings), radians.
     pub bias: f32,
-    /// Its standard deviation, radians (0 for a calibrated unit).
+    /// Its standard deviation, radians (0 for a calibrated station).
     pub bias_sd: f32,
-    /// Which DF unit `bias` is.
-    pub bias_source: u8,
+    /// Which station `bias` is.
+    pub bias_station: u16,
+    /// Every station's offset in the fix: the range [start, end) of the offsets table lent
+    /// with the working storage ([`super::Buffers`]); empty for other sources and where the
+    /// table was full.
+    pub offsets: [u32; 2],
     /// Bearing noise used, radians (the median bearing sigma times the scale).
     pub sigma: f32,
     /// Whether `sigma` was estimated from the residuals.
@@ -68,6 +73,36 @@ impl Source {
     pub fn in_channel(&self, freq_mhz: Option<f32>, width_mhz: f32) -> bool {
         channel::belongs(freq_mhz, self.channel_lowest_mhz, width_mhz)
     }
+}
+
+/// One station's offset as an emitter's fix estimated it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StationOffset {
+    /// The station (its row in the station table).
+    pub station: u16,
+    /// Its bearings in the fix.
+    pub used: u32,
+    /// Its offset, radians.
+    pub bias: f32,
+    /// Its standard deviation, radians (the prior's for a calibrated station).
+    pub sd: f32,
+    /// Share of the offset's information the bearings gave (0: the prior alone, as for a
+    /// fixed station; 1: measured by the drive).
+    pub measured: f32,
+    /// The prior it had.
+    pub prior: BiasPrior,
+}
+
+impl StationOffset {
+    /// An empty slot, to fill working storage with.
+    pub const EMPTY: Self = Self {
+        station: 0,
+        used: 0,
+        bias: 0.0,
+        sd: 0.0,
+        measured: 0.0,
+        prior: BiasPrior { mean: 0.0, sd: 0.0 },
+    };
 }
 
 /// Why bearings that agree on a point are not the channel's emitter.
@@ -137,8 +172,8 @@ impl ChannelReport {
 pub struct Rejected {
     /// Non-finite or out-of-range values (a bad sigma, a NaN angle, a negative frequency).
     pub invalid: u32,
-    /// A DF source index beyond [`MAX_SOURCES`](super::super::bias::MAX_SOURCES).
-    pub unknown_source: u32,
+    /// A station index beyond the station table ([`super::Buffers`]).
+    pub unknown_station: u32,
     /// Beyond the working storage's capacity.
     pub over_capacity: u32,
     /// Exact repeats of earlier observations.
@@ -173,7 +208,8 @@ const EMPTY_SOURCE: Source = Source {
     crlb: 0.0,
     bias: 0.0,
     bias_sd: 0.0,
-    bias_source: 0,
+    bias_station: 0,
+    offsets: [0; 2],
     sigma: 0.0,
     sigma_estimated: false,
     used: 0,
@@ -195,6 +231,8 @@ pub struct Report<const C: usize, const O: usize> {
     pub(super) emitter_count: usize,
     pub(super) others: [OtherSource; O],
     pub(super) other_count: usize,
+    /// Entries of the offsets table written.
+    pub(super) offsets_written: usize,
     /// Observations set aside, by reason.
     pub rejected: Rejected,
     /// Observations accepted into the analysis (after the evidence checks).
@@ -219,6 +257,7 @@ impl<const C: usize, const O: usize> Report<C, O> {
                 why: OtherReason::Weaker,
             }; O],
             other_count: 0,
+            offsets_written: 0,
             rejected: Rejected::default(),
             accepted: 0,
         }
@@ -232,6 +271,17 @@ impl<const C: usize, const O: usize> Report<C, O> {
     /// Other sources, every channel's.
     pub fn others(&self) -> &[OtherSource] {
         self.others.get(..self.other_count).unwrap_or(&[])
+    }
+
+    /// The per-station offsets of `source` (an emitter of this report) in `table`, the
+    /// offsets table lent to [`super::locate`].
+    pub fn offsets_of<'t>(
+        &self,
+        source: &Source,
+        table: &'t [StationOffset],
+    ) -> &'t [StationOffset] {
+        let [a, b] = source.offsets;
+        table.get(a as usize..b as usize).unwrap_or(&[])
     }
 
     /// Every channel and what it came to.

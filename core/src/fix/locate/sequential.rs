@@ -2,25 +2,40 @@
 //! removed, and the search repeats on the rest. The first source is the channel's emitter, the
 //! later ones (a reflection, a second transmitter) other sources.
 
-use super::super::bias::{BiasPrior, MAX_SOURCES};
+use super::super::bias::{BiasPrior, StationSlot};
 use super::source::find_source;
 use super::{
     ChannelFreq, ChannelOutcome, Item, LocateConfig, NoEmitter, OtherReason, OtherSource, Report,
+    StationOffset,
 };
 use rand_core::Rng;
 
+/// The station table and the emitters' offsets table, as the caller lent them.
+pub(super) struct Tables<'a> {
+    /// One row per station.
+    pub(super) stations: &'a mut [StationSlot],
+    /// Each emitter's per-station offsets.
+    pub(super) offsets: &'a mut [StationOffset],
+}
+
 /// The sources of one channel: sequential consensus on `run` (its bearings, in input order),
 /// pushed into `report`. Returns the channel's outcome.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn channel_sources<const C: usize, const O: usize, R: Rng + ?Sized>(
     run: &mut [Item],
     scratch: &mut [Item],
+    tables: Tables<'_>,
     freq: ChannelFreq,
     config: &LocateConfig,
     report: &mut Report<C, O>,
     rng: &mut R,
 ) -> ChannelOutcome {
+    let Tables { stations, offsets } = tables;
+    // Every channel starts from the caller's priors.
+    for s in stations.iter_mut() {
+        s.reset();
+    }
     let mut len = run.len();
-    let mut priors = config.priors;
     let mut outcome = ChannelOutcome::NoConsistentEmitter(NoEmitter::NoConsensus);
     for k in 0..config.max_sources_per_channel {
         let first = k == 0;
@@ -31,8 +46,8 @@ pub(super) fn channel_sources<const C: usize, const O: usize, R: Rng + ?Sized>(
             }
             break;
         }
-        let found = find_source(set, scratch, &priors, freq, config, rng);
-        let (source, kept, fix_bias) = match found {
+        let found = find_source(set, scratch, stations, freq, config, rng);
+        let (mut source, kept) = match found {
             Ok(f) => f,
             Err(why) => {
                 if first {
@@ -42,18 +57,17 @@ pub(super) fn channel_sources<const C: usize, const O: usize, R: Rng + ?Sized>(
             }
         };
         if first {
+            source.offsets = record_offsets(stations, offsets, &mut report.offsets_written);
             if let Some(slot) = report.emitters.get_mut(report.emitter_count) {
                 *slot = source;
                 outcome = ChannelOutcome::Emitter(report.emitter_count);
                 report.emitter_count += 1;
             }
-            // The same DF units saw the other sources: the emitter's offsets are their prior.
-            for s in 0..MAX_SOURCES {
-                if priors[s].is_free() && fix_bias.1[s] > 0.0 {
-                    priors[s] = BiasPrior {
-                        mean: fix_bias.0[s],
-                        sd: fix_bias.1[s],
-                    };
+            // The same stations saw the other sources: the emitter's offsets are their prior.
+            for s in stations.iter_mut().filter(|s| s.used() > 0) {
+                let (mean, sd) = s.offset();
+                if s.prior_in_force().is_free() && sd > 0.0 {
+                    s.set_prior_in_force(BiasPrior { mean, sd });
                 }
             }
         } else if let Some(slot) = report.others.get_mut(report.other_count) {
@@ -74,6 +88,32 @@ pub(super) fn channel_sources<const C: usize, const O: usize, R: Rng + ?Sized>(
         ChannelOutcome::NoConsistentEmitter(_) => report.rejected.no_emitter += run.len() as u32,
     }
     outcome
+}
+
+/// The last fit's offset of every station it used, appended to `offsets` from `written` on (as
+/// many as fit); the range written.
+fn record_offsets(
+    stations: &[StationSlot],
+    offsets: &mut [StationOffset],
+    written: &mut usize,
+) -> [u32; 2] {
+    let start = *written;
+    for (i, s) in stations.iter().enumerate().filter(|(_, s)| s.used() > 0) {
+        let Some(slot) = offsets.get_mut(*written) else {
+            break;
+        };
+        let (bias, sd) = s.offset();
+        *slot = StationOffset {
+            station: i as u16,
+            used: s.used(),
+            bias,
+            sd,
+            measured: s.measured(),
+            prior: s.prior_in_force(),
+        };
+        *written += 1;
+    }
+    [start as u32, *written as u32]
 }
 
 /// Drop from `run` every item of `kept` (both in increasing input index); returns the new

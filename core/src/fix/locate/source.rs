@@ -3,7 +3,7 @@
 //! residuals' correlation in time), the fit at the noise used, and the confidence region
 //! ([`super::region`]).
 
-use super::super::bias::{self, BiasPrior, BiasedFix, BiasedOptions, MAX_SOURCES, Sighting};
+use super::super::bias::{self, BiasedFix, BiasedOptions, Sighting, StationSlot};
 use super::super::consistency;
 use super::super::noise::median_sigma;
 use super::super::robust::{self, Consensus, OffsetWindow, RefineOptions, RobustFix, TRIM_CUT};
@@ -14,22 +14,20 @@ use crate::model::bearing::{predicted, wrap};
 use crate::stats;
 use rand_core::Rng;
 
-/// Offsets and their sds of a fix, to pass on as priors.
-pub(super) type Offsets = ([f32; MAX_SOURCES], [f32; MAX_SOURCES]);
-
 /// One source from `set`: the consensus, its refinement and its honest statistics. On success
-/// the source's bearings are the first `kept` of `scratch`.
+/// the source's bearings are the first `kept` of `scratch`, and each station's offset in the
+/// fit is in its row of `stations`.
 pub(super) fn find_source<R: Rng + ?Sized>(
     set: &[Item],
     scratch: &mut [Item],
-    priors: &[BiasPrior; MAX_SOURCES],
+    stations: &mut [StationSlot],
     freq: ChannelFreq,
     config: &LocateConfig,
     rng: &mut R,
-) -> Result<(Source, usize, Offsets), NoEmitter> {
-    let window = OffsetWindow::from_priors(priors);
+) -> Result<(Source, usize), NoEmitter> {
+    let window = OffsetWindow::from_stations(set, stations);
     let consensus = significant_consensus(set, window, config, rng)?;
-    let refined = refine(set, scratch, priors, &consensus, config)?;
+    let refined = refine(set, scratch, stations, &consensus, config)?;
     let kept = refined.kept as usize;
     let members = scratch.get(..kept).ok_or(NoEmitter::TooFew)?;
     let median = median_sigma(members);
@@ -41,11 +39,11 @@ pub(super) fn find_source<R: Rng + ?Sized>(
     if estimated_sigma > config.max_sigma {
         return Err(NoEmitter::TooNoisy);
     }
-    let noise = noise_used(members, &refined, median, config)?;
-    let at_scale = at_noise(members, priors, &refined, noise.scale, config.solver)?;
+    let noise = noise_used(members, stations, &refined, median, config)?;
+    let at_scale = at_noise(members, stations, &refined, noise.scale, config.solver)?;
     let region = confidence_region(
         members,
-        priors,
+        stations,
         &at_scale,
         &refined.fix.position,
         noise.for_region(),
@@ -70,7 +68,7 @@ pub(super) fn find_source<R: Rng + ?Sized>(
         source.chance,
     ])
     .map_err(NoEmitter::Geometry)?;
-    Ok((source, kept, (at_scale.bias, at_scale.bias_sd)))
+    Ok((source, kept))
 }
 
 /// RANSAC's best point, if luck is unlikely to have lined up as many bearings on it.
@@ -101,14 +99,14 @@ fn significant_consensus<R: Rng + ?Sized>(
 fn refine(
     set: &[Item],
     scratch: &mut [Item],
-    priors: &[BiasPrior; MAX_SOURCES],
+    stations: &mut [StationSlot],
     consensus: &Consensus,
     config: &LocateConfig,
 ) -> Result<RobustFix, NoEmitter> {
     robust::refine(
         set,
         scratch,
-        priors,
+        stations,
         consensus,
         RefineOptions {
             estimate_scale: true,
@@ -178,6 +176,7 @@ impl Noise {
 /// estimate the noise is [`NoEmitter::TooFew`].
 fn noise_used(
     members: &[Item],
+    stations: &[StationSlot],
     refined: &RobustFix,
     median: f32,
     config: &LocateConfig,
@@ -188,7 +187,7 @@ fn noise_used(
     let tau = consistency::correlation_time(
         members.iter().map(|it| {
             let b = it.bearing();
-            let bias = fix.bias.get(it.source()).copied().unwrap_or(0.0);
+            let bias = stations.get(it.station()).map_or(0.0, |s| s.offset().0);
             wrap(b.theta - predicted(&fix.position, &b.vehicle) - bias) / (norm * b.sigma)
         }),
         refined.kept,
@@ -230,7 +229,7 @@ fn noise_used(
 /// proportional to the scale: one more solve from the fix, which is already converged.
 fn at_noise(
     members: &[Item],
-    priors: &[BiasPrior; MAX_SOURCES],
+    stations: &mut [StationSlot],
     refined: &RobustFix,
     scale: f32,
     solver: BiasedOptions,
@@ -238,18 +237,7 @@ fn at_noise(
     if scale == refined.scale {
         return Ok(refined.fix);
     }
-    bias::refit(members, priors, &refined.fix, scale, solver).map_err(NoEmitter::Geometry)
-}
-
-/// The main DF unit of a source: the one with most of its bearings.
-fn main_unit(members: &[Item]) -> usize {
-    let mut per = [0u32; MAX_SOURCES];
-    for it in members {
-        if let Some(c) = per.get_mut(it.source()) {
-            *c += 1;
-        }
-    }
-    (0..MAX_SOURCES).max_by_key(|s| per[*s]).unwrap_or(0)
+    bias::refit(members, stations, &refined.fix, scale, solver).map_err(NoEmitter::Geometry)
 }
 
 /// The source as reported.
@@ -262,7 +250,6 @@ fn as_reported(
     region: &Region,
     chance: f32,
 ) -> Source {
-    let main = main_unit(members);
     let (first, last) = (members.first(), members.last());
     Source {
         freq_mhz: freq.mean,
@@ -274,9 +261,10 @@ fn as_reported(
         cep50: region.cep50,
         stretch: region.stretch,
         crlb: region.crlb,
-        bias: at_scale.bias[main],
-        bias_sd: at_scale.bias_sd[main],
-        bias_source: main as u8,
+        bias: at_scale.bias,
+        bias_sd: at_scale.bias_sd,
+        bias_station: at_scale.main,
+        offsets: [0; 2],
         sigma: noise.sigma,
         sigma_estimated: noise.estimated,
         used: refined.kept,

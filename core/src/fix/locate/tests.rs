@@ -170,13 +170,13 @@ fn bad_observations_are_counted_by_reason() {
     let mut o = drive(&mut rng, 0.0);
     o[3].bearing.theta = f32::NAN;
     o[4].bearing.sigma = 0.0;
-    o[5].source = 9;
+    o[5].station = 9; // beyond the 4 rows of the station table
     o[6].freq_mhz = Some(-1.0);
     o[7].time_s = 1.5; // older than o[6]: time went backwards
     let r = run::<200>(&o, &LocateConfig::default());
     let rej = r.rejected;
     assert_eq!(
-        (rej.invalid, rej.unknown_source, rej.time_backwards),
+        (rej.invalid, rej.unknown_station, rej.time_backwards),
         (3, 1, 1)
     );
     // 236 usable, 200 fit: the rest is over capacity.
@@ -216,4 +216,44 @@ fn a_unit_noisier_than_it_claims_is_inconsistent_when_trusted() {
     let e = r.emitters()[0];
     assert!(e.consistent && !e.sigma_estimated, "{e:?}");
     assert!((e.ellipse_scale - 5.991).abs() < 1e-3 && e.sigma == 2.0 * DEG);
+}
+
+/// Three fixed stations 6-9 km out, each with its own offset: the fix leans on their priors
+/// and says so (a few hundred metres, holding the truth), and each station's offset is in
+/// the offsets table.
+#[test]
+fn a_network_of_fixed_stations_is_honest_about_its_offsets() {
+    let mut rng = XorShiftRng::seed_from_u64(8);
+    let e = [0.0f32, 0.0];
+    let sites = [[-8000.0f32, 1000.0], [2000.0, -6000.0], [6000.0, 6000.0]];
+    let offsets = [2.5 * DEG, -3.0 * DEG, 1.5 * DEG];
+    let o: [Observation; 600] = core::array::from_fn(|k| {
+        let s = k % 3;
+        let mut x = obs(
+            sites[s],
+            e,
+            offsets[s] + 2.0 * DEG * random::normal(&mut rng),
+            k / 3,
+        );
+        x.station = s as u16;
+        x
+    });
+    let prior = crate::fix::bias::BiasPrior {
+        mean: 0.0,
+        sd: 3.0 * DEG,
+    };
+    let mut work = Workspace::<600, 3>::with_prior(prior);
+    let mut rng = XorShiftRng::seed_from_u64(9);
+    let r = locate::<1, 1, _>(&o, &LocateConfig::default(), work.buffers(), &mut rng).unwrap();
+    let em = r.emitters()[0];
+    let err = libm::hypotf(em.position[0] - e[0], em.position[1] - e[1]);
+    assert!(em.ellipse.contains(&em.position, &e), "{err} m: {em:?}");
+    assert!(em.ellipse.major > 200.0, "{em:?}");
+    let table = r.offsets_of(&em, work.offsets());
+    assert_eq!(table.len(), 3);
+    for (s, t) in table.iter().enumerate() {
+        assert_eq!((t.station as usize, t.used), (s, 200));
+        // The prior governs: its sd stays most of the prior's.
+        assert!(t.measured < 0.6 && t.sd > 0.6 * prior.sd, "{t:?}");
+    }
 }

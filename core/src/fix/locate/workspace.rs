@@ -1,7 +1,7 @@
 //! The working storage [`super::locate`] borrows: no allocation, a capacity the caller picks.
 
-use super::super::bias::Sighting;
-use super::Observation;
+use super::super::bias::{BiasPrior, Sighting, StationSlot};
+use super::{Observation, StationOffset};
 use crate::model::bearing::Bearing;
 
 /// An observation in the working storage, with where it came from.
@@ -31,33 +31,42 @@ impl Sighting for Item {
     fn bearing(&self) -> &Bearing {
         &self.obs.bearing
     }
-    fn source(&self) -> usize {
-        self.obs.source as usize
+    fn station(&self) -> usize {
+        usize::from(self.obs.station)
     }
 }
 
 /// Working storage lent by the caller (a host can lend `Vec`s): the capacity is the shortest
-/// of the four slices.
+/// of the four observation slices; `stations` holds one row per station index (its prior set
+/// by the caller, [`StationSlot::new`]; observations of a station beyond it are rejected as
+/// unknown), and `offsets` receives each emitter's per-station offsets
+/// ([`Source::offsets`](super::Source::offsets)), as many as fit.
 pub struct Buffers<'a> {
     pub(super) items: &'a mut [Item],
     pub(super) scratch: &'a mut [Item],
     pub(super) order: &'a mut [u32],
     pub(super) tags: &'a mut [u8],
+    pub(super) stations: &'a mut [StationSlot],
+    pub(super) offsets: &'a mut [StationOffset],
 }
 
 impl<'a> Buffers<'a> {
-    /// Borrow the four work areas.
+    /// Borrow the work areas.
     pub fn new(
         items: &'a mut [Item],
         scratch: &'a mut [Item],
         order: &'a mut [u32],
         tags: &'a mut [u8],
+        stations: &'a mut [StationSlot],
+        offsets: &'a mut [StationOffset],
     ) -> Self {
         Self {
             items,
             scratch,
             order,
             tags,
+            stations,
+            offsets,
         }
     }
 
@@ -71,29 +80,54 @@ impl<'a> Buffers<'a> {
     }
 }
 
-/// Working storage for `B` observations (about 80 bytes each), e.g. in a `static` on the MCU.
-pub struct Workspace<const B: usize> {
+/// Working storage for `B` observations (about 80 bytes each) from `S` stations (about 70
+/// bytes each, with room for one emitter's offsets of every station), e.g. in a `static` on
+/// the MCU.
+pub struct Workspace<const B: usize, const S: usize = 4> {
     items: [Item; B],
     scratch: [Item; B],
     order: [u32; B],
     tags: [u8; B],
+    stations: [StationSlot; S],
+    offsets: [StationOffset; S],
 }
 
-impl<const B: usize> Default for Workspace<B> {
+impl<const B: usize, const S: usize> Default for Workspace<B, S> {
     fn default() -> Self {
         Self::new()
     }
 }
 
-impl<const B: usize> Workspace<B> {
-    /// Empty storage.
+impl<const B: usize, const S: usize> Workspace<B, S> {
+    /// Empty storage, every station with the default prior.
     pub const fn new() -> Self {
+        Self::with_prior(BiasPrior {
+            mean: 0.0,
+            sd: super::super::bias::DEFAULT_BIAS_SD,
+        })
+    }
+
+    /// Empty storage, every station's offset with `prior`.
+    pub const fn with_prior(prior: BiasPrior) -> Self {
         Self {
             items: [Item::EMPTY; B],
             scratch: [Item::EMPTY; B],
             order: [0; B],
             tags: [0; B],
+            stations: [StationSlot::new(prior); S],
+            offsets: [StationOffset::EMPTY; S],
         }
+    }
+
+    /// The station table: set a station's prior with `stations()[i] = StationSlot::new(p)`.
+    pub fn stations(&mut self) -> &mut [StationSlot; S] {
+        &mut self.stations
+    }
+
+    /// The emitters' offsets the last [`super::locate`] wrote (each emitter's
+    /// [`Source::offsets`](super::Source::offsets) range).
+    pub fn offsets(&self) -> &[StationOffset; S] {
+        &self.offsets
     }
 
     /// The storage as [`Buffers`].
@@ -103,6 +137,8 @@ impl<const B: usize> Workspace<B> {
             &mut self.scratch,
             &mut self.order,
             &mut self.tags,
+            &mut self.stations,
+            &mut self.offsets,
         )
     }
 }

@@ -1,7 +1,7 @@
 //! The consensus: the point most bearings agree on, each hypothesis with its best common
 //! offset, and how likely luck would have lined up as many.
 
-use super::super::bias::{BiasPrior, MAX_SOURCES, Sighting};
+use super::super::bias::{BiasPrior, Sighting, StationSlot};
 use super::super::intersection::intersect;
 use super::super::noise::median_sigma;
 use super::{MAX_RANGE_M, SCORE_SAMPLE};
@@ -76,20 +76,28 @@ pub struct OffsetWindow {
 }
 
 impl OffsetWindow {
-    /// Three prior sds either side of the widest free prior among `priors` (capped at 30
-    /// degrees), centred on its mean; a zero window when every unit is calibrated.
-    pub fn from_priors(priors: &[BiasPrior; MAX_SOURCES]) -> Self {
-        let widest = priors
+    /// Three prior sds either side of the widest prior the caller gave the stations of `items`
+    /// (capped at 30 degrees), centred on its mean; a zero window when every one is
+    /// calibrated. The caller's priors, not the ones in force: the search looks where the
+    /// caller said the offsets may lie, also for a channel's later sources, whose priors the
+    /// emitter's estimate narrowed.
+    pub fn from_stations<T: Sighting>(items: &[T], stations: &[StationSlot]) -> Self {
+        let widest = items
             .iter()
-            .copied()
+            .filter_map(|t| stations.get(t.station()).map(StationSlot::prior))
             .fold(None::<BiasPrior>, |w, p| match w {
                 Some(w) if w.sd >= p.sd => Some(w),
                 _ => Some(p),
             })
             .unwrap_or_default();
+        Self::from_prior(widest)
+    }
+
+    /// Three sds of `prior` either side of its mean (capped at 30 degrees).
+    pub fn from_prior(prior: BiasPrior) -> Self {
         Self {
-            centre: widest.mean,
-            half_width: (3.0 * widest.sd).min(30.0 * PI / 180.0),
+            centre: prior.mean,
+            half_width: (3.0 * prior.sd).min(30.0 * PI / 180.0),
         }
     }
 }
@@ -173,7 +181,7 @@ pub fn ransac<T: Sighting, R: Rng + ?Sized>(
 ) -> Result<Consensus, Error> {
     options.check()?;
     check_finite(&[window.centre, window.half_width])?;
-    let usable = |t: &T| t.source() < MAX_SOURCES && t.bearing().check().is_ok();
+    let usable = |t: &T| t.bearing().check().is_ok();
     let candidates = items.iter().filter(|t| usable(t)).count() as u32;
     if candidates < 2 {
         return Err(Error::TooFewMeasurements);

@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::error::Error;
-use crate::fix::bias::{self, BiasPrior};
+use crate::fix::bias::{BiasPrior, StationSlot};
 use crate::likelihood::Gaussian;
 use crate::model::bearing::{Bearing, predicted, wrap};
 use crate::random;
@@ -47,11 +47,11 @@ fn u_drive(ghost: Option<[f32; 2]>, wild: f32, bias: f32, rng: &mut XorShiftRng)
 fn consensus_finds_the_emitter_past_a_ghost_and_an_offset() {
     let mut rng = XorShiftRng::seed_from_u64(1);
     let bs = u_drive(Some([900.0, 1800.0]), 0.1, 4.0 * DEG, &mut rng);
-    let priors = bias::same_priors(BiasPrior::default());
+    let mut priors = [StationSlot::new(BiasPrior::default())];
     let c = ransac(
         &bs,
         &RansacOptions::default(),
-        OffsetWindow::from_priors(&priors),
+        OffsetWindow::from_stations(&bs, &priors),
         &mut rng,
     )
     .unwrap();
@@ -62,13 +62,13 @@ fn consensus_finds_the_emitter_past_a_ghost_and_an_offset() {
     );
     assert!(c.inliers > 120, "{c:?}");
     let mut scratch = bs;
-    let f = refine(&bs, &mut scratch, &priors, &c, RefineOptions::default()).unwrap();
+    let f = refine(&bs, &mut scratch, &mut priors, &c, RefineOptions::default()).unwrap();
     let err = libm::hypotf(f.fix.position[0] - e[0], f.fix.position[1] - e[1]);
     assert!(err < 40.0, "{err} m: {f:?}");
     assert!(
-        (f.fix.bias[0] - 4.0 * DEG).abs() < 1.0 * DEG,
+        (f.fix.bias - 4.0 * DEG).abs() < 1.0 * DEG,
         "{}",
-        f.fix.bias[0] / DEG
+        f.fix.bias / DEG
     );
     // The ghost's 60 and most wild bearings are out; the emitter's are in.
     assert!((140..=170).contains(&f.kept), "{}", f.kept);
@@ -80,11 +80,11 @@ fn consensus_finds_the_emitter_past_a_ghost_and_an_offset() {
 fn pure_noise_is_not_significant() {
     let mut rng = XorShiftRng::seed_from_u64(2);
     let bs = u_drive(None, 1.0, 0.0, &mut rng);
-    let priors = bias::same_priors(BiasPrior::default());
+    let priors = [StationSlot::new(BiasPrior::default())];
     let c = ransac(
         &bs,
         &RansacOptions::default(),
-        OffsetWindow::from_priors(&priors),
+        OffsetWindow::from_stations(&bs, &priors),
         &mut rng,
     )
     .unwrap();
@@ -103,16 +103,16 @@ fn pure_noise_is_not_significant() {
 fn clean_data_keep_every_bearing() {
     let mut rng = XorShiftRng::seed_from_u64(3);
     let bs = u_drive(None, 0.0, 0.0, &mut rng);
-    let priors = bias::same_priors(BiasPrior::calibrated(0.0));
+    let mut priors = [StationSlot::new(BiasPrior::calibrated(0.0))];
     let c = ransac(
         &bs,
         &RansacOptions::default(),
-        OffsetWindow::from_priors(&priors),
+        OffsetWindow::from_stations(&bs, &priors),
         &mut rng,
     )
     .unwrap();
     let mut scratch = bs;
-    let f = refine(&bs, &mut scratch, &priors, &c, RefineOptions::default()).unwrap();
+    let f = refine(&bs, &mut scratch, &mut priors, &c, RefineOptions::default()).unwrap();
     // At most the 0.27 % a 3-sigma cut takes from a Gaussian (plus one).
     assert!(f.kept >= 237, "{}", f.kept);
     let plain = super::super::ml::ml(&bs, None, &Gaussian, Default::default()).unwrap();

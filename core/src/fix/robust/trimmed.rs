@@ -1,7 +1,9 @@
 //! The refinement of a consensus: Tukey's biweight, then trimmed Gaussian ML with the noise
 //! scale re-estimated, until the kept set settles.
 
-use super::super::bias::{self, BiasPrior, BiasedFix, BiasedOptions, MAX_SOURCES, Sighting, Start};
+use super::super::bias::{
+    self, BiasedFix, BiasedOptions, Sighting, Start, StartOffsets, StationSlot,
+};
 use super::super::noise::median_sigma;
 use super::{Consensus, MAX_TRIM_ROUNDS, TRIM_ALPHA, TRIM_CUT};
 use crate::error::{Error, check_finite};
@@ -68,20 +70,21 @@ impl Default for RefineOptions {
     }
 }
 
-/// The residual of a sighting at a fix, its source's offset removed.
-fn residual_at<T: Sighting>(t: &T, fix: &BiasedFix) -> Option<f32> {
+/// The residual of a sighting at a fix, its station's offset (the table's) removed.
+fn residual_at<T: Sighting>(t: &T, fix: &BiasedFix, stations: &[StationSlot]) -> Option<f32> {
     let b = t.bearing();
-    let bias = *fix.bias.get(t.source())?;
+    let bias = stations.get(t.station())?.offset().0;
     b.check().ok()?;
     Some(wrap(b.theta - predicted(&fix.position, &b.vehicle) - bias))
 }
 
 /// Refine a consensus on `items`: Tukey from the hypothesis, then trimmed Gaussian ML. The kept
-/// bearings are copied, in order, to the front of `scratch` (at least `items.len()` long).
+/// bearings are copied, in order, to the front of `scratch` (at least `items.len()` long); the
+/// stations' offsets are the table's (`stations`, one row per station index, with its prior).
 pub fn refine<T: Sighting + Copy>(
     items: &[T],
     scratch: &mut [T],
-    priors: &[BiasPrior; MAX_SOURCES],
+    stations: &mut [StationSlot],
     consensus: &Consensus,
     options: RefineOptions,
 ) -> Result<RobustFix, Error> {
@@ -101,17 +104,11 @@ pub fn refine<T: Sighting + Copy>(
     };
     let start = Start {
         position: consensus.position,
-        bias: core::array::from_fn(|s| {
-            if priors[s].is_free() {
-                consensus.bias
-            } else {
-                priors[s].mean
-            }
-        }),
+        offsets: StartOffsets::Common(consensus.bias),
     };
     let tukey = bias::ml_sources(
         items,
-        priors,
+        stations,
         start,
         &Tukey::default(),
         BiasedOptions {
@@ -129,7 +126,7 @@ pub fn refine<T: Sighting + Copy>(
         rounds += 1;
         let mut kept = 0usize;
         for t in items {
-            if let Some(r) = residual_at(t, &fix)
+            if let Some(r) = residual_at(t, &fix, stations)
                 && libm::fabsf(r) <= cut * scale * t.bearing().sigma
                 && let Some(slot) = scratch.get_mut(kept)
             {
@@ -141,7 +138,7 @@ pub fn refine<T: Sighting + Copy>(
             return Err(Error::TooFewMeasurements);
         }
         let set = scratch.get(..kept).ok_or(Error::OutOfRange)?;
-        let next = bias::refit(set, priors, &fix, scale, options.solver)?;
+        let next = bias::refit(set, stations, &fix, scale, options.solver)?;
         let mut settled = kept as u32 == kept_before;
         let dof = kept as f32 - next.parameters;
         if options.estimate_scale && dof > 0.0 {
@@ -165,7 +162,7 @@ pub fn refine<T: Sighting + Copy>(
     let set = scratch
         .get(..kept_before as usize)
         .ok_or(Error::OutOfRange)?;
-    let fix = bias::refit(set, priors, &fix, scale, options.solver)?;
+    let fix = bias::refit(set, stations, &fix, scale, options.solver)?;
     check_finite(&[scale])?;
     Ok(RobustFix {
         fix,

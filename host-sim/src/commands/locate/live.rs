@@ -41,8 +41,8 @@ pub enum LiveSource {
     },
     /// Standard input.
     Stdin,
-    /// A KrakenSDR's web server, polled.
-    Kraken(KrakenUrl),
+    /// KrakenSDRs' web servers, all polled at once; each URL is an input of its own.
+    Kraken(Vec<KrakenUrl>),
 }
 
 /// How to read a live line.
@@ -65,6 +65,8 @@ pub struct LiveOptions {
 /// A read's outcome, sent from the reader thread.
 enum Chunk {
     Bytes(Vec<u8>),
+    /// Whole records from live input `0` (one of several KrakenSDRs).
+    From(u8, Vec<u8>),
     /// Sentence bodies from gpsd.
     Sentences(Vec<String>),
     End,
@@ -74,15 +76,15 @@ enum Chunk {
 /// How long a read waits before the line counts as idle.
 const IDLE: Duration = Duration::from_millis(100);
 
-/// Start the thread that polls a KrakenSDR: each poll's new records are a chunk.
-fn kraken(url: &KrakenUrl, tx: mpsc::SyncSender<Chunk>) -> Result<(), String> {
+/// Start the thread that polls KrakenSDR `input`: each poll's new records are a chunk.
+fn kraken(input: u8, url: &KrakenUrl, tx: mpsc::SyncSender<Chunk>) -> Result<(), String> {
     let url = url.clone();
     std::thread::Builder::new()
-        .name("foxhunt-kraken".into())
+        .name(format!("foxhunt-kraken-{input}"))
         .spawn(move || {
             crate::inputs::kraken_http::poll(
                 &url,
-                |p| p.records.is_empty() || tx.send(Chunk::Bytes(p.records)).is_ok(),
+                |p| p.records.is_empty() || tx.send(Chunk::From(input, p.records)).is_ok(),
                 note,
             )
         })
@@ -139,8 +141,11 @@ fn reader(
             path.clone(),
         ),
         LiveSource::Stdin => (Box::new(std::io::stdin()), "standard input".into()),
-        LiveSource::Kraken(url) => {
-            kraken(url, tx)?;
+        LiveSource::Kraken(urls) => {
+            for (i, url) in urls.iter().enumerate() {
+                let i = u8::try_from(i).map_err(|_| "at most 256 --kraken URLs".to_string())?;
+                kraken(i, url, tx.clone())?;
+            }
             return Ok(rx);
         }
     };
@@ -178,6 +183,16 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<Decoded,
     o.locate.check()?;
     let rx = reader(&o.source, o.gpsd.as_ref())?;
     let mut dec = Decoder::new(BridgeConfig::default(), o.keep_track);
+    // Several KrakenSDRs: each URL an input, so a unit without a STATION_ID is a station of
+    // its own.
+    if let LiveSource::Kraken(urls) = &o.source
+        && urls.len() > 1
+    {
+        for u in urls {
+            dec.begin_input(u.base.trim_start_matches("http://"))?;
+        }
+    }
+    o.locate.survey(&mut dec);
     let mut last_byte = Instant::now();
     let mut reported = (0usize, 0u32);
     let mut ended = false;
@@ -188,6 +203,11 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<Decoded,
             match next {
                 Ok(Chunk::Bytes(b)) => {
                     last_byte = Instant::now();
+                    dec.feed(&b);
+                }
+                Ok(Chunk::From(i, b)) => {
+                    last_byte = Instant::now();
+                    dec.switch_input(i);
                     dec.feed(&b);
                 }
                 Ok(Chunk::Sentences(v)) => {

@@ -10,6 +10,7 @@ use crate::inputs::capture::{Decoded, Decoder};
 use crate::inputs::files::{Source, stream};
 use crate::inputs::gpsd::GpsdAddress;
 use crate::inputs::kraken_http::KrakenUrl;
+use crate::inputs::stations::{Network, parse_reference};
 use crate::locate::report::Located;
 use crate::locate::{locate, locate_guided};
 use crate::outputs::files::Outputs;
@@ -107,9 +108,34 @@ pub struct Args {
     #[command(flatten)]
     pub guidance: GuidanceArgs,
     /// Live: poll a KrakenSDR about twice a second, `http://HOST:8081` (its DOA_value.html,
-    /// else doa.xml) or the URL of either page; no CAPTURE.
+    /// else doa.xml) or the URL of either page; no CAPTURE. Repeatable: every unit is polled
+    /// at once and their bearings fused, each a station of its own (its STATION_ID, else its
+    /// URL).
     #[arg(long, value_name = "URL")]
-    pub kraken: Option<String>,
+    pub kraken: Vec<String>,
+    /// A stations file (TOML): each DF station's id, surveyed position, offset prior or
+    /// calibration, noise and antenna, and reference transmitters (docs/src/networks.md).
+    #[arg(long, value_name = "FILE")]
+    pub stations: Option<PathBuf>,
+    /// A reference transmitter at LAT,LON on MHZ (repeatable): its channel's bearings
+    /// calibrate every station that hears it.
+    #[arg(long, value_name = "LAT,LON@MHZ", allow_hyphen_values = true)]
+    pub reference: Vec<String>,
+}
+
+/// The network `--stations` and `--reference` describe, if any.
+fn network(a: &Args) -> Result<Option<std::sync::Arc<Network>>, String> {
+    if a.stations.is_none() && a.reference.is_empty() {
+        return Ok(None);
+    }
+    let mut n = match &a.stations {
+        Some(path) => Network::load(path)?,
+        None => Network::default(),
+    };
+    for r in &a.reference {
+        n.add_reference(parse_reference(r)?)?;
+    }
+    Ok(Some(std::sync::Arc::new(n)))
 }
 
 /// Where the maps go: (path, named on the command line).
@@ -135,17 +161,22 @@ enum Input {
     Live(LiveSource),
     /// A live line of bearings with gpsd beside it.
     Gpsd(LiveSource, GpsdAddress),
-    /// A KrakenSDR's web page (and perhaps gpsd).
-    Kraken(KrakenUrl, Option<GpsdAddress>),
+    /// KrakenSDRs' web pages (and perhaps gpsd).
+    Kraken(Vec<KrakenUrl>, Option<GpsdAddress>),
 }
 
 fn input(a: &Args) -> Result<Input, String> {
     let gpsd = a.gpsd.as_deref().map(GpsdAddress::parse).transpose()?;
-    if let Some(url) = &a.kraken {
+    if !a.kraken.is_empty() {
         if !a.captures.is_empty() || a.baud.is_some() {
             return Err("--kraken reads the unit's web page: give no CAPTURE and no --baud".into());
         }
-        return Ok(Input::Kraken(KrakenUrl::parse(url)?, gpsd));
+        let urls = a
+            .kraken
+            .iter()
+            .map(|u| KrakenUrl::parse(u))
+            .collect::<Result<Vec<_>, _>>()?;
+        return Ok(Input::Kraken(urls, gpsd));
     }
     if let Some(g) = gpsd {
         return match line_input(a)? {
@@ -216,6 +247,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
         seed: a.seed,
         offset,
         channel_width_mhz: a.channel_width_mhz,
+        network: network(a)?,
     };
     options.check()?;
     let quiet = quiet_exit(a)?;
@@ -232,6 +264,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
     if !calibrating {
         inputs.extend(a.calibration.as_deref());
     }
+    inputs.extend(a.stations.as_deref());
     let outputs = Outputs::new(inputs, false);
     let paths = map_paths(a);
     for p in paths.iter().flatten() {
@@ -245,12 +278,21 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
     let decoded = match input {
         Input::Sample => {
             let mut dec = Decoder::new(BridgeConfig::default(), keep_track);
+            options.survey(&mut dec);
             dec.feed(SAMPLE_DRIVE);
             dec.finish()
         }
         Input::Files(sources) => {
             let mut dec = Decoder::new(BridgeConfig::default(), keep_track);
-            stream(&sources, |b| dec.feed(b))?;
+            // Each file is an input of its own: a unit whose records name no station is one
+            // station per file.
+            for (s, path) in sources.iter().zip(&a.captures) {
+                let name = path.file_name().unwrap_or(path.as_os_str());
+                dec.begin_input(&name.to_string_lossy())?;
+                // Now this input's unnamed units have their labels.
+                options.survey(&mut dec);
+                stream(std::slice::from_ref(s), |b| dec.feed(b))?;
+            }
             dec.finish()
         }
         Input::Live(_) | Input::Gpsd(..) | Input::Kraken(..) => {
@@ -264,7 +306,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
                 source,
                 gpsd,
                 quiet_exit: quiet,
-                locate: options,
+                locate: options.clone(),
                 json: a.json,
                 keep_track,
             };

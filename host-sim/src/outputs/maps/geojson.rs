@@ -118,8 +118,9 @@ pub(super) fn polygon_geometry(ring: &[[f64; 2]]) -> Value {
     json!({"type": "MultiPolygon", "coordinates": [[west], [east]]})
 }
 
-/// Every emitter and other source with its ellipse, the track and the bearing rays as GeoJSON
-/// (RFC 7946: longitude first, polygons closed, nothing crossing the antimeridian).
+/// Every emitter and other source with its ellipse, the DF stations, the track and the bearing
+/// rays as GeoJSON (RFC 7946: longitude first, polygons closed, nothing crossing the
+/// antimeridian).
 pub fn geojson(l: &Located, d: &Decoded) -> Value {
     let Some(frame) = d.frame else {
         return json!({"type": "FeatureCollection", "features": []});
@@ -141,6 +142,18 @@ pub fn geojson(l: &Located, d: &Decoded) -> Value {
                 "properties": {"kind": "ellipse", "of": kind, "confidence": s.ellipse.confidence},
                 "geometry": polygon_geometry(&ring)}));
         }
+    }
+    // Each station where it stood (a vehicle: its first bearing), its kind and offset.
+    for s in &l.report.stations {
+        let (Some(lat), Some(lon)) = (s.lat, s.lon) else {
+            continue;
+        };
+        features.push(json!({"type": "Feature",
+            "properties": {"kind": "station", "id": s.id,
+                "station": if s.fixed { "fixed" } else { "mobile" },
+                "offset_deg": s.offset_deg, "offset_sd_deg": s.offset_sd_deg,
+                "offset_from": s.offset_from, "bearings": s.bearings},
+            "geometry": {"type": "Point", "coordinates": [lon, lat]}}));
     }
     let track: Vec<[f64; 2]> = d
         .track

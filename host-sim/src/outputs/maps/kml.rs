@@ -5,7 +5,8 @@ use crate::inputs::capture::Decoded;
 use crate::locate::report::Located;
 use std::fmt::Write;
 
-/// KML: every emitter and other source with its ellipse, the vehicle track and the bearings.
+/// KML: every emitter and other source with its ellipse, the DF stations, the vehicle track and
+/// the bearings.
 pub fn kml(l: &Located, d: &Decoded) -> String {
     let Some(frame) = d.frame else {
         return String::new();
@@ -41,6 +42,24 @@ pub fn kml(l: &Located, d: &Decoded) -> String {
             );
         }
     }
+    out.push_str("<Folder><name>stations</name>\n");
+    for s in &l.report.stations {
+        let (Some(lat), Some(lon)) = (s.lat, s.lon) else {
+            continue;
+        };
+        let _ = writeln!(
+            out,
+            "<Placemark><name>{}</name><description>{} station; offset {:.2} +- {:.2} deg ({}); {} bearings</description><Point><coordinates>{}</coordinates></Point></Placemark>",
+            xml_text(&s.id),
+            if s.fixed { "fixed" } else { "mobile" },
+            s.offset_deg,
+            s.offset_sd_deg,
+            s.offset_from,
+            s.bearings,
+            coords([lon, lat])
+        );
+    }
+    out.push_str("</Folder>\n");
     let track: Vec<String> = d
         .track
         .iter()
@@ -63,5 +82,21 @@ pub fn kml(l: &Located, d: &Decoded) -> String {
         );
     }
     out.push_str("</Folder>\n</Document>\n</kml>\n");
+    out
+}
+
+/// `text` with XML's special characters escaped (a station id is the records' text).
+fn xml_text(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&apos;"),
+            c => out.push(c),
+        }
+    }
     out
 }

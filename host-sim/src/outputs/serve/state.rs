@@ -187,8 +187,14 @@ fn map_unit(report: UnitReport) -> MapUnit {
 
 /// The field pipeline on the observations, as `foxhunt locate` runs it.
 fn fix(d: &Decoded) -> Result<Pipeline, String> {
-    crate::estimate::pipeline(&d.observations, &LocateConfig::default(), 1)
-        .map_err(|e| e.to_string())
+    crate::estimate::pipeline(
+        &d.observations,
+        &LocateConfig::default(),
+        &crate::estimate::Priors::default(),
+        1,
+    )
+    .map(|r| r.report)
+    .map_err(|e| e.to_string())
 }
 
 fn no_emitter(r: &Pipeline) -> String {

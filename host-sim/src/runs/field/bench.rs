@@ -6,7 +6,7 @@ use super::judge::THREE_SIGMA_TAIL;
 use super::judge::measure;
 use crate::outputs::tables::Row;
 use foxhunt_core::Method;
-use foxhunt_core::fix::bias::{self, BiasPrior};
+use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::fix::consistency::ellipse_scale;
 use foxhunt_core::fix::ellipse::mahalanobis;
 use foxhunt_core::fix::locate::LocateConfig;
@@ -15,7 +15,7 @@ use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 use rayon::prelude::*;
 
-use super::judge::truth_geometry;
+use super::judge::bound_at;
 
 /// The estimators the field bench compares: the pipeline, and for context the plain fixes and
 /// filters a user could ask `locate` for (run as `locate` runs them: noise estimated from the
@@ -42,7 +42,7 @@ fn row(label: &str, method: Method, runs: usize) -> Row {
 fn pipeline_rows(c: Condition, runs: usize) -> Vec<Row> {
     let t = std::time::Instant::now();
     let config = LocateConfig::default();
-    let s = measure(c, runs, &config);
+    let s = measure(c, runs, &config, BiasPrior::default());
     let seconds = t.elapsed().as_secs_f64() / runs.max(1) as f64;
     let label = format!("field/{}", c.name());
     let mut note = Vec::new();
@@ -129,9 +129,7 @@ fn method_row(c: Condition, m: Method, runs: usize) -> Row {
                 let m =
                     mahalanobis(&f.covariance, &f.position, &t.position).unwrap_or(f32::INFINITY);
                 let error = (f.position[0] - t.position[0]).hypot(f.position[1] - t.position[1]);
-                let bound = bias::crlb(&t.position, &truth_geometry(&d, t), BiasPrior::default())
-                    .map(|b| b.rmse as f64)
-                    .unwrap_or(f64::INFINITY);
+                let bound = f64::from(bound_at(&d, t, BiasPrior::default()));
                 Some((
                     error as f64,
                     m * m <= f.ellipse_scale,

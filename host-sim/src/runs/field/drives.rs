@@ -79,6 +79,7 @@ fn simple(
             freq_mhz: None,
         }],
         ghost: None,
+        stations: Vec::new(),
         bias,
         sigma,
     }
@@ -93,6 +94,7 @@ fn long_drive(lat: f64, turned: bool, rng: &mut XorShiftRng) -> FieldDrive {
             observations: Vec::new(),
             emitters: Vec::new(),
             ghost: None,
+            stations: Vec::new(),
             bias: 0.0,
             sigma,
         };
@@ -139,6 +141,7 @@ fn long_drive(lat: f64, turned: bool, rng: &mut XorShiftRng) -> FieldDrive {
             freq_mhz: None,
         }],
         ghost: None,
+        stations: Vec::new(),
         bias: 0.0,
         sigma,
     }
@@ -172,6 +175,7 @@ pub fn simulate(condition: Condition, run: usize) -> FieldDrive {
                     freq_mhz: None,
                 }],
                 ghost: Some(ghost),
+                stations: Vec::new(),
                 bias: 0.0,
                 sigma: two,
             }
@@ -200,6 +204,7 @@ pub fn simulate(condition: Condition, run: usize) -> FieldDrive {
                 observations,
                 emitters: vec![a, b],
                 ghost: None,
+                stations: Vec::new(),
                 bias: 0.0,
                 sigma: two,
             }
@@ -228,6 +233,7 @@ pub fn simulate(condition: Condition, run: usize) -> FieldDrive {
                     freq_mhz: None,
                 }],
                 ghost: None,
+                stations: Vec::new(),
                 bias: 0.0,
                 sigma: raw_sigma / 10f32.sqrt(),
             }
@@ -268,6 +274,7 @@ pub fn simulate(condition: Condition, run: usize) -> FieldDrive {
                     freq_mhz: None,
                 }],
                 ghost: None,
+                stations: Vec::new(),
                 bias: 0.0,
                 sigma: d.sigma(),
             }

@@ -2,10 +2,11 @@
 
 use super::drives::simulate;
 use super::{CHANNELS, Condition, DEG, FieldDrive, OTHERS, Truth};
+use crate::estimate::PipelineRun;
 use foxhunt_core::Error;
-use foxhunt_core::fix::bias::{self, BiasPrior};
+use foxhunt_core::fix::bias::{self, BiasPrior, StationSlot};
 use foxhunt_core::fix::ellipse::mahalanobis;
-use foxhunt_core::fix::locate::{ChannelOutcome, LocateConfig, Report, Source};
+use foxhunt_core::fix::locate::{ChannelOutcome, LocateConfig, Observation, Report, Source};
 use foxhunt_core::model::bearing::{Bearing, predicted};
 use rayon::prelude::*;
 
@@ -32,26 +33,49 @@ pub struct RunOutcome {
     pub within_cep50: bool,
 }
 
-/// The observations' geometry at the truth with the true noise: the bound's input.
-pub(super) fn truth_geometry(d: &FieldDrive, t: &Truth) -> Vec<Bearing> {
+/// The observations' geometry at the truth with the true noise: the bound's input (each
+/// station's own noise in a network).
+pub(super) fn truth_geometry(d: &FieldDrive, t: &Truth) -> Vec<Observation> {
     d.observations
         .iter()
         .filter(|o| o.freq_mhz == t.freq_mhz)
-        .map(|o| Bearing {
-            vehicle: o.bearing.vehicle,
-            theta: predicted(&t.position, &o.bearing.vehicle),
-            sigma: d.sigma,
+        .map(|o| Observation {
+            bearing: Bearing {
+                vehicle: o.bearing.vehicle,
+                theta: predicted(&t.position, &o.bearing.vehicle),
+                sigma: d
+                    .stations
+                    .get(usize::from(o.station))
+                    .map_or(d.sigma, |s| s.sigma),
+            },
+            ..*o
         })
         .collect()
 }
 
-/// Run the pipeline on one drive.
+/// The bias-aware bound at truth `t`: every station's offset with the prior the run gave it.
+pub fn bound_at(d: &FieldDrive, t: &Truth, prior: BiasPrior) -> f32 {
+    let geometry = truth_geometry(d, t);
+    let priors = d.priors(prior);
+    let n = geometry
+        .iter()
+        .map(|o| usize::from(o.station) + 1)
+        .max()
+        .unwrap_or(0);
+    let mut table: Vec<StationSlot> = (0..n).map(|s| StationSlot::new(priors.of(s))).collect();
+    bias::crlb_stations(&t.position, &geometry, &mut table)
+        .map(|b| b.rmse)
+        .unwrap_or(f32::INFINITY)
+}
+
+/// Run the pipeline on one drive, every station with the drive's prior or `prior`.
 pub fn run_locate(
     d: &FieldDrive,
     config: &LocateConfig,
+    prior: BiasPrior,
     seed: u64,
-) -> Result<Report<CHANNELS, OTHERS>, Error> {
-    crate::estimate::pipeline(&d.observations, config, seed)
+) -> Result<PipelineRun, Error> {
+    crate::estimate::pipeline(&d.observations, config, &d.priors(prior), seed)
 }
 
 /// The emitter reported for the channel of truth `t`.
@@ -94,9 +118,7 @@ pub fn judge(
     d.emitters
         .iter()
         .map(|t| {
-            let bound = bias::crlb(&t.position, &truth_geometry(d, t), prior)
-                .map(|b| b.rmse)
-                .unwrap_or(f32::INFINITY);
+            let bound = bound_at(d, t, prior);
             let ghost_reported = d.ghost.is_some_and(|g| {
                 r.into_iter().flat_map(|r| r.others()).any(|o| {
                     let (inside, _) = sigmas_of(&o.source, &g);
@@ -180,15 +202,21 @@ impl EmitterSummary {
     }
 }
 
-/// Measure `condition` over `runs` seeded runs with `config` (its priors also set the bound).
-pub fn measure(condition: Condition, runs: usize, config: &LocateConfig) -> Summary {
+/// Measure `condition` over `runs` seeded runs with `config`, every station's offset with the
+/// drive's prior or `prior` (which also set the bound).
+pub fn measure(
+    condition: Condition,
+    runs: usize,
+    config: &LocateConfig,
+    prior: BiasPrior,
+) -> Summary {
     let outcomes: Vec<(Vec<RunOutcome>, bool)> = (0..runs)
         .into_par_iter()
         .map(|run| {
             let d = simulate(condition, run);
-            let r = run_locate(&d, config, run as u64).ok();
+            let r = run_locate(&d, config, prior, run as u64).ok();
             let none = r.as_ref().is_none_or(|r| r.emitters().is_empty());
-            (judge(&d, r.as_ref(), config.priors[0]), none)
+            (judge(&d, r.as_ref().map(|r| &r.report), prior), none)
         })
         .collect();
     let emitters = outcomes.first().map(|o| o.0.len()).unwrap_or(0);

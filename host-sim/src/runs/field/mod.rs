@@ -27,9 +27,12 @@ pub use bench::{BENCH_METHODS, bench};
 pub use capture::capture;
 pub use drives::{l600, simulate, u_route};
 pub use judge::{
-    EmitterSummary, RunOutcome, Summary, THREE_SIGMA_TAIL, emitter_for, judge, measure, run_locate,
+    EmitterSummary, RunOutcome, Summary, THREE_SIGMA_TAIL, bound_at, emitter_for, judge, measure,
+    run_locate,
 };
 
+use crate::estimate::Priors;
+use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::fix::locate::Observation;
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
@@ -134,6 +137,21 @@ pub struct Truth {
     pub freq_mhz: Option<f32>,
 }
 
+/// A station of a network drive (docs/src/networks.md): what the simulation made of it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StationTruth {
+    /// Its id, as its records carry it.
+    pub id: String,
+    /// Whether it stands still (a mast) or drives.
+    pub fixed: bool,
+    /// Its true offset, radians.
+    pub offset: f32,
+    /// Its true bearing noise, radians.
+    pub sigma: f32,
+    /// The offset prior its stations file states.
+    pub prior: BiasPrior,
+}
+
 /// The observations of one run and what made them.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FieldDrive {
@@ -147,6 +165,19 @@ pub struct FieldDrive {
     pub bias: f32,
     /// The true bearing noise, radians (the sd of a reported bearing's error).
     pub sigma: f32,
+    /// The stations of a network drive, by station index (empty: one DF unit, station 0,
+    /// with the prior the run is given).
+    pub stations: Vec<StationTruth>,
+}
+
+impl FieldDrive {
+    /// Each station's prior: the drive's own where it states them, else `default`.
+    pub fn priors(&self, default: BiasPrior) -> Priors {
+        Priors {
+            default,
+            stations: self.stations.iter().map(|s| Some(s.prior)).collect(),
+        }
+    }
 }
 
 /// The seeded generator of run `run` of a condition (independent streams per condition).

@@ -2,16 +2,15 @@
 //! the fix is refitted every few seconds until it is good enough or the run gives up.
 
 use super::{FIX_EVERY_S, MAX_DISTANCE_M, MAX_TIME_S, OFFSET, RunResult, Set};
+use crate::estimate::Priors;
 use crate::guidance::reach::OnRoad;
 use crate::guidance::{FixView, Situation};
 use crate::inputs::roads::RoadGraph;
 use crate::runs::guidance::networks::{HALF_M, Network};
 use crate::runs::guidance::policy::{Decision, GOAL_M, Move, Policy, decide};
-use foxhunt_core::fix::bias::{self, BiasPrior, BiasedFix};
+use foxhunt_core::fix::bias::{self, BiasPrior, BiasedFix, StationSlot};
 use foxhunt_core::fix::ellipse::cep50;
-use foxhunt_core::fix::locate::{
-    Buffers, Item, LocateConfig, NoiseModel, Observation, Source, locate,
-};
+use foxhunt_core::fix::locate::{LocateConfig, NoiseModel, Observation, Source};
 use foxhunt_core::guidance::stop::{FixQuality, Limit, Reason, StopRule, verdict};
 use foxhunt_core::model::bearing::{Bearing, predicted, wrap};
 use foxhunt_core::{Gaussian, random};
@@ -106,10 +105,10 @@ fn fix(bearings: &[Bearing], prior: BiasPrior, last: Option<&BiasedFix>) -> Opti
     let warm = last.and_then(|f| {
         bias::ml_sources(
             bearings,
-            &bias::same_priors(prior),
+            &mut [StationSlot::new(prior)],
             bias::Start {
                 position: f.position,
-                bias: f.bias,
+                offsets: bias::StartOffsets::Common(f.bias),
             },
             &Gaussian,
             options,
@@ -132,19 +131,12 @@ fn honest(bearings: &[Bearing], prior: BiasPrior) -> Option<Source> {
         .enumerate()
         .map(|(k, b)| Observation::new(*b, k as f32))
         .collect();
-    let n = obs.len();
-    let mut items = vec![Item::EMPTY; n];
-    let mut scratch = vec![Item::EMPTY; n];
-    let mut order = vec![0u32; n];
-    let mut tags = vec![0u8; n];
-    let mut rng = XorShiftRng::seed_from_u64(n as u64);
     let config = LocateConfig {
         noise: NoiseModel::Known,
-        priors: bias::same_priors(prior),
         ..LocateConfig::default()
     };
-    let work = Buffers::new(&mut items, &mut scratch, &mut order, &mut tags);
-    let r = locate::<1, 1, _>(&obs, &config, work, &mut rng).ok()?;
+    let seed = obs.len() as u64;
+    let r = crate::estimate::pipeline(&obs, &config, &Priors::same(prior), seed).ok()?;
     r.emitters().first().copied()
 }
 

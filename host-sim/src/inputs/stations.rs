@@ -1,0 +1,455 @@
+//! The stations file (`--stations FILE`, docs/src/formats/files.md): what is known of each DF
+//! station of a network before the drive (where it stands, its offset's prior or calibration,
+//! its noise, its antenna) and the reference transmitters it hears. Read with a size cap and
+//! checked whole when loaded; every error is one line naming the file and the entry.
+
+use foxhunt_bridge::nmea::LatLon;
+use foxhunt_core::fix::bias::{BiasPrior, DEFAULT_BIAS_SD};
+use serde::Deserialize;
+use std::collections::HashSet;
+use std::io::Read;
+use std::path::Path;
+
+/// A stations file is refused past this many bytes (ten thousand stations fit in a few
+/// hundred kilobytes).
+pub const MAX_FILE_BYTES: u64 = 1 << 20;
+/// Stations a file may list at most.
+pub const MAX_STATIONS: usize = 10_000;
+/// Reference transmitters a network may have at most.
+pub const MAX_REFERENCES: usize = 64;
+/// Longest station id: a KrakenSDR's STATION_ID is kept to this many bytes, so a longer id
+/// could never match a record.
+pub const MAX_ID_BYTES: usize = foxhunt_bridge::kraken::STATION_LEN;
+
+/// What kind of antenna a station has: shown in the report, it does not change the fix.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Antenna {
+    /// A uniform circular array (KrakenSDR's usual five elements).
+    Uca,
+    /// A uniform linear array (front and back are mirror images).
+    Ula,
+    /// A pseudo-Doppler array.
+    Doppler,
+    /// An Adcock or Watson-Watt array.
+    Adcock,
+    /// A rotated directional antenna (a Yagi).
+    Yagi,
+    /// Something else.
+    Other,
+}
+
+/// One station as the file describes it (the TOML keys).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StationEntry {
+    id: String,
+    position: Option<[f64; 2]>,
+    offset_deg: Option<f32>,
+    offset_sd_deg: Option<f32>,
+    calibration_file: Option<String>,
+    noise_deg: Option<f32>,
+    antenna: Option<Antenna>,
+}
+
+/// What applies to every station the file does not list.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct DefaultEntry {
+    offset_deg: Option<f32>,
+    offset_sd_deg: Option<f32>,
+    noise_deg: Option<f32>,
+}
+
+/// A reference transmitter as the file describes it.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ReferenceEntry {
+    name: Option<String>,
+    position: [f64; 2],
+    freq_mhz: f64,
+}
+
+/// The file's TOML.
+#[derive(Debug, Clone, PartialEq, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct FileToml {
+    #[serde(default)]
+    default: DefaultEntry,
+    #[serde(default)]
+    station: Vec<StationEntry>,
+    #[serde(default)]
+    reference: Vec<ReferenceEntry>,
+}
+
+/// Where a station's offset prior came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PriorFrom {
+    /// The default of an uncalibrated unit (or `--calibration`'s, for every station).
+    Default,
+    /// The stations file's prior for it (or its `[default]`).
+    StationsFile,
+    /// A calibration file the stations file names for it.
+    Calibration,
+}
+
+/// One station: what the file says of it, checked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StationSpec {
+    /// Its id: a KrakenSDR's STATION_ID, or a unit's `INPUT:KIND` label.
+    pub id: String,
+    /// Where it stands (replaces its records' positions).
+    pub position: Option<LatLon>,
+    /// Its offset's prior.
+    pub prior: BiasPrior,
+    /// Where the prior came from.
+    pub from: PriorFrom,
+    /// Its bearing noise, radians (replaces the bearings' own sigma).
+    pub noise: Option<f32>,
+    /// Its antenna.
+    pub antenna: Option<Antenna>,
+}
+
+/// A reference transmitter: a known emitter whose bearings calibrate the stations.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Reference {
+    /// Its name in the report.
+    pub name: String,
+    /// Where it is.
+    pub position: LatLon,
+    /// Its frequency, MHz: bearings of its channel are calibration, not an emitter to find.
+    pub freq_mhz: f64,
+}
+
+/// What is known of a network's stations before the drive: the stations file with the
+/// `--reference` transmitters added.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Network {
+    /// The listed stations.
+    pub stations: Vec<StationSpec>,
+    /// Prior of a station the file does not list, and where it came from.
+    pub default_prior: Option<BiasPrior>,
+    /// Noise of a station the file does not list, radians.
+    pub default_noise: Option<f32>,
+    /// The reference transmitters.
+    pub references: Vec<Reference>,
+}
+
+fn lat_lon(p: [f64; 2]) -> Option<LatLon> {
+    (p[0].is_finite() && p[1].is_finite() && p[0].abs() <= 90.0 && p[1].abs() <= 180.0).then_some(
+        LatLon {
+            lat: p[0],
+            lon: p[1],
+        },
+    )
+}
+
+/// An offset prior from the keys (degrees), checked; `None` when neither is given.
+fn prior_of(mean: Option<f32>, sd: Option<f32>, what: &str) -> Result<Option<BiasPrior>, String> {
+    if mean.is_none() && sd.is_none() {
+        return Ok(None);
+    }
+    let mean = mean.unwrap_or(0.0);
+    let sd = sd.unwrap_or(DEFAULT_BIAS_SD.to_degrees());
+    if !(mean.is_finite() && mean.abs() <= 180.0) {
+        return Err(format!(
+            "{what}: offset_deg must lie in [-180, 180], not {mean}"
+        ));
+    }
+    if !(sd >= 0.0) {
+        return Err(format!(
+            "{what}: offset_sd_deg must be >= 0 (0: calibrated; inf: no prior), not {sd}"
+        ));
+    }
+    Ok(Some(BiasPrior {
+        mean: mean.to_radians(),
+        sd: sd.to_radians(),
+    }))
+}
+
+fn noise_of(noise: Option<f32>, what: &str) -> Result<Option<f32>, String> {
+    match noise {
+        None => Ok(None),
+        Some(n) if n > 0.0 && n < 90.0 => Ok(Some(n.to_radians())),
+        Some(n) => Err(format!(
+            "{what}: noise_deg must lie between 0 and 90 degrees, not {n}"
+        )),
+    }
+}
+
+/// Parse `LAT,LON@MHZ` (a `--reference`).
+pub fn parse_reference(text: &str) -> Result<Reference, String> {
+    let bad = || format!("--reference wants LAT,LON@MHZ in decimal degrees and MHz, not `{text}`");
+    let (at, mhz) = text.split_once('@').ok_or_else(bad)?;
+    let (lat, lon) = at.split_once(',').ok_or_else(bad)?;
+    let p = [
+        lat.trim().parse::<f64>().map_err(|_| bad())?,
+        lon.trim().parse::<f64>().map_err(|_| bad())?,
+    ];
+    let freq_mhz: f64 = mhz.trim().parse().map_err(|_| bad())?;
+    let position = lat_lon(p).ok_or_else(bad)?;
+    if !(freq_mhz > 0.0 && freq_mhz.is_finite()) {
+        return Err(format!(
+            "--reference: the frequency must be a positive number of MHz, not {mhz}"
+        ));
+    }
+    Ok(Reference {
+        name: format!("{:.5},{:.5}@{freq_mhz}", p[0], p[1]),
+        position,
+        freq_mhz,
+    })
+}
+
+impl Network {
+    /// Load and check a stations file; errors name the file.
+    pub fn load(path: &Path) -> Result<Self, String> {
+        let name = path.display();
+        let file = std::fs::File::open(path).map_err(|e| format!("cannot read {name}: {e}"))?;
+        if !file.metadata().is_ok_and(|m| m.is_file()) {
+            return Err(format!("{name}: a stations file must be a regular file"));
+        }
+        let mut text = String::new();
+        file.take(MAX_FILE_BYTES + 1)
+            .read_to_string(&mut text)
+            .map_err(|e| format!("cannot read {name}: {e}"))?;
+        if text.len() as u64 > MAX_FILE_BYTES {
+            return Err(format!(
+                "{name}: a stations file holds at most {MAX_FILE_BYTES} bytes"
+            ));
+        }
+        let toml: FileToml =
+            crate::inputs::files::parse_toml(&text).map_err(|e| format!("{name}: {e}"))?;
+        Self::from_toml(toml, path.parent().unwrap_or(Path::new(".")))
+            .map_err(|e| format!("{name}: {e}"))
+    }
+
+    /// The checked network of a parsed file (calibration files relative to `dir`).
+    fn from_toml(t: FileToml, dir: &Path) -> Result<Self, String> {
+        if t.station.len() > MAX_STATIONS {
+            return Err(format!("more than {MAX_STATIONS} stations"));
+        }
+        if t.reference.len() > MAX_REFERENCES {
+            return Err(format!("more than {MAX_REFERENCES} reference transmitters"));
+        }
+        let mut seen = HashSet::new();
+        let mut stations = Vec::with_capacity(t.station.len());
+        for (k, s) in t.station.into_iter().enumerate() {
+            let what = format!("station {} (`{}`)", k + 1, s.id);
+            if s.id.is_empty() || s.id.len() > MAX_ID_BYTES {
+                return Err(format!(
+                    "{what}: an id has 1 to {MAX_ID_BYTES} bytes (KrakenSDR ids are cut there)"
+                ));
+            }
+            if !seen.insert(s.id.clone()) {
+                return Err(format!("{what}: listed twice"));
+            }
+            let position = match s.position {
+                None => None,
+                Some(p) => Some(lat_lon(p).ok_or_else(|| {
+                    format!("{what}: position wants [latitude, longitude] in degrees, not {p:?}")
+                })?),
+            };
+            let given = prior_of(s.offset_deg, s.offset_sd_deg, &what)?;
+            let (prior, from) = match (&s.calibration_file, given) {
+                (Some(_), Some(_)) => {
+                    return Err(format!(
+                        "{what}: give offset_deg/offset_sd_deg or calibration_file, not both"
+                    ));
+                }
+                (Some(f), None) => {
+                    let c = crate::inputs::calibration::Calibration::load(&dir.join(f))
+                        .map_err(|e| format!("{what}: {e}"))?;
+                    (c.prior(), PriorFrom::Calibration)
+                }
+                (None, Some(p)) => (p, PriorFrom::StationsFile),
+                (None, None) => {
+                    match prior_of(t.default.offset_deg, t.default.offset_sd_deg, "default")? {
+                        Some(p) => (p, PriorFrom::StationsFile),
+                        None => (BiasPrior::default(), PriorFrom::Default),
+                    }
+                }
+            };
+            stations.push(StationSpec {
+                id: s.id,
+                position,
+                prior,
+                from,
+                noise: noise_of(s.noise_deg, &what)?,
+                antenna: s.antenna,
+            });
+        }
+        let mut references = Vec::with_capacity(t.reference.len());
+        for (k, r) in t.reference.into_iter().enumerate() {
+            let what = format!("reference {}", k + 1);
+            let position = lat_lon(r.position).ok_or_else(|| {
+                format!(
+                    "{what}: position wants [latitude, longitude] in degrees, not {:?}",
+                    r.position
+                )
+            })?;
+            if !(r.freq_mhz > 0.0 && r.freq_mhz.is_finite()) {
+                return Err(format!(
+                    "{what}: freq_mhz must be a positive number, not {}",
+                    r.freq_mhz
+                ));
+            }
+            references.push(Reference {
+                name: r.name.unwrap_or_else(|| format!("reference {}", k + 1)),
+                position,
+                freq_mhz: r.freq_mhz,
+            });
+        }
+        Ok(Self {
+            stations,
+            default_prior: prior_of(t.default.offset_deg, t.default.offset_sd_deg, "default")?,
+            default_noise: noise_of(t.default.noise_deg, "default")?,
+            references,
+        })
+    }
+
+    /// What the file says of station `id`, if it lists it.
+    pub fn station(&self, id: &str) -> Option<&StationSpec> {
+        self.stations.iter().find(|s| s.id == id)
+    }
+
+    /// Add a `--reference`; errors past [`MAX_REFERENCES`].
+    pub fn add_reference(&mut self, r: Reference) -> Result<(), String> {
+        if self.references.len() >= MAX_REFERENCES {
+            return Err(format!("more than {MAX_REFERENCES} reference transmitters"));
+        }
+        self.references.push(r);
+        Ok(())
+    }
+
+    /// The file's text for a network (what `foxhunt simulate --condition network-*` writes
+    /// beside its capture).
+    pub fn to_toml(&self) -> String {
+        use std::fmt::Write;
+        let mut out = String::new();
+        let deg = |r: f32| r.to_degrees();
+        if let Some(p) = self.default_prior {
+            let _ = writeln!(
+                out,
+                "[default]\noffset_deg = {}\noffset_sd_deg = {}\n",
+                deg(p.mean),
+                deg(p.sd)
+            );
+        }
+        for s in &self.stations {
+            let _ = writeln!(out, "[[station]]\nid = {:?}", s.id);
+            if let Some(p) = s.position {
+                let _ = writeln!(out, "position = [{:.7}, {:.7}]", p.lat, p.lon);
+            }
+            let _ = writeln!(
+                out,
+                "offset_deg = {}\noffset_sd_deg = {}",
+                deg(s.prior.mean),
+                deg(s.prior.sd)
+            );
+            if let Some(n) = s.noise {
+                let _ = writeln!(out, "noise_deg = {:.3}", deg(n));
+            }
+            if let Some(a) = s.antenna {
+                let name = serde_json::to_value(a)
+                    .ok()
+                    .and_then(|v| v.as_str().map(str::to_string))
+                    .unwrap_or_default();
+                let _ = writeln!(out, "antenna = {name:?}");
+            }
+            out.push('\n');
+        }
+        for r in &self.references {
+            let _ = writeln!(
+                out,
+                "[[reference]]\nname = {:?}\nposition = [{:.7}, {:.7}]\nfreq_mhz = {}\n",
+                r.name, r.position.lat, r.position.lon, r.freq_mhz
+            );
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Network, String> {
+        let t: FileToml = crate::inputs::files::parse_toml(text)?;
+        Network::from_toml(t, Path::new("."))
+    }
+
+    #[test]
+    fn a_network_reads_back_what_it_writes() {
+        let text = r#"
+[default]
+offset_sd_deg = 4.0
+
+[[station]]
+id = "north"
+position = [47.07, 8.0]
+offset_deg = 1.0
+offset_sd_deg = 3.0
+noise_deg = 2.0
+antenna = "uca"
+
+[[station]]
+id = "car-1"
+
+[[reference]]
+name = "tower"
+position = [47.05, 8.03]
+freq_mhz = 145.5
+"#;
+        let n = parse(text).expect("a network");
+        assert_eq!(n.stations.len(), 2);
+        let north = n.station("north").expect("north");
+        assert_eq!(north.from, PriorFrom::StationsFile);
+        assert!((north.prior.sd.to_degrees() - 3.0).abs() < 1e-5);
+        assert!((north.noise.unwrap_or(0.0).to_degrees() - 2.0).abs() < 1e-5);
+        // An entry without a prior takes the file's default.
+        let car = n.station("car-1").expect("car");
+        assert!((car.prior.sd.to_degrees() - 4.0).abs() < 1e-5);
+        assert_eq!(n.references[0].freq_mhz, 145.5);
+        let again = parse(&n.to_toml()).expect("its own text");
+        assert_eq!(again.stations.len(), 2);
+        assert_eq!(again.references, n.references);
+    }
+
+    #[test]
+    fn bad_entries_are_one_line_errors_naming_them() {
+        for (text, says) in [
+            ("[[station]]\nid = \"\"", "1 to 16 bytes"),
+            (
+                "[[station]]\nid = \"a\"\n[[station]]\nid = \"a\"",
+                "listed twice",
+            ),
+            (
+                "[[station]]\nid = \"a\"\noffset_sd_deg = -1.0",
+                "offset_sd_deg",
+            ),
+            ("[[station]]\nid = \"a\"\noffset_deg = 400.0", "offset_deg"),
+            (
+                "[[station]]\nid = \"a\"\nposition = [91.0, 0.0]",
+                "position",
+            ),
+            ("[[station]]\nid = \"a\"\nnoise_deg = 0.0", "noise_deg"),
+            ("[[station]]\nid = \"a\"\ncolour = 1", "unknown field"),
+            (
+                "[[reference]]\nposition = [47.0, 8.0]\nfreq_mhz = -1.0",
+                "freq_mhz",
+            ),
+            (
+                "[[station]]\nid = \"a\"\noffset_deg = 1.0\ncalibration_file = \"x\"",
+                "not both",
+            ),
+        ] {
+            let e = parse(text).expect_err(text);
+            assert!(e.contains(says) && !e.contains('\n'), "{text}: {e}");
+        }
+        assert!(parse_reference("47.0,8.0@145.5").is_ok());
+        for bad in ["47.0,8.0", "47.0@145", "95,8@1", "47,8@0", "47,8@x"] {
+            assert!(parse_reference(bad).is_err(), "{bad}");
+        }
+    }
+}
