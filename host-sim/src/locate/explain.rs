@@ -53,6 +53,10 @@ pub(crate) fn no_bearing(d: &Decoded) -> String {
         b.turning,
         "taken while the vehicle turned faster than the yaw-rate gate",
     );
+    reason(
+        b.time_jump,
+        "whose time jumped away from the records around them (a corrupt time)",
+    );
     format!(
         "no usable bearing: of {} bearing records, {}",
         r.seen,

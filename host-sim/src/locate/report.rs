@@ -192,6 +192,7 @@ pub fn rejections(d: &Decoded) -> BTreeMap<&'static str, u32> {
         ("stale_fix", b.stale_fix),
         ("late", b.late),
         ("turning", b.turning),
+        ("time_jump", b.time_jump),
         ("outlier", 0),
         ("repeated", 0),
         ("time_backwards", 0),

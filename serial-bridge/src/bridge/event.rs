@@ -126,6 +126,9 @@ pub struct BridgeCounters {
     pub late: u32,
     /// Bearings turned by a heading while the vehicle turned faster than the yaw gate.
     pub turning: u32,
+    /// Bearing records whose time jumped away from their source's clock on their own (a
+    /// corrupt digit): the records around them said so ([`super::clock`]).
+    pub time_jump: u32,
     /// Valid MT frames of other commands.
     pub other_mt: u32,
     /// AF_INCOMING_MSG frames too short for their fields.
