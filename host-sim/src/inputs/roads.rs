@@ -9,10 +9,67 @@
 //! parses (km/h or mph) and from the road class otherwise. Every OSM node of a kept way is a
 //! graph node (no chains contracted), so a curved road is its polyline.
 
+use crate::inputs::files::{ROADS_CAP, open_capped};
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;
 use std::collections::HashMap;
+use std::io::{BufRead, Read};
 use std::path::Path;
+
+/// The longest run of bytes OSM XML has between two markup brackets (`<`, `>`): a tag with
+/// every attribute, or the text between tags. Far beyond any real one; a file without markup
+/// (zeros, a binary) fails at the first run this long instead of filling memory with it.
+const MAX_MARKUP_RUN: usize = 1 << 20;
+
+/// A reader of OSM XML text that fails on a run of [`MAX_MARKUP_RUN`] bytes without `<` or
+/// `>`, or when the text does not start (after blanks) with `<`.
+struct MarkupRuns<R> {
+    inner: R,
+    run: usize,
+    started: bool,
+}
+
+impl<R: Read> MarkupRuns<R> {
+    fn new(inner: R) -> Self {
+        Self {
+            inner,
+            run: 0,
+            started: false,
+        }
+    }
+}
+
+impl<R: Read> Read for MarkupRuns<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        for &b in buf.get(..n).unwrap_or_default() {
+            if !self.started {
+                // A UTF-8 byte-order mark and blanks may come first; then the markup.
+                if b.is_ascii_whitespace() || [0xef, 0xbb, 0xbf].contains(&b) {
+                    continue;
+                }
+                if b != b'<' {
+                    return Err(std::io::Error::other(
+                        "not OSM XML (it does not start with `<`; a .osm.pbf file must end in .pbf)",
+                    ));
+                }
+                self.started = true;
+            }
+            self.run = if b == b'<' || b == b'>' {
+                0
+            } else {
+                self.run + 1
+            };
+            if self.run > MAX_MARKUP_RUN {
+                return Err(std::io::Error::other(format!(
+                    "not OSM XML ({} bytes without markup)",
+                    MAX_MARKUP_RUN
+                )));
+            }
+        }
+        Ok(n)
+    }
+}
 
 /// One directed road segment.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -179,16 +236,17 @@ impl RoadGraph {
         }
     }
 
-    /// Read an extract: `.pbf` as OSM PBF, anything else as OSM XML. Nodes are placed in a
-    /// frame at the extract's first kept node until [`RoadGraph::localise`] moves them.
+    /// Read an extract: `.pbf` as OSM PBF, anything else as OSM XML, streamed (at most
+    /// [`ROADS_CAP`] bytes of it). Nodes are placed in a frame at the extract's first kept node
+    /// until [`RoadGraph::localise`] moves them.
     pub fn load(path: &Path) -> Result<Self, String> {
+        let file = open_capped(path, ROADS_CAP, "a road extract")?;
         let osm = if path.to_string_lossy().ends_with(".pbf") {
-            read_pbf(path)?
+            read_pbf(file)
         } else {
-            let text =
-                std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-            read_xml(&text).map_err(|e| format!("{}: {e}", path.display()))?
-        };
+            read_xml(std::io::BufReader::new(MarkupRuns::new(file)))
+        }
+        .map_err(|e| format!("{}: {e}", path.display()))?;
         osm.graph().map_err(|e| format!("{}: {e}", path.display()))
     }
 }
@@ -326,7 +384,7 @@ impl Osm {
 }
 
 /// Read OSM XML (`<node id lat lon>`, `<way><nd ref/><tag k v/></way>`).
-fn read_xml(bytes: &[u8]) -> Result<Osm, String> {
+fn read_xml(bytes: impl BufRead) -> Result<Osm, String> {
     use quick_xml::events::Event;
     let mut reader = quick_xml::Reader::from_reader(bytes);
     let mut osm = Osm::default();
@@ -339,9 +397,10 @@ fn read_xml(bytes: &[u8]) -> Result<Osm, String> {
             .and_then(|a| a.unescape_value().ok().map(|v| v.into_owned()))
     };
     loop {
-        let ev = reader
-            .read_event_into(&mut buf)
-            .map_err(|e| format!("OSM XML at byte {}: {e}", reader.buffer_position()))?;
+        let ev = reader.read_event_into(&mut buf).map_err(|e| match e {
+            quick_xml::Error::Io(io) => io.to_string(),
+            e => format!("OSM XML at byte {}: {e}", reader.buffer_position()),
+        })?;
         match &ev {
             Event::Start(e) | Event::Empty(e) => match e.name().as_ref() {
                 b"node" => {
@@ -391,10 +450,9 @@ fn read_xml(bytes: &[u8]) -> Result<Osm, String> {
 }
 
 /// Read an OSM PBF extract.
-fn read_pbf(path: &Path) -> Result<Osm, String> {
+fn read_pbf(file: impl Read + Send) -> Result<Osm, String> {
     use osmpbf::{Element, ElementReader};
-    let reader = ElementReader::from_path(path)
-        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let reader = ElementReader::new(std::io::BufReader::new(file));
     let mut osm = Osm::default();
     reader
         .for_each(|el| match el {
@@ -427,7 +485,10 @@ fn read_pbf(path: &Path) -> Result<Osm, String> {
             }
             Element::Relation(_) => {}
         })
-        .map_err(|e| format!("{}: {e}", path.display()))?;
+        .map_err(|e| match e.kind() {
+            osmpbf::ErrorKind::Io(io) => io.to_string(),
+            _ => format!("not OSM PBF: {e}"),
+        })?;
     Ok(osm)
 }
 
@@ -465,12 +526,12 @@ mod tests {
         assert_eq!(g.segments().count(), 3);
         assert_eq!(g.nearest([800.0, 10.0]), Some(1));
         assert!(
-            read_xml(b"<osm><node id='1' lat='x'/></osm>")
+            read_xml(&b"<osm><node id='1' lat='x'/></osm>"[..])
                 .unwrap()
                 .graph()
                 .is_err()
         );
-        assert!(read_xml(b"<osm><way></nd></osm>").is_err());
+        assert!(read_xml(&b"<osm><way></nd></osm>"[..]).is_err());
     }
 
     #[test]
