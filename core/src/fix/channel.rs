@@ -260,7 +260,13 @@ mod tests {
         assert_eq!(ch.freq(0), Some(Some(433.92f32)));
         // Two frequencies 20 kHz apart, alternating: their mean to one f32 step at 433 MHz
         // (30 Hz).
-        let f = |i: usize| Some(Some(if i.is_multiple_of(2) { 433.91f32 } else { 433.93 }));
+        let f = |i: usize| {
+            Some(Some(if i.is_multiple_of(2) {
+                433.91f32
+            } else {
+                433.93
+            }))
+        };
         let ch = group::<2>(N, f, 0.05, &mut order, &mut of).unwrap();
         let mean = ch.freq(0).flatten().unwrap();
         assert!((mean - 433.92).abs() <= 3.1e-5, "{mean}");
