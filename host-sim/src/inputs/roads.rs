@@ -16,16 +16,20 @@ use std::collections::HashMap;
 use std::io::{BufRead, Read};
 use std::path::Path;
 
-/// The longest run of bytes OSM XML has between two markup brackets (`<`, `>`): a tag with
-/// every attribute, or the text between tags. Far beyond any real one; a file without markup
-/// (zeros, a binary) fails at the first run this long instead of filling memory with it.
+/// The longest run of bytes OSM XML has inside one piece: a tag with every attribute (from
+/// `<` to its `>`), or the text between two tags. Far beyond any real one; a file without
+/// markup (zeros, a binary), or a tag that never closes (`<node <node ...`), fails at the
+/// first run this long instead of filling the XML reader's buffer with it.
 const MAX_MARKUP_RUN: usize = 1 << 20;
 
-/// A reader of OSM XML text that fails on a run of [`MAX_MARKUP_RUN`] bytes without `<` or
-/// `>`, or when the text does not start (after blanks) with `<`.
+/// A reader of OSM XML text that fails on a piece of [`MAX_MARKUP_RUN`] bytes, or when the
+/// text does not start (after blanks) with `<`.
 struct MarkupRuns<R> {
     inner: R,
+    /// Bytes since the piece began: since the last `>` outside a tag, the last `<` in one.
     run: usize,
+    /// Inside a tag (after `<`, before its `>`).
+    in_tag: bool,
     started: bool,
 }
 
@@ -34,6 +38,7 @@ impl<R: Read> MarkupRuns<R> {
         Self {
             inner,
             run: 0,
+            in_tag: false,
             started: false,
         }
     }
@@ -55,15 +60,17 @@ impl<R: Read> Read for MarkupRuns<R> {
                 }
                 self.started = true;
             }
-            self.run = if b == b'<' || b == b'>' {
-                0
+            // A tag ends only at its `>` (a `<` inside one is no new piece), text at a `<`.
+            let ends = if self.in_tag { b == b'>' } else { b == b'<' };
+            if ends {
+                self.in_tag = !self.in_tag;
+                self.run = 0;
             } else {
-                self.run + 1
-            };
+                self.run += 1;
+            }
             if self.run > MAX_MARKUP_RUN {
                 return Err(std::io::Error::other(format!(
-                    "not OSM XML ({} bytes without markup)",
-                    MAX_MARKUP_RUN
+                    "not OSM XML (a tag or a text of more than {MAX_MARKUP_RUN} bytes)"
                 )));
             }
         }
@@ -528,6 +535,16 @@ mod tests {
   <way id="12"><nd ref="1"/><nd ref="4"/><tag k="highway" v="footway"/></way>
   <way id="13"><nd ref="2"/><nd ref="99"/><tag k="highway" v="service"/></way>
 </osm>"#;
+
+    #[test]
+    fn a_tag_that_never_closes_is_refused_before_it_fills_memory() {
+        for endless in [b'<', b'a'] {
+            let text = Read::chain(&b"<osm><node "[..], std::io::repeat(endless));
+            let reader = std::io::BufReader::new(MarkupRuns::new(text));
+            let e = read_xml(reader, &mut Osm::default()).expect_err("endless");
+            assert!(e.contains("not OSM XML (a tag"), "{e}");
+        }
+    }
 
     #[test]
     fn osm_xml_gives_drivable_directed_roads() {
