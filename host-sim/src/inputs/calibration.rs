@@ -180,8 +180,14 @@ impl Calibration {
 
     /// Load and check a calibration file; errors name the file and the key.
     pub fn load(path: &Path) -> Result<Self, String> {
-        let c: Self = crate::inputs::files::load_toml(path)?;
-        c.check().map_err(|e| format!("{}: {e}", path.display()))?;
+        let text = crate::inputs::files::read_text(path)?;
+        Self::from_toml(&text).map_err(|e| format!("{}: {e}", path.display()))
+    }
+
+    /// Parse and check a calibration file's text; the error names the key.
+    pub fn from_toml(text: &str) -> Result<Self, String> {
+        let c: Self = crate::inputs::files::parse_toml(text)?;
+        c.check()?;
         Ok(c)
     }
 

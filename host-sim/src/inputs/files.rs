@@ -275,9 +275,3 @@ pub fn toml_error(e: &toml::de::Error, text: &str) -> String {
         None => what,
     }
 }
-
-/// Read and parse a TOML file; errors name the file.
-pub fn load_toml<T: DeserializeOwned>(path: &Path) -> Result<T, String> {
-    let text = read_text(path)?;
-    parse_toml(&text).map_err(|e| format!("{}: {e}", path.display()))
-}
