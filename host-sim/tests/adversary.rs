@@ -538,6 +538,12 @@ fn exit_statuses_are_as_documented() {
     let d = |p: &str| dir.join(p).to_string_lossy().into_owned();
     let here = d("");
     let garbage = write(&dir, "garbage.nmea", "no sentence here\n$GPGGA,bad*00\n");
+    // Only the DF unit's "searching" fix sentence: no position anywhere.
+    let searching = write(
+        &dir,
+        "searching.nmea",
+        "$PFOXF,100059.50,,,,,,,,,2,60,1.20,S*37\n",
+    );
     let drive = d("drive.nmea");
     run_in(&dir, &["simulate", "--out", &drive], b"").expect(0, &[]);
     // (what, args, standard input, status, words on stderr)
@@ -557,6 +563,13 @@ fn exit_statuses_are_as_documented() {
             b"",
             1,
             vec![],
+        ),
+        (
+            "only the unit's searching sentence",
+            vec!["locate", &searching],
+            b"",
+            1,
+            vec!["searching"],
         ),
         (
             "a missing capture",
