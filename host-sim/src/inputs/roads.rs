@@ -440,7 +440,9 @@ fn read_xml(bytes: impl BufRead, into: &mut impl Extract) -> Result<(), String> 
         let ev = reader.read_event_into(&mut buf).map_err(|e| match e {
             // The cap's or the markup check's own words.
             quick_xml::Error::Io(io) => io.to_string(),
-            e => format!("OSM XML at byte {}: {e}", reader.buffer_position()),
+            // quick-xml quotes the text it found, line ends and all: on one line.
+            e => format!("OSM XML at byte {}: {e}", reader.buffer_position())
+                .replace(['\n', '\r'], " "),
         })?;
         match &ev {
             Event::Start(e) | Event::Empty(e) => match e.name().as_ref() {
