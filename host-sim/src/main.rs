@@ -3,7 +3,7 @@
 
 use clap::{Parser, Subcommand};
 use foxhunt_sim::commands;
-use foxhunt_sim::outputs::terminal::{Out, Stop, note};
+use foxhunt_sim::outputs::terminal::{Out, note};
 use std::process::ExitCode;
 
 /// Find radio transmitters from bearings: fixes of recorded and live drives, indoor RSSI
@@ -41,7 +41,7 @@ enum Command {
     ///   foxhunt locate /dev/ttyUSB0 --baud 4800 --gpsd       # positions, heading from gpsd
     ///   foxhunt locate --kraken http://192.168.1.20:8081     # a KrakenSDR on the network
     ///   foxhunt locate /dev/ttyUSB0 --baud 4800 --roads area.osm.pbf --target-cep50-m 50
-    #[command(verbatim_doc_comment)]
+    #[command(verbatim_doc_comment, allow_negative_numbers = true)]
     Locate(commands::locate::Args),
     /// Track a ZigBee node indoors from a coordinator's capture (AF_INCOMING_MSG frames).
     ///
@@ -51,7 +51,7 @@ enum Command {
     /// Examples:
     ///   foxhunt track serial-bridge/captures/rssi-sim.znp --anchors serial-bridge/captures/rssi-sim.anchors.toml
     ///   foxhunt track node.cap --anchors lab.toml --json --svg track.svg
-    #[command(verbatim_doc_comment)]
+    #[command(verbatim_doc_comment, allow_negative_numbers = true)]
     Track(commands::track::Args),
     /// Every decoded frame of a capture as a JSON line, then the counters.
     ///
@@ -63,7 +63,7 @@ enum Command {
     ///
     /// Example:
     ///   foxhunt frames drive.nmea | grep pfoxb
-    #[command(verbatim_doc_comment)]
+    #[command(verbatim_doc_comment, allow_negative_numbers = true)]
     Frames(commands::frames::Args),
     /// Write a capture as the radios would send it (a drive in a DF unit's format; for
     /// rssi-sim and rssi-lab, AF_INCOMING_MSG frames and an anchors file).
@@ -81,7 +81,7 @@ enum Command {
     ///   foxhunt simulate --scenario aoa-drive --bias-deg 4 --wild 0.1 --out biased.nmea
     ///   foxhunt simulate --scenario-file my.toml --origin 53.35,-6.26 --out my.nmea
     ///   foxhunt simulate --scenario rssi-sim --out lab.znp --anchors-out lab.toml
-    #[command(verbatim_doc_comment)]
+    #[command(verbatim_doc_comment, allow_negative_numbers = true)]
     Simulate(commands::simulate::Args),
     /// Monte Carlo benchmark of every method on a scenario, against the CRLB (or PCRB).
     ///
@@ -94,7 +94,7 @@ enum Command {
     ///   foxhunt bench --scenario all --markdown    # every canonical scenario, the book's table
     ///   foxhunt bench --scenario rssi-sim --runs 20 --particles 80
     ///   foxhunt bench --scenario-file my.toml --json
-    #[command(verbatim_doc_comment)]
+    #[command(verbatim_doc_comment, allow_negative_numbers = true)]
     Bench(commands::bench::Args),
     /// Speed: the bootstrap SIR against the same filter in numpy (filterpy), how every
     /// filter's step time grows with N (100 to 100 000), and with --scale `locate` on large
@@ -103,7 +103,7 @@ enum Command {
     /// Installs the peer (numpy, scipy and filterpy at the versions pinned in
     /// host-sim/benches/peer-requirements.txt) from PyPI into target/peer-venv on first use.
     /// Example: foxhunt perf --runs 20 --scale
-    #[command(verbatim_doc_comment)]
+    #[command(verbatim_doc_comment, allow_negative_numbers = true)]
     Perf(commands::perf::Args),
     /// A live map in the browser: route, bearings, every emitter and other source with its
     /// ellipse, the suggested move and the CEP50 history, pushed as the input is decoded.
@@ -115,7 +115,7 @@ enum Command {
     /// Examples:
     ///   foxhunt serve serial-bridge/captures/aoa-drive.nmea      # then open http://127.0.0.1:8080/
     ///   cat /dev/ttyUSB0 | foxhunt serve - --roads area.osm.pbf
-    #[command(verbatim_doc_comment)]
+    #[command(verbatim_doc_comment, allow_negative_numbers = true)]
     Serve(commands::serve::Args),
 }
 
@@ -132,13 +132,14 @@ fn main() -> ExitCode {
         Command::Serve(a) => commands::serve::run(a),
     }
     .and_then(|()| out.flush());
-    match result {
-        Ok(()) | Err(Stop::Closed) => ExitCode::SUCCESS,
-        Err(Stop::Error(e)) => {
-            // One line that names the problem; 1 = the input gave no result (clap exits 2 on
-            // usage errors).
-            note(&format!("foxhunt: {}", e.replace('\n', " ")));
-            ExitCode::from(1)
-        }
+    // What went wrong decides the status (`Stop::status`: 1 no result, 2 usage; clap's own
+    // usage errors exit 2 before this), on one line that names the problem.
+    let stop = match result {
+        Ok(()) => return ExitCode::SUCCESS,
+        Err(stop) => stop,
+    };
+    if let Some(e) = stop.message() {
+        note(&format!("foxhunt: {}", e.replace('\n', " ")));
     }
+    ExitCode::from(stop.status())
 }

@@ -76,6 +76,22 @@ fn refused(out: &Output, words: &[&str]) {
     }
 }
 
+/// A usage error: exit status 2 and every one of `words` on stderr (clap's own message, or the
+/// program's one line), no panic and nothing on stdout.
+fn misused(out: &Output, words: &[&str]) {
+    let err = stderr(out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(
+        out.stdout.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    for w in words {
+        assert!(err.contains(w), "`{w}` not in: {err}");
+    }
+}
+
 fn sentence(body: &str) -> String {
     let mut s = String::new();
     foxhunt_bridge::nmea::write_sentence(&mut s, body).expect("string");
@@ -138,11 +154,11 @@ fn bench_gives_finite_rows_at_a_count_the_old_tables_lacked() {
         assert!(r["rmse"].as_f64().is_some_and(f64::is_finite), "{r}");
         assert!(r["ratio"].as_f64().is_some_and(|q| q > 0.0), "{r}");
     }
-    refused(
+    misused(
         &foxhunt(&["bench", "--particles", "81"]),
         &["81", "compiled"],
     );
-    refused(&foxhunt(&["bench", "--runs", "0"]), &["--runs", "0"]);
+    misused(&foxhunt(&["bench", "--runs", "0"]), &["--runs", "'0'"]);
 }
 
 #[test]
@@ -502,32 +518,33 @@ fn mirrored_bearings_are_not_called_a_shallow_crossing() {
 
 #[test]
 fn nonsense_options_are_refused_by_name() {
-    refused(
+    // Out-of-range values are usage errors (exit 2), their text quoted as given.
+    misused(
         &foxhunt(&["locate", "--sigma-deg", "100000"]),
-        &["--sigma-deg", "100000"],
+        &["--sigma-deg", "'100000'", "between 0 and 90"],
     );
-    refused(
+    misused(
         &foxhunt(&["locate", "--sigma-deg", "NaN"]),
-        &["--sigma-deg", "NaN"],
+        &["--sigma-deg", "'NaN'"],
     );
-    refused(
+    misused(
         &foxhunt(&["locate", "--particles", "123", "--method", "sir"]),
-        &["--particles", "123"],
+        &["--particles", "'123'", "compiled"],
     );
     let dir = scratch("nonsense");
     let out = dir.join("d.nmea");
     let o = out.to_str().expect("path");
-    refused(
+    misused(
         &foxhunt(&["simulate", "--out", o, "--bias-deg", "NaN"]),
-        &["--bias-deg", "NaN"],
+        &["--bias-deg", "'NaN'"],
     );
     assert!(!out.exists(), "a capture was written");
-    refused(
+    misused(
         &foxhunt(&["simulate", "--out", o, "--wild", "1.5"]),
-        &["--wild", "1.5"],
+        &["--wild", "'1.5'"],
     );
     for flag in ["--drop", "--corrupt", "--wild", "--bias-deg"] {
-        refused(
+        misused(
             &foxhunt(&[
                 "simulate",
                 "--scenario",
@@ -540,24 +557,25 @@ fn nonsense_options_are_refused_by_name() {
             &[flag, "rssi-sim"],
         );
     }
-    refused(
+    misused(
         &foxhunt(&["simulate", "--out", o, "--origin", "95,8"]),
-        &["--origin"],
+        &["--origin", "'95,8'"],
     );
-    refused(
+    misused(
         &foxhunt(&["locate", "--quiet-exit", "5"]),
         &["--quiet-exit", "live"],
     );
-    refused(
+    misused(
         &foxhunt(&["locate", "-", "--quiet-exit", "-1"]),
-        &["--quiet-exit", "-1"],
+        &["--quiet-exit", "'-1'"],
     );
-    // `inf` is "until the line closes": an empty standard input closes at once.
+    // `inf` is "until the line closes": an empty standard input closes at once, with no fix.
     let inf = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
         .args(["locate", "-", "--quiet-exit", "inf"])
         .stdin(Stdio::null())
         .output()
         .expect("run foxhunt");
+    assert_eq!(inf.status.code(), Some(1), "{}", stderr(&inf));
     assert!(!stderr(&inf).contains("panicked"), "{}", stderr(&inf));
 }
 
@@ -741,7 +759,8 @@ fn live_lines_carry_what_the_df_unit_said_also_before_a_fix() {
     assert!(second["error"].is_string(), "still no host fix: {second}");
     assert!(second["unit"]["fixes"].as_u64() > Some(0), "{second}");
     drop(stdin);
-    assert!(child.wait().expect("foxhunt ends").success());
+    // The host never had a fix (two bearings): exit status 1, whatever the unit said.
+    assert_eq!(child.wait().expect("foxhunt ends").code(), Some(1));
     let last = rx
         .iter()
         .last()

@@ -206,9 +206,10 @@ fn the_target_radius_moves_the_stop() {
         .output()
         .expect("run foxhunt");
     let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{err}");
+    // A value out of range is a usage error: exit status 2, the flag and the text as given.
+    assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(
-        err.contains("--target-cep50-m") && err.trim().lines().count() == 1,
+        err.contains("--target-cep50-m") && err.contains("'0'"),
         "{err}"
     );
 }

@@ -354,3 +354,29 @@ fn kraken_records_bring_their_own_position_and_heading() {
     assert!((azimuth(&m[0].bearing) - 240.0).abs() < 1e-3, "{m:?}");
     assert_eq!(rx.bridge.counters().low_quality, 1);
 }
+
+#[test]
+fn a_bearing_whose_time_jumped_ahead_holds_no_later_one_back() {
+    // A drive of 30 one-second fixes with a $PFOXB half a second after each; the fifth
+    // bearing's hour digit corrupt (checksum right): 11:00:04.5 instead of 12:00:04.5 is
+    // behind, 13:00:04.5 ahead. Either costs that bearing, none of the others.
+    for hour in ["11", "13"] {
+        let mut bodies = Vec::new();
+        for s in 0..30 {
+            bodies.push(format!(
+                "GPRMC,1200{s:02}.000,A,4700.0000,N,00800.{:04},E,24.5,90.0,010626,,,A",
+                s * 100
+            ));
+            let h = if s == 4 { hour } else { "12" };
+            bodies.push(format!("PFOXB,{h}00{s:02}.50,10.0,T,80,433.92"));
+        }
+        let bodies: Vec<&str> = bodies.iter().map(String::as_str).collect();
+        let mut rx = Receiver::<0>::new(BridgeConfig::default(), []);
+        let b = bearings(&run(&mut rx, &bodies));
+        assert!(
+            b.len() >= 29,
+            "hour {hour}: {} of 30 bearings placed",
+            b.len()
+        );
+    }
+}

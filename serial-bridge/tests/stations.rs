@@ -160,13 +160,15 @@ fn a_full_table_is_counted_and_a_surveyed_station_stands_where_surveyed() {
             .survey(StationKey::Named(Station::new("mast")), mast)
     );
     let mut bytes = Vec::new();
-    for (k, id) in ["mast", "b", "c", "mast", "c"].iter().enumerate() {
+    // A unit's first record waits for its second (its clock is judged on its own), so each
+    // station is heard twice before the next starts.
+    for (k, id) in ["mast", "b", "mast", "b", "c", "c", "c"].iter().enumerate() {
         bytes.extend(xml(id, 1_780_000_000_000 + 1000 * k as u64, at, 0.0, 10.0));
     }
     let m = measurements(&mut rx, &bytes);
-    // "mast" and "b" fill the MCU's two rows; "c" is refused twice.
-    assert_eq!(rx.bridge.counters().stations_full, 2);
-    assert_eq!(m.len(), 3);
+    // "mast" and "b" fill the MCU's two rows; "c" is refused three times.
+    assert_eq!(rx.bridge.counters().stations_full, 3);
+    assert_eq!(m.len(), 4);
     let s = &rx.bridge.stations()[0];
     assert!(s.fixed() && s.surveyed() == Some(mast));
     // The records say (47, 8); the mast stands 1.1 km north and 1.5 km east of it.

@@ -1,12 +1,11 @@
 //! `foxhunt bench`: Monte Carlo of every method of a scenario's table against its bound.
 
 use crate::outputs::tables as report;
-use crate::outputs::terminal::{Out, Outcome};
+use crate::outputs::terminal::{Out, Outcome, Stop};
 use crate::runs::field::Condition;
 use crate::runs::montecarlo::{Progress, bench, total_runs};
 use crate::runs::network::NetworkCondition;
 use crate::runs::scenario::{NAMES, Scenario, ScenarioModel};
-use foxhunt_core::PARTICLE_COUNTS;
 use std::path::PathBuf;
 
 /// Options of `foxhunt bench`.
@@ -23,11 +22,11 @@ pub struct Args {
     #[arg(long)]
     pub scenario_file: Option<PathBuf>,
     /// Monte Carlo runs (at least 1; default: the scenario's).
-    #[arg(long)]
+    #[arg(long, value_parser = super::values::count_at_least(1, "runs"))]
     pub runs: Option<usize>,
     /// Particles, one of the compiled counts 50, 80, 100, 200, 500, 1000, 2000, 5000, 10000,
     /// 100000 (default: the scenario's table).
-    #[arg(long)]
+    #[arg(long, value_parser = super::values::particles)]
     pub particles: Option<usize>,
     /// Print JSON (an array of rows with stable field names).
     #[arg(long, conflicts_with = "markdown")]
@@ -39,7 +38,7 @@ pub struct Args {
     #[arg(long)]
     pub quiet: bool,
     /// When stderr is not a terminal, a progress line at most every this many seconds.
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(long, default_value_t = 5.0, value_parser = super::values::seconds())]
     pub progress_secs: f64,
 }
 
@@ -56,16 +55,6 @@ pub fn scenarios(a: &Args) -> Result<Vec<Scenario>, String> {
             )
         })?],
     };
-    if a.runs == Some(0) {
-        return Err("--runs must be at least 1, not 0".into());
-    }
-    if let Some(n) = a.particles
-        && !PARTICLE_COUNTS.contains(&n)
-    {
-        return Err(format!(
-            "--particles {n} is not a compiled size; use one of {PARTICLE_COUNTS:?}"
-        ));
-    }
     for s in list.iter_mut() {
         if let Some(r) = a.runs {
             s.runs = r;
@@ -152,11 +141,10 @@ fn print(a: &Args, rows: &[crate::outputs::tables::Row], out: &mut Out) -> Outco
 /// Run `foxhunt bench`.
 pub fn run(a: &Args, out: &mut Out) -> Outcome {
     if let Some(conditions) = field_conditions(a)? {
-        if a.runs == Some(0) {
-            return Err("--runs must be at least 1, not 0".into());
-        }
         if a.particles.is_some() {
-            return Err("--particles does not apply to the field conditions (N = 1000)".into());
+            return Err(Stop::usage(
+                "--particles does not apply to the field conditions (N = 1000)",
+            ));
         }
         let rows = crate::runs::field::bench(&conditions, a.runs.unwrap_or(100));
         return print(a, &rows, out);
@@ -192,13 +180,6 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
         );
     }
     let list = scenarios(a)?;
-    if !(a.progress_secs >= 0.0 && a.progress_secs.is_finite()) {
-        return Err(format!(
-            "--progress-secs must be a number of seconds >= 0, not {}",
-            a.progress_secs
-        )
-        .into());
-    }
     let every = std::time::Duration::from_secs_f64(a.progress_secs);
     let progress = Progress::every(list.iter().map(total_runs).sum(), !a.quiet, every);
     let rows: Vec<_> = list.iter().flat_map(|s| bench(s, &progress)).collect();

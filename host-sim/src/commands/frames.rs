@@ -1,6 +1,7 @@
 //! `foxhunt frames`: every decoded frame of a capture as a JSON line.
 
 use crate::inputs::files::{Source, stream};
+use crate::outputs::frames::FramesWriter;
 use crate::outputs::terminal::{Out, Outcome, write_error};
 use std::path::PathBuf;
 
@@ -11,11 +12,17 @@ pub struct Args {
     pub capture: PathBuf,
 }
 
-/// Run `foxhunt frames`.
+/// Run `foxhunt frames`: frames are written as the capture is read, in bounded memory.
 pub fn run(a: &Args, out: &mut Out) -> Outcome {
-    let mut bytes = Vec::new();
+    let mut w = FramesWriter::new();
+    let mut failed = None;
     stream(&[Source::from_path(&a.capture)], |b| {
-        bytes.extend_from_slice(b)
+        if failed.is_none() {
+            failed = w.feed(b, out).err();
+        }
     })?;
-    crate::outputs::frames::write_frames(&bytes, out).map_err(write_error)
+    if let Some(e) = failed {
+        return Err(write_error(e));
+    }
+    w.finish(out).map_err(write_error)
 }

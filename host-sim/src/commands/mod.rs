@@ -8,6 +8,7 @@ pub mod perf;
 pub mod serve;
 pub mod simulate;
 pub mod track;
+pub mod values;
 
 use crate::guidance::guide::Guide;
 use crate::inputs::roads::RoadGraph;
@@ -65,7 +66,8 @@ pub struct GuidanceArgs {
     pub roads: Option<std::path::PathBuf>,
     /// The stop rule's target: "good enough" once the fix's CEP50 and the bias-aware bound's
     /// are below this many metres, with consistent residuals and enough independent bearings.
-    #[arg(long, value_name = "M", default_value_t = StopRule::default().target_cep50_m)]
+    #[arg(long, value_name = "M", default_value_t = StopRule::default().target_cep50_m,
+          value_parser = values::f32_where(|m| m > 0.0 && m.is_finite(), "a number of metres > 0"))]
     pub target_cep50_m: f32,
 }
 

@@ -1,6 +1,6 @@
 //! `foxhunt perf`: the speed tables of the book (docs/src/speed.md).
 
-use crate::outputs::terminal::{Out, Outcome, note};
+use crate::outputs::terminal::{Out, Outcome, Stop, note};
 use crate::runs::perf::{
     GROWTH_FILTERS, GROWTH_SIZES, growth, growth_table, numpy_table, scale, scale_table,
 };
@@ -9,13 +9,15 @@ use crate::runs::perf::{
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Runs timed per particle count against the numpy peer (at least 1).
-    #[arg(long, default_value_t = 20)]
+    #[arg(long, default_value_t = 20, value_parser = super::values::count_at_least(1, "runs"))]
     pub runs: usize,
     /// Seconds spent timing each cell of the growth table.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5,
+          value_parser = super::values::f64_where(|s| s > 0.0 && s.is_finite(), "a number of seconds > 0"))]
     pub budget: f64,
     /// Skip a growth cell whose extrapolated step time exceeds this many seconds.
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = 30.0,
+          value_parser = super::values::f64_where(|s| s > 0.0, "a number of seconds > 0"))]
     pub limit: f64,
     /// Leave out the numpy comparison.
     #[arg(long)]
@@ -31,15 +33,10 @@ pub struct Args {
 
 /// Run `foxhunt perf`.
 pub fn run(a: &Args, out: &mut Out) -> Outcome {
-    if a.runs == 0 {
-        return Err("--runs must be at least 1, not 0".into());
-    }
-    if !(a.budget > 0.0 && a.budget.is_finite() && a.limit > 0.0) {
-        return Err(format!(
-            "--budget and --limit must be positive seconds, not {} and {}",
-            a.budget, a.limit
-        )
-        .into());
+    if a.no_numpy && a.no_growth && !a.scale {
+        return Err(Stop::usage(
+            "--no-numpy and --no-growth leave nothing to time: drop one, or add --scale",
+        ));
     }
     if !a.no_numpy {
         out.line(&numpy_table(a.runs)?)?;

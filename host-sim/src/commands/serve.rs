@@ -1,8 +1,9 @@
 //! `foxhunt serve`: the live map of a replayed capture or of standard input.
 
-use super::GuidanceArgs;
+use super::{GuidanceArgs, values};
+use crate::inputs::files::{InputKind, Source};
 use crate::outputs::serve::{Input, ServeOptions, serve};
-use crate::outputs::terminal::Outcome;
+use crate::outputs::terminal::{Outcome, Stop};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -21,23 +22,15 @@ pub struct Args {
     /// Online map tiles, a URL template such as `https://tile.example/{z}/{x}/{y}.png`.
     #[arg(long)]
     pub tiles: Option<String>,
-    /// Replay: lines of the capture per update.
-    #[arg(long, default_value_t = 20)]
+    /// Replay: lines of the capture per update (at least 1).
+    #[arg(long, default_value_t = 20, value_parser = values::count_at_least(1, "lines"))]
     pub chunk_lines: usize,
     /// Replay: seconds between updates.
-    #[arg(long, default_value_t = 0.2)]
+    #[arg(long, default_value_t = 0.2, value_parser = values::seconds())]
     pub pace: f64,
     /// Exit this many seconds after the input ends (default: serve until stopped).
-    #[arg(long)]
+    #[arg(long, value_parser = values::seconds())]
     pub linger: Option<f64>,
-}
-
-fn seconds(name: &str, s: f64) -> Result<Duration, String> {
-    if s >= 0.0 && s.is_finite() {
-        Ok(Duration::from_secs_f64(s))
-    } else {
-        Err(format!("--{name} wants a number of seconds >= 0, not {s}"))
-    }
 }
 
 /// Run `foxhunt serve`.
@@ -45,15 +38,32 @@ pub fn run(a: &Args) -> Outcome {
     let input = match a.captures.as_slice() {
         [one] if one.as_os_str() == "-" => Input::Stdin,
         many if many.iter().any(|p| p.as_os_str() == "-") => {
-            return Err("standard input (-) is read live: give it alone".into());
+            return Err(Stop::usage(
+                "standard input (-) is read live: give it alone",
+            ));
         }
-        many => Input::Replay {
-            files: many.to_vec(),
-            lines: a.chunk_lines.max(1),
-            pace: seconds("pace", a.pace)?,
-        },
+        many => {
+            // Every file readable as a capture before the server starts: a missing file or a
+            // device is the command's error, not a page that never fills.
+            for p in many {
+                let source = Source::from_path(p);
+                if source.kind()? == InputKind::Serial {
+                    return Err(Stop::usage(format!(
+                        "{} is a serial device: serve reads it as standard input, `cat {0} | \
+                         foxhunt serve -` (after `stty -F {0} 4800 raw`)",
+                        p.display()
+                    )));
+                }
+                source.check_capture()?;
+            }
+            Input::Replay {
+                files: many.to_vec(),
+                lines: a.chunk_lines,
+                pace: Duration::from_secs_f64(a.pace),
+            }
+        }
     };
-    let linger = a.linger.map(|l| seconds("linger", l)).transpose()?;
+    let linger = a.linger.map(Duration::from_secs_f64);
     serve(ServeOptions {
         addr: a.addr.clone(),
         input,

@@ -1,7 +1,7 @@
 //! `foxhunt simulate`: a capture byte for byte as the radios would send it.
 
 use crate::outputs::files::Outputs;
-use crate::outputs::terminal::{Outcome, note};
+use crate::outputs::terminal::{Outcome, Stop, note};
 use crate::runs::field::Condition;
 use crate::runs::network::NetworkCondition;
 use crate::runs::scenario::{NAMES, Scenario, ScenarioModel};
@@ -40,45 +40,46 @@ pub struct Args {
     pub force: bool,
     /// Latitude,longitude where the route's first point lies (the capture's local origin),
     /// decimal degrees (default 47.0,8.0).
-    #[arg(long, allow_hyphen_values = true)]
-    pub origin: Option<String>,
+    #[arg(long, allow_hyphen_values = true, value_name = "LAT,LON", value_parser = origin)]
+    pub origin: Option<LatLon>,
     /// Which Monte Carlo run's noise to write.
     #[arg(long, default_value_t = 0)]
     pub run: usize,
     /// Drives: UTC time of the first fix, HH:MM:SS (default 10:00:00).
-    #[arg(long)]
-    pub start: Option<String>,
+    #[arg(long, value_name = "HH:MM:SS", value_parser = start)]
+    pub start: Option<UtcTime>,
     /// Drives: UTC date of the first fix, YYYY-MM-DD (default 2026-06-01).
-    #[arg(long)]
-    pub date: Option<String>,
+    #[arg(long, value_name = "YYYY-MM-DD", value_parser = date)]
+    pub date: Option<Date>,
     /// Drives: share of wild bearings, uniform over the circle (default: the scenario's).
-    #[arg(long)]
+    #[arg(long, value_parser = super::values::share())]
     pub wild: Option<f32>,
     /// Drives: a constant bias on every bearing, degrees (a mounting offset).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, allow_hyphen_values = true,
+          value_parser = super::values::f32_where(|d| d.abs() <= 180.0, "a number of degrees from -180 to 180"))]
     pub bias_deg: Option<f32>,
     /// Drives: share of bytes corrupted after writing (0.01 = 1 %).
-    #[arg(long)]
+    #[arg(long, value_parser = super::values::share())]
     pub corrupt: Option<f32>,
     /// Drives: share of bytes dropped after writing.
-    #[arg(long)]
+    #[arg(long, value_parser = super::values::share())]
     pub drop: Option<f32>,
     /// Drives: the DF unit's record format: pfoxb (GGA + RMC + $PFOXB, the default), agrelo
     /// (GGA + RMC + HDT + %BBB/Q relative bearings), kraken-csv or kraken-xml (KrakenSDR
     /// records with their own position and heading).
-    #[arg(long)]
-    pub format: Option<String>,
+    #[arg(long, value_parser = format)]
+    pub format: Option<CaptureFormat>,
 }
 
 fn format(text: &str) -> Result<CaptureFormat, String> {
     CaptureFormat::from_name(text).ok_or_else(|| {
         let names: Vec<&str> = CaptureFormat::ALL.iter().map(|f| f.name()).collect();
-        format!("--format `{text}` is not one of {}", names.join(", "))
+        format!("not one of {}", names.join(", "))
     })
 }
 
 fn start(text: &str) -> Result<UtcTime, String> {
-    let bad = || format!("--start wants HH:MM:SS (UTC), not `{text}`");
+    let bad = || "not HH:MM:SS (UTC)".to_string();
     let parts: Vec<u32> = text
         .split(':')
         .map(|p| p.parse().map_err(|_| bad()))
@@ -92,7 +93,7 @@ fn start(text: &str) -> Result<UtcTime, String> {
 }
 
 fn date(text: &str) -> Result<Date, String> {
-    let bad = || format!("--date wants YYYY-MM-DD, not `{text}`");
+    let bad = || "not a date YYYY-MM-DD".to_string();
     let parts: Vec<&str> = text.split('-').collect();
     let [y, m, d] = parts.as_slice() else {
         return Err(bad());
@@ -105,9 +106,7 @@ fn date(text: &str) -> Result<Date, String> {
     let month = time::Month::try_from(m).map_err(|_| bad())?;
     time::Date::from_calendar_date(i32::from(y), month, d).map_err(|_| bad())?;
     if !(1980..2080).contains(&y) {
-        return Err(format!(
-            "--date must lie in 1980-2079 (RMC writes two-digit years), not {y}"
-        ));
+        return Err("not in 1980-2079 (RMC writes two-digit years)".into());
     }
     Ok(Date {
         year: y,
@@ -117,19 +116,8 @@ fn date(text: &str) -> Result<Date, String> {
 }
 
 fn origin(text: &str) -> Result<LatLon, String> {
-    let bad = || format!("--origin wants LAT,LON in decimal degrees, not `{text}`");
-    let (lat, lon) = text.split_once(',').ok_or_else(bad)?;
-    let p = LatLon {
-        lat: lat.trim().parse().map_err(|_| bad())?,
-        lon: lon.trim().parse().map_err(|_| bad())?,
-    };
-    if p.lat.abs() <= 90.0 && p.lon.abs() <= 180.0 {
-        Ok(p)
-    } else {
-        Err(format!(
-            "--origin must be a latitude in [-90, 90] and a longitude in [-180, 180], not `{text}`"
-        ))
-    }
+    let [lat, lon] = super::values::lat_lon(text)?;
+    Ok(LatLon { lat, lon })
 }
 
 /// The names `--condition` takes: the field conditions, then the network ones.
@@ -145,10 +133,7 @@ fn condition_names() -> Vec<String> {
 /// `simulate --condition network-*`: one run of a network condition, its capture and its
 /// stations file.
 fn network(a: &Args, c: NetworkCondition) -> Outcome {
-    let origin = match &a.origin {
-        Some(text) => origin(text)?,
-        None => crate::runs::simulate::DEFAULT_ORIGIN,
-    };
+    let origin = a.origin.unwrap_or(crate::runs::simulate::DEFAULT_ORIGIN);
     let stations_path = a.out.with_extension("stations.toml");
     if stations_path == a.out {
         return Err("the stations file and the capture cannot be one file".into());
@@ -200,11 +185,10 @@ pub fn run(a: &Args) -> Outcome {
                 ("format", a.format.is_some()),
             ];
             if let Some((name, _)) = drive_only.iter().find(|(_, given)| *given) {
-                return Err(format!(
+                return Err(Stop::usage(format!(
                     "--{name} applies to drives, not to the indoor scenario `{}`",
                     scenario.name
-                )
-                .into());
+                )));
             }
             let named = a.anchors_out.is_some();
             let anchors_path = a
@@ -212,7 +196,9 @@ pub fn run(a: &Args) -> Outcome {
                 .clone()
                 .unwrap_or_else(|| a.out.with_extension("anchors.toml"));
             if anchors_path == a.out {
-                return Err("the anchors file and the capture cannot be one file".into());
+                return Err(Stop::usage(
+                    "the anchors file and the capture cannot be one file",
+                ));
             }
             outputs.check(&anchors_path, named)?;
             let (bytes, anchors, _) = indoor_capture(&scenario.name, a.run)?;
@@ -221,11 +207,10 @@ pub fn run(a: &Args) -> Outcome {
             outputs.write(&anchors_path, text.as_bytes(), named)?;
         }
         ScenarioModel::Ungm { .. } => {
-            return Err(format!(
+            return Err(Stop::usage(format!(
                 "`{}` is a benchmark without a radio: nothing to capture",
                 scenario.name
-            )
-            .into());
+            )));
         }
         ScenarioModel::Bearing(d) => {
             let mut o = CaptureOptions {
@@ -236,18 +221,10 @@ pub fn run(a: &Args) -> Outcome {
                 drop_fraction: a.drop.unwrap_or(0.0),
                 ..CaptureOptions::default()
             };
-            if let Some(text) = &a.origin {
-                o.origin = origin(text)?;
-            }
-            if let Some(text) = &a.start {
-                o.start = start(text)?;
-            }
-            if let Some(text) = &a.date {
-                o.date = date(text)?;
-            }
-            if let Some(text) = &a.format {
-                o.format = format(text)?;
-            }
+            o.origin = a.origin.unwrap_or(o.origin);
+            o.start = a.start.unwrap_or(o.start);
+            o.date = a.date.unwrap_or(o.date);
+            o.format = a.format.unwrap_or(o.format);
             let bytes = drive_capture(&scenario, &o)?;
             outputs.write(&a.out, &bytes, true)?;
             note(&format!(
@@ -275,10 +252,7 @@ fn field(a: &Args, name: &str) -> Outcome {
             names.join(", ")
         )
     })?;
-    let origin = match &a.origin {
-        Some(text) => origin(text)?,
-        None => crate::runs::simulate::DEFAULT_ORIGIN,
-    };
+    let origin = a.origin.unwrap_or(crate::runs::simulate::DEFAULT_ORIGIN);
     let outputs = Outputs::new(std::iter::empty(), a.force);
     let (bytes, truths) = crate::runs::field::capture(c, a.run, origin)?;
     outputs.write(&a.out, &bytes, true)?;

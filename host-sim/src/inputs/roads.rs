@@ -9,10 +9,74 @@
 //! parses (km/h or mph) and from the road class otherwise. Every OSM node of a kept way is a
 //! graph node (no chains contracted), so a curved road is its polyline.
 
+use crate::inputs::files::{ROADS_CAP, open_capped};
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;
 use std::collections::HashMap;
+use std::io::{BufRead, Read};
 use std::path::Path;
+
+/// The longest run of bytes OSM XML has inside one piece: a tag with every attribute (from
+/// `<` to its `>`), or the text between two tags. Far beyond any real one; a file without
+/// markup (zeros, a binary), or a tag that never closes (`<node <node ...`), fails at the
+/// first run this long instead of filling the XML reader's buffer with it.
+const MAX_MARKUP_RUN: usize = 1 << 20;
+
+/// A reader of OSM XML text that fails on a piece of [`MAX_MARKUP_RUN`] bytes, or when the
+/// text does not start (after blanks) with `<`.
+struct MarkupRuns<R> {
+    inner: R,
+    /// Bytes since the piece began: since the last `>` outside a tag, the last `<` in one.
+    run: usize,
+    /// Inside a tag (after `<`, before its `>`).
+    in_tag: bool,
+    started: bool,
+}
+
+impl<R: Read> MarkupRuns<R> {
+    fn new(inner: R) -> Self {
+        Self {
+            inner,
+            run: 0,
+            in_tag: false,
+            started: false,
+        }
+    }
+}
+
+impl<R: Read> Read for MarkupRuns<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        for &b in buf.get(..n).unwrap_or_default() {
+            if !self.started {
+                // A UTF-8 byte-order mark and blanks may come first; then the markup.
+                if b.is_ascii_whitespace() || [0xef, 0xbb, 0xbf].contains(&b) {
+                    continue;
+                }
+                if b != b'<' {
+                    return Err(std::io::Error::other(
+                        "not OSM XML (it does not start with `<`; a .osm.pbf file must end in .pbf)",
+                    ));
+                }
+                self.started = true;
+            }
+            // A tag ends only at its `>` (a `<` inside one is no new piece), text at a `<`.
+            let ends = if self.in_tag { b == b'>' } else { b == b'<' };
+            if ends {
+                self.in_tag = !self.in_tag;
+                self.run = 0;
+            } else {
+                self.run += 1;
+            }
+            if self.run > MAX_MARKUP_RUN {
+                return Err(std::io::Error::other(format!(
+                    "not OSM XML (a tag or a text of more than {MAX_MARKUP_RUN} bytes)"
+                )));
+            }
+        }
+        Ok(n)
+    }
+}
 
 /// One directed road segment.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -345,20 +409,22 @@ impl Osm {
     }
 }
 
-/// Read the extract at `path`: `.pbf` as OSM PBF, anything else as OSM XML.
+/// Read the extract at `path`: `.pbf` as OSM PBF, anything else as OSM XML, streamed (at most
+/// [`ROADS_CAP`] bytes of it; what is not a file or a pipe is refused before reading).
 fn read_extract(path: &Path, into: &mut impl Extract) -> Result<(), String> {
+    let file = open_capped(path, ROADS_CAP, "a road extract")?;
     if path.to_string_lossy().ends_with(".pbf") {
-        return read_pbf(path, into);
+        return read_pbf(file, path, into);
     }
-    let text = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    read_xml(&text, into).map_err(|e| format!("{}: {e}", path.display()))
+    read_xml(std::io::BufReader::new(MarkupRuns::new(file)), into)
+        .map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// A tag as read from XML: key, value.
 type Tag = (String, String);
 
 /// Read OSM XML (`<node id lat lon>`, `<way><nd ref/><tag k v/></way>`).
-fn read_xml(bytes: &[u8], into: &mut impl Extract) -> Result<(), String> {
+fn read_xml(bytes: impl BufRead, into: &mut impl Extract) -> Result<(), String> {
     use quick_xml::events::Event;
     let mut reader = quick_xml::Reader::from_reader(bytes);
     let mut buf = Vec::new();
@@ -371,9 +437,13 @@ fn read_xml(bytes: &[u8], into: &mut impl Extract) -> Result<(), String> {
             .and_then(|a| a.unescape_value().ok().map(|v| v.into_owned()))
     };
     loop {
-        let ev = reader
-            .read_event_into(&mut buf)
-            .map_err(|e| format!("OSM XML at byte {}: {e}", reader.buffer_position()))?;
+        let ev = reader.read_event_into(&mut buf).map_err(|e| match e {
+            // The cap's or the markup check's own words.
+            quick_xml::Error::Io(io) => io.to_string(),
+            // quick-xml quotes the text it found, line ends and all: on one line.
+            e => format!("OSM XML at byte {}: {e}", reader.buffer_position())
+                .replace(['\n', '\r'], " "),
+        })?;
         match &ev {
             Event::Start(e) | Event::Empty(e) => match e.name().as_ref() {
                 b"node" => {
@@ -420,27 +490,29 @@ fn read_xml(bytes: &[u8], into: &mut impl Extract) -> Result<(), String> {
     Ok(())
 }
 
-/// Read an OSM PBF extract (its errors name the file).
-fn read_pbf(path: &Path, into: &mut impl Extract) -> Result<(), String> {
-    use super::osm_pbf::{self, Element};
+/// Read an OSM PBF extract from `file`, the one at `path` (its errors name the file).
+fn read_pbf(file: impl Read, path: &Path, into: &mut impl Extract) -> Result<(), String> {
+    use super::osm_pbf::{Element, PbfReader};
     let (mut refs, mut at) = (Vec::new(), Vec::new());
-    osm_pbf::read(path, |el| match el {
-        Element::Node(n) => into.node(
-            n.id,
-            LatLon {
-                lat: n.lat,
-                lon: n.lon,
-            },
-        ),
-        Element::Way(w) => {
-            refs.clear();
-            refs.extend(w.refs());
-            at.clear();
-            at.extend(w.locations().map(|(lat, lon)| LatLon { lat, lon }));
-            into.way(&refs, &at, &mut w.tags());
-        }
-    })
-    .map_err(|e| e.to_string())
+    let reader = PbfReader::new(std::io::BufReader::new(file), path.display().to_string());
+    reader
+        .read_all(|el| match el {
+            Element::Node(n) => into.node(
+                n.id,
+                LatLon {
+                    lat: n.lat,
+                    lon: n.lon,
+                },
+            ),
+            Element::Way(w) => {
+                refs.clear();
+                refs.extend(w.refs());
+                at.clear();
+                at.extend(w.locations().map(|(lat, lon)| LatLon { lat, lon }));
+                into.way(&refs, &at, &mut w.tags());
+            }
+        })
+        .map_err(|e| e.to_string())
 }
 
 #[cfg(test)]
@@ -465,6 +537,16 @@ mod tests {
   <way id="12"><nd ref="1"/><nd ref="4"/><tag k="highway" v="footway"/></way>
   <way id="13"><nd ref="2"/><nd ref="99"/><tag k="highway" v="service"/></way>
 </osm>"#;
+
+    #[test]
+    fn a_tag_that_never_closes_is_refused_before_it_fills_memory() {
+        for endless in [b'<', b'a'] {
+            let text = Read::chain(&b"<osm><node "[..], std::io::repeat(endless));
+            let reader = std::io::BufReader::new(MarkupRuns::new(text));
+            let e = read_xml(reader, &mut Osm::default()).expect_err("endless");
+            assert!(e.contains("not OSM XML (a tag"), "{e}");
+        }
+    }
 
     #[test]
     fn osm_xml_gives_drivable_directed_roads() {

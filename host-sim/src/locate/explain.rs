@@ -7,6 +7,20 @@ use foxhunt_core::{Bearing, Error};
 /// Why a capture gives no position for the vehicle, in words a user can act on.
 pub(crate) fn no_vehicle_position(d: &Decoded) -> String {
     let g = d.gps;
+    if g.seen == 0 && d.bearing_records.seen > 0 && d.bridge.no_fix + d.bridge.stale_fix == 0 {
+        // Bearings that needed no GPS fix (KrakenSDR records bring their own positions): the
+        // first one placed would have set the frame, so none was, and why is their story.
+        return no_bearing(d);
+    }
+    if g.seen == 0
+        && let Some(u) = d.unit.report()
+    {
+        return format!(
+            "no fix: the capture holds the DF unit's own sentences but no GPS fix or bearing, \
+             and the unit reports no position ({})",
+            u.status_text.unwrap_or("no fix sentence")
+        );
+    }
     if g.seen == 0 {
         let bad = d.stream.bad_checksum + d.stream.malformed;
         return if bad > 0 {
@@ -53,6 +67,10 @@ pub(crate) fn no_bearing(d: &Decoded) -> String {
         b.turning,
         "taken while the vehicle turned faster than the yaw-rate gate",
     );
+    reason(
+        b.time_jump,
+        "whose time jumped away from the records around them (a corrupt time)",
+    );
     format!(
         "no usable bearing: of {} bearing records, {}",
         r.seen,
@@ -64,10 +82,42 @@ pub(crate) fn no_bearing(d: &Decoded) -> String {
     )
 }
 
+/// How far the bearings' lines turn over the drive, degrees: the spread (5th to 95th
+/// percentile) of their directions as undirected lines, so a few wild ones do not count. A
+/// distant emitter's lines hardly turn; nearly parallel lines cross anywhere noise puts them.
+fn turn_deg(bearings: &[Bearing]) -> f32 {
+    let Some(first) = bearings.first() else {
+        return 0.0;
+    };
+    let half = core::f32::consts::FRAC_PI_2;
+    let mut d: Vec<f32> = bearings
+        .iter()
+        .map(|b| {
+            let x = (b.theta - first.theta).rem_euclid(2.0 * half);
+            if x > half { x - 2.0 * half } else { x }
+        })
+        .collect();
+    d.sort_by(f32::total_cmp);
+    let at = |q: f32| d[((d.len() - 1) as f32 * q).round() as usize];
+    (at(0.95) - at(0.05)).to_degrees()
+}
+
+/// The bearings' typical noise, degrees (the median of their sigmas).
+fn noise_deg(bearings: &[Bearing]) -> f32 {
+    let mut s: Vec<f32> = bearings.iter().map(|b| b.sigma).collect();
+    s.sort_by(f32::total_cmp);
+    s.get(s.len() / 2).map_or(1.0, |x| x.to_degrees())
+}
+
 /// Whether nearly all of at least five bearings point away from where their lines cross (the
 /// pseudo-linear fix, which treats a bearing as an undirected line): the sign of a reversed or
-/// mirrored DF convention. Fewer, or a mixed picture, is a geometry problem instead.
+/// mirrored DF convention. Fewer, a mixed picture, or lines that turn too little for their
+/// crossing to mean anything (a distant emitter: noise puts it behind as often as ahead) is a
+/// geometry problem instead.
 fn points_away(bearings: &[Bearing]) -> bool {
+    if turn_deg(bearings) < 10.0 * noise_deg(bearings).max(1.0) {
+        return false;
+    }
     let Ok(f) = foxhunt_core::fix::ple::ple(bearings) else {
         return false;
     };
@@ -96,6 +146,14 @@ pub fn explain(e: Error, bearings: &[Bearing]) -> String {
              (they meet behind the vehicle): is the DF unit's angle convention reversed (180 \
              degrees) or mirrored?"
             .into(),
+        Error::ParallelBearings if turn_deg(bearings) > 0.01 => format!(
+            "the bearings turn by only {:.1} degrees over the drive against {:.1} degrees of \
+             noise: the emitter may lie anywhere along the line of bearing out to the search's \
+             edge (a distant emitter, or bearings too noisy), so its range is unknown; drive \
+             across the line of bearing, or closer",
+            turn_deg(bearings),
+            noise_deg(bearings)
+        ),
         Error::ParallelBearings => "all bearings are parallel: they never cross, so the range is \
              unknown; drive across the line of bearing"
             .into(),

@@ -35,10 +35,9 @@ use stations::station_reports;
 pub fn locate(d: &Decoded, o: &LocateOptions) -> Result<Located, String> {
     o.check()?;
     let unit = d.unit.report();
+    // The unit's own fix is the report of a capture of its output, when it has one.
     if d.observations.is_empty()
-        && let Some(u) = unit
-            .clone()
-            .filter(|u| u.lat.is_some() || d.frame.is_none())
+        && let Some(u) = unit.clone().filter(|u| u.lat.is_some())
     {
         return Ok(unit_only(d, o, u));
     }

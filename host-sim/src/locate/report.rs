@@ -199,6 +199,7 @@ pub fn rejections(d: &Decoded) -> BTreeMap<&'static str, u32> {
         ("late", b.late),
         ("turning", b.turning),
         ("stations_full", b.stations_full),
+        ("time_jump", b.time_jump),
         ("outlier", 0),
         ("repeated", 0),
         ("time_backwards", 0),

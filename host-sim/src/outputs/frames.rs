@@ -4,6 +4,7 @@
 //! as the unit reported it and `reference` (`true` or `relative`) after the format's own
 //! convention, with `quality` and `freq_mhz` where the format has them.
 
+use crate::outputs::json::Short;
 use foxhunt_bridge::agrelo::Agrelo;
 use foxhunt_bridge::mt::{AfIncomingMsg, LinkQualityMap};
 use foxhunt_bridge::nmea::{LatLon, NmeaError, Reference, Sentence, UtcTime};
@@ -26,11 +27,6 @@ fn time(t: UtcTime) -> String {
 fn position(v: &mut Value, p: LatLon) {
     v["lat"] = json!(p.lat);
     v["lon"] = json!(p.lon);
-}
-
-/// An `f32` as the decimal it prints as (0.41, not 0.4099999964).
-fn short(x: f32) -> f64 {
-    x.to_string().parse().unwrap_or(f64::NAN)
 }
 
 fn talker(t: &[u8; 2]) -> String {
@@ -57,13 +53,13 @@ fn unit_json(text: &str) -> Option<Value> {
         Ok(UnitSentence::Fix(f)) => {
             let mut v = json!({"kind": "pfoxf", "time": time(f.time),
                 "status": (f.status.letter() as char).to_string(), "used": f.used,
-                "window": f.window, "sigma_deg": short(f.sigma_deg)});
+                "window": f.window, "sigma_deg": f.sigma_deg.short()});
             if let Some(p) = f.position {
                 position(&mut v, p);
-                v["major_m"] = json!(short(f.major_m));
-                v["minor_m"] = json!(short(f.minor_m));
-                v["orientation_deg"] = json!(short(f.orientation_deg));
-                v["cep50_m"] = json!(short(f.cep50_m));
+                v["major_m"] = json!(f.major_m.short());
+                v["minor_m"] = json!(f.minor_m.short());
+                v["orientation_deg"] = json!(f.orientation_deg.short());
+                v["cep50_m"] = json!(f.cep50_m.short());
             }
             v
         }
@@ -97,7 +93,7 @@ fn sentence_json(text: &str) -> Value {
         Ok(Sentence::Gga(g)) => {
             let mut v = json!({"kind": "gga", "talker": talker(&g.talker),
                 "time": time(g.time), "quality": g.quality, "satellites": g.satellites,
-                "hdop": g.hdop, "altitude_m": g.altitude_m});
+                "hdop": g.hdop.short(), "altitude_m": g.altitude_m.short()});
             position(&mut v, g.position);
             v
         }
@@ -117,7 +113,7 @@ fn sentence_json(text: &str) -> Value {
         Ok(Sentence::Gns(g)) => {
             let mut v = json!({"kind": "gns", "talker": talker(&g.talker),
                 "time": time(g.time), "mode": (g.mode as char).to_string(),
-                "satellites": g.satellites, "hdop": g.hdop, "altitude_m": g.altitude_m});
+                "satellites": g.satellites, "hdop": g.hdop.short(), "altitude_m": g.altitude_m.short()});
             position(&mut v, g.position);
             v
         }
@@ -139,7 +135,7 @@ fn sentence_json(text: &str) -> Value {
             let mut v = json!({"kind": "pfoxb", "time": time(b.time),
                 "bearing_deg": b.azimuth_deg, "azimuth_deg": b.azimuth_deg,
                 "reference": reference(b.reference),
-                "quality": b.quality, "freq_mhz": b.freq_mhz});
+                "quality": b.quality.short(), "freq_mhz": b.freq_mhz});
             if let Some(p) = b.position {
                 position(&mut v, p);
             }
@@ -170,19 +166,19 @@ pub fn frame_json(f: &Frame<'_>, map: &LinkQualityMap) -> Value {
         },
         Frame::Agrelo(text) => match Agrelo::parse(text) {
             // Relative to the vehicle, clockwise; 0 means no bearing (`bearing_deg` null).
-            Ok(a) => json!({"kind": "agrelo", "bearing_deg": a.bearing().map(short),
+            Ok(a) => json!({"kind": "agrelo", "bearing_deg": a.bearing().short(),
                 "reference": "relative", "quality": a.quality,
-                "magnetic_deg": a.magnetic_deg.map(short), "record": text}),
+                "magnetic_deg": a.magnetic_deg.short(), "record": text}),
             Err(e) => json!({"kind": "agrelo", "record": text, "error": e.to_string()}),
         },
         Frame::KrakenCsv(k) => {
             let r = &k.record;
-            let mut v = json!({"kind": "kraken_csv", "bearing_deg": short(r.bearing_deg),
-                "reference": "relative", "quality": short(r.confidence),
-                "power_db": short(r.power_db),
+            let mut v = json!({"kind": "kraken_csv", "bearing_deg": r.bearing_deg.short(),
+                "reference": "relative", "quality": r.confidence.short(),
+                "power_db": r.power_db.short(),
                 "freq_mhz": r.freq_hz as f64 / 1e6, "time": time(UtcTime {
                     ms_of_day: (r.epoch_ms % 86_400_000) as u32 }),
-                "epoch_ms": r.epoch_ms, "heading_deg": short(r.heading_deg),
+                "epoch_ms": r.epoch_ms, "heading_deg": r.heading_deg.short(),
                 "station": r.station.as_str(), "latency_ms": r.latency_ms,
                 "spectrum": k.spectrum.map(|s| s.to_vec())});
             if let Some(p) = r.position {
@@ -192,12 +188,12 @@ pub fn frame_json(f: &Frame<'_>, map: &LinkQualityMap) -> Value {
         }
         Frame::KrakenXml(r) => {
             // DOA counts anticlockwise from the array's front; true = heading + 360 - DOA.
-            let mut v = json!({"kind": "kraken_xml", "bearing_deg": short(r.doa_deg),
-                "reference": "relative", "anticlockwise": true, "quality": r.conf.map(short),
-                "pwr": r.pwr.map(short), "freq_mhz": r.freq_mhz,
+            let mut v = json!({"kind": "kraken_xml", "bearing_deg": r.doa_deg.short(),
+                "reference": "relative", "anticlockwise": true, "quality": r.conf.short(),
+                "pwr": r.pwr.short(), "freq_mhz": r.freq_mhz,
                 "time": r.time_ms.map(|t| time(UtcTime { ms_of_day: (t % 86_400_000) as u32 })),
-                "epoch_ms": r.time_ms, "heading_deg": r.heading_deg.map(short),
-                "true_bearing_deg": r.true_deg().map(short), "station": r.station.as_str()});
+                "epoch_ms": r.time_ms, "heading_deg": r.heading_deg.short(),
+                "true_bearing_deg": r.true_deg().short(), "station": r.station.as_str()});
             if let Some(p) = r.position {
                 position(&mut v, p);
             }
@@ -206,37 +202,99 @@ pub fn frame_json(f: &Frame<'_>, map: &LinkQualityMap) -> Value {
     }
 }
 
+/// Frames of a capture as JSON lines, fed in chunks (memory stays bounded whatever the
+/// capture's size), then the counters line.
+pub struct FramesWriter {
+    demux: Demux<600>,
+    map: LinkQualityMap,
+    /// Lines of each kind.
+    kinds: std::collections::BTreeMap<&'static str, u64>,
+    /// The first write error: nothing more is written after it.
+    failed: Option<std::io::Error>,
+}
+
+impl Default for FramesWriter {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl FramesWriter {
+    /// A writer with nothing fed yet.
+    pub fn new() -> Self {
+        Self {
+            demux: Demux::new(),
+            map: LinkQualityMap::default(),
+            kinds: Default::default(),
+            failed: None,
+        }
+    }
+
+    fn sink<'s>(
+        map: &'s LinkQualityMap,
+        kinds: &'s mut std::collections::BTreeMap<&'static str, u64>,
+        failed: &'s mut Option<std::io::Error>,
+        out: &'s mut impl std::io::Write,
+    ) -> impl FnMut(Frame<'_>) + 's {
+        move |f: Frame<'_>| {
+            if failed.is_some() {
+                return;
+            }
+            let v = frame_json(&f, map);
+            *kinds.entry(frame_kind(&f, &v)).or_default() += 1;
+            if let Err(e) = writeln!(out, "{v}") {
+                *failed = Some(e);
+            }
+        }
+    }
+
+    /// The frames completed by `bytes`, written to `out`.
+    pub fn feed(&mut self, bytes: &[u8], out: &mut impl std::io::Write) -> std::io::Result<()> {
+        {
+            let mut sink = Self::sink(&self.map, &mut self.kinds, &mut self.failed, &mut *out);
+            self.demux.feed(bytes, &mut sink);
+        }
+        self.failed.take().map_or(Ok(()), Err)
+    }
+
+    /// The frames still buffered, then the counters line.
+    pub fn finish(mut self, out: &mut impl std::io::Write) -> std::io::Result<()> {
+        {
+            let mut sink = Self::sink(&self.map, &mut self.kinds, &mut self.failed, &mut *out);
+            self.demux.finish_into(&mut sink);
+        }
+        if let Some(e) = self.failed.take() {
+            return Err(e);
+        }
+        let c = self.demux.counters();
+        writeln!(
+            out,
+            "{}",
+            json!({"kind": "counters", "bytes": c.bytes, "sentences": c.sentences,
+                "mt_frames": c.mt_frames, "garbage_bytes": c.garbage_bytes,
+                "bad_checksum": c.bad_checksum, "malformed": c.malformed, "too_long": c.too_long,
+                "bad_fcs": c.bad_fcs, "overlapping": c.overlapping, "truncated": c.truncated,
+                "agrelo": c.agrelo, "agrelo_malformed": c.agrelo_malformed,
+                "kraken_csv": c.kraken_csv, "kraken_xml": c.kraken_xml,
+                "kraken_bad_field": c.kraken_bad_field, "kraken_too_long": c.kraken_too_long,
+                "kraken_structure": c.kraken_structure, "kinds": self.kinds})
+        )
+    }
+}
+
+/// The kind a frame's line names (its record kind's name, or the MT frame's).
+fn frame_kind(f: &Frame<'_>, v: &Value) -> &'static str {
+    match v["kind"].as_str() {
+        Some("af_incoming_msg") => "af_incoming_msg",
+        _ => f.kind().name(),
+    }
+}
+
 /// Every frame of `bytes` as a JSON line, then the counters line, into `out`.
 pub fn write_frames(bytes: &[u8], out: &mut impl std::io::Write) -> std::io::Result<()> {
-    let map = LinkQualityMap::default();
-    let mut demux = Demux::<600>::new();
-    let mut result = Ok(());
-    let mut kinds: std::collections::BTreeMap<String, u64> = Default::default();
-    let mut sink = |f: Frame<'_>| {
-        if result.is_ok() {
-            let v = frame_json(&f, &map);
-            if let Some(k) = v["kind"].as_str() {
-                *kinds.entry(k.to_string()).or_default() += 1;
-            }
-            result = writeln!(out, "{v}");
-        }
-    };
-    demux.feed(bytes, &mut sink);
-    demux.finish_into(&mut sink);
-    result?;
-    let c = demux.counters();
-    writeln!(
-        out,
-        "{}",
-        json!({"kind": "counters", "bytes": c.bytes, "sentences": c.sentences,
-            "mt_frames": c.mt_frames, "garbage_bytes": c.garbage_bytes,
-            "bad_checksum": c.bad_checksum, "malformed": c.malformed, "too_long": c.too_long,
-            "bad_fcs": c.bad_fcs, "overlapping": c.overlapping, "truncated": c.truncated,
-            "agrelo": c.agrelo, "agrelo_malformed": c.agrelo_malformed,
-            "kraken_csv": c.kraken_csv, "kraken_xml": c.kraken_xml,
-            "kraken_bad_field": c.kraken_bad_field, "kraken_too_long": c.kraken_too_long,
-            "kraken_structure": c.kraken_structure, "kinds": kinds})
-    )
+    let mut w = FramesWriter::new();
+    w.feed(bytes, out)?;
+    w.finish(out)
 }
 
 #[cfg(test)]

@@ -4,6 +4,7 @@
 
 pub mod files;
 pub mod frames;
+pub mod json;
 pub mod maps;
 pub mod serve;
 pub mod tables;

@@ -6,10 +6,40 @@ use std::io::{ErrorKind, Write};
 /// Why a command stopped early.
 #[derive(Debug)]
 pub enum Stop {
-    /// An error to print on one line (exit status 1).
+    /// No result: the input gave no fix (or track), or a file could not be read or written.
+    /// One line on standard error, exit status 1.
     Error(String),
+    /// The command line cannot be run as given: flags that do not go together, or a value the
+    /// command refuses in their context. One line on standard error, exit status 2, as clap's
+    /// own usage errors.
+    Usage(String),
     /// Standard output's reader went away (`foxhunt ... | head`): end quietly, as Unix tools do.
     Closed,
+}
+
+impl Stop {
+    /// A usage error.
+    pub fn usage(e: impl Into<String>) -> Self {
+        Stop::Usage(e.into())
+    }
+
+    /// The process's exit status: 0 when the reader went away, 1 without a result, 2 on a
+    /// usage error.
+    pub fn status(&self) -> u8 {
+        match self {
+            Stop::Closed => 0,
+            Stop::Error(_) => 1,
+            Stop::Usage(_) => 2,
+        }
+    }
+
+    /// The line to print, if any.
+    pub fn message(&self) -> Option<&str> {
+        match self {
+            Stop::Error(e) | Stop::Usage(e) => Some(e),
+            Stop::Closed => None,
+        }
+    }
 }
 
 impl From<String> for Stop {

@@ -42,6 +42,7 @@
 //! place in it), `stations` (who took each bearing) and `receiver` (a serial line end to end);
 //! the frames come in here.
 
+mod clock;
 mod config;
 mod event;
 mod heading;
@@ -49,6 +50,8 @@ mod placement;
 mod receiver;
 mod stations;
 
+pub use clock::CLOCKS;
+use clock::{ClockKey, Clocks};
 pub use config::{BridgeConfig, QualityWeighting};
 pub use event::{
     BearingKind, BearingMeasurement, BridgeCounters, Event, HeadingSource, RssiReading, VehicleFix,
@@ -114,6 +117,23 @@ struct Incoming {
 }
 
 const DAY_MS_U64: u64 = 86_400_000;
+
+/// A time of day on a continuous clock: the representative nearest `reference` (the time of
+/// day itself without one).
+fn nearest_day(reference: Option<i64>, ms_of_day: u32) -> i64 {
+    let t = i64::from(ms_of_day);
+    match reference {
+        None => t,
+        Some(last) => {
+            let day = last.div_euclid(DAY_MS);
+            [day - 1, day, day + 1]
+                .map(|d| d * DAY_MS + t)
+                .into_iter()
+                .min_by_key(|c| (c - last).abs())
+                .unwrap_or(t)
+        }
+    }
+}
 /// Bearings that may wait for a fix at once.
 const WAITING: usize = 16;
 
@@ -146,6 +166,8 @@ pub struct Bridge<const A: usize = 0, const S: usize = MCU_STATIONS> {
     /// Latest magnetic heading, and the true one its own variation gives.
     magnetic: Option<(Stamped, Option<f32>)>,
     waiting: Deque<Pending, WAITING>,
+    /// Each bearing source's own clock (records whose time jumps are held and judged there).
+    clocks: Clocks<Incoming>,
     counters: BridgeCounters,
     /// The stations seen, each with its own heading samples and motion.
     stations: Stations<S>,
@@ -171,6 +193,7 @@ impl<const A: usize, const S: usize> Bridge<A, S> {
             true_heading: None,
             magnetic: None,
             waiting: Deque::new(),
+            clocks: Clocks::new(),
             counters: BridgeCounters::default(),
             stations: Stations::new(),
             input: 0,
@@ -200,20 +223,22 @@ impl<const A: usize, const S: usize> Bridge<A, S> {
     /// Place a time of day on the continuous clock: the representative nearest the last time
     /// seen, so a drive across midnight keeps counting.
     fn unwrap_time(&mut self, ms_of_day: u32) -> i64 {
-        let t = i64::from(ms_of_day);
-        let unwrapped = match self.clock {
-            None => t,
-            Some(last) => {
-                let day = last.div_euclid(DAY_MS);
-                [day - 1, day, day + 1]
-                    .map(|d| d * DAY_MS + t)
-                    .into_iter()
-                    .min_by_key(|c| (c - last).abs())
-                    .unwrap_or(t)
-            }
-        };
+        let unwrapped = nearest_day(self.clock, ms_of_day);
         self.clock = Some(unwrapped);
         unwrapped
+    }
+
+    /// A bearing record with a time of its own (`ms_of_day`), judged on its source's clock
+    /// ([`clock`]): it passes on at once, is held until the source's next record says whether
+    /// its time or the clock jumped, or is refused (`time_jump`).
+    fn timed(&mut self, key: ClockKey, ms_of_day: u32, b: Incoming, sink: &mut impl FnMut(Event)) {
+        let time_ms = nearest_day(self.clocks.last(key).or(self.clock), ms_of_day);
+        let judged = self.clocks.judge(key, time_ms, Incoming { time_ms, ..b });
+        self.counters.time_jump += judged.jumped;
+        for r in judged.pass.into_iter().flatten() {
+            self.clock = Some(r.time_ms);
+            self.bearing_in(r, sink);
+        }
     }
 
     fn local(&mut self, p: LatLon) -> Result<[f32; 2], GeoError> {
@@ -248,10 +273,12 @@ impl<const A: usize, const S: usize> Bridge<A, S> {
                     self.counters.low_quality += 1;
                     return;
                 }
-                let time_ms = self.unwrap_time((r.epoch_ms % DAY_MS_U64) as u32);
-                self.bearing_in(
+                let key = ClockKey::new(BearingKind::KrakenCsv, r.station.as_str());
+                self.timed(
+                    key,
+                    (r.epoch_ms % DAY_MS_U64) as u32,
                     Incoming {
-                        time_ms,
+                        time_ms: 0,
                         azimuth_deg: f64::from(r.relative_deg(self.config.kraken_convention)),
                         relative: true,
                         record_heading: r.position.map(|_| r.heading_deg),
@@ -269,28 +296,32 @@ impl<const A: usize, const S: usize> Bridge<A, S> {
                     self.counters.low_quality += 1;
                     return;
                 }
-                let Some(time_ms) = r
-                    .time_ms
-                    .map(|t| self.unwrap_time((t % DAY_MS_U64) as u32))
-                    .or(self.clock)
-                else {
-                    self.counters.no_fix += 1;
-                    return;
+                let incoming = Incoming {
+                    time_ms: 0,
+                    azimuth_deg: f64::from(r.relative_deg()),
+                    relative: true,
+                    record_heading: r.position.and(r.heading_deg),
+                    quality: r.conf.unwrap_or(100.0).clamp(0.0, 100.0),
+                    freq_mhz: r.freq_mhz.unwrap_or(0.0),
+                    position: r.position,
+                    kind: BearingKind::KrakenXml,
+                    key: StationKey::of(BearingKind::KrakenXml, Some(&r.station), self.input),
                 };
-                self.bearing_in(
-                    Incoming {
-                        time_ms,
-                        azimuth_deg: f64::from(r.relative_deg()),
-                        relative: true,
-                        record_heading: r.position.and(r.heading_deg),
-                        quality: r.conf.unwrap_or(100.0).clamp(0.0, 100.0),
-                        freq_mhz: r.freq_mhz.unwrap_or(0.0),
-                        position: r.position,
-                        kind: BearingKind::KrakenXml,
-                        key: StationKey::of(BearingKind::KrakenXml, Some(&r.station), self.input),
-                    },
-                    sink,
-                );
+                match (r.time_ms, self.clock) {
+                    (Some(t), _) => {
+                        let key = ClockKey::new(BearingKind::KrakenXml, r.station.as_str());
+                        self.timed(key, (t % DAY_MS_U64) as u32, incoming, sink);
+                    }
+                    // No time of its own: the clock's, as an Agrelo record.
+                    (None, Some(time_ms)) => self.bearing_in(
+                        Incoming {
+                            time_ms,
+                            ..incoming
+                        },
+                        sink,
+                    ),
+                    (None, None) => self.counters.no_fix += 1,
+                }
             }
         }
     }
@@ -509,6 +540,15 @@ impl<const A: usize, const S: usize> Bridge<A, S> {
 
     /// The stream ended: place the bearings still waiting with the fixes there are.
     pub fn finish(&mut self, sink: &mut impl FnMut(Event)) {
+        // Records held for their source's next one: none came, so nothing says they jumped.
+        let mut held: heapless::Vec<Incoming, { 2 * CLOCKS }> = heapless::Vec::new();
+        self.clocks.release(|r| {
+            let _ = held.push(r);
+        });
+        for r in held {
+            self.clock = Some(r.time_ms);
+            self.bearing_in(r, sink);
+        }
         while let Some(p) = self.waiting.pop_front() {
             self.place(&p, sink);
         }

@@ -70,12 +70,18 @@ impl<const A: usize, const S: usize> Bridge<A, S> {
         self.first_fix_ms.get_or_insert(time_ms);
         self.counters.fixes += 1;
         sink(Event::Fix(fix));
-        while let Some(p) = self.waiting.front().copied() {
-            if p.time_ms > time_ms {
+        // Every waiting bearing this fix reaches, in arrival order; the others wait on. Not
+        // only those before the first that waits on: one bearing whose time jumped ahead would
+        // hold every later one back until the queue overflowed (a corrupt digit costing many).
+        for _ in 0..self.waiting.len() {
+            let Some(p) = self.waiting.pop_front() else {
                 break;
+            };
+            if p.time_ms > time_ms {
+                let _ = self.waiting.push_back(p);
+            } else {
+                self.place(&p, sink);
             }
-            self.waiting.pop_front();
-            self.place(&p, sink);
         }
     }
 

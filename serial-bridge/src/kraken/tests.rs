@@ -137,3 +137,29 @@ fn kerberos_sample_and_current_form() {
         Err(KrakenError::Structure)
     );
 }
+
+#[test]
+fn an_xml_record_with_a_doubled_element_or_a_frequency_below_zero_is_refused() {
+    let one = "<DATA><STATION_ID>K</STATION_ID><TIME>1700000000123</TIME><FREQUENCY>433.92</FREQUENCY><DOA>270</DOA><CONF>50</CONF></DATA>";
+    assert!(xml(one).is_ok());
+    // Two bearings in one record: neither can be told to be the right one.
+    assert_eq!(
+        xml(&one.replace("<DOA>270</DOA>", "<DOA>270</DOA><DOA>90</DOA>")),
+        Err(KrakenError::Structure)
+    );
+    assert_eq!(
+        xml(&one.replace("<TIME>", "<TIME>1</TIME><TIME>")),
+        Err(KrakenError::Structure)
+    );
+    // A frequency below zero (or zero) is no channel: refused as the CSV refuses it, not
+    // joined to the bearings without a frequency.
+    for f in ["-433.92", "0", "-0.5"] {
+        assert_eq!(
+            xml(&one.replace("433.92", f)),
+            Err(KrakenError::BadField(0)),
+            "{f}"
+        );
+    }
+    // Elements the decoder does not read may repeat.
+    assert!(xml(&one.replace("<CONF>", "<SNR_DB>1</SNR_DB><SNR_DB>2</SNR_DB><CONF>")).is_ok());
+}

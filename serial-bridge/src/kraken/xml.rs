@@ -164,6 +164,9 @@ pub(crate) struct XmlDecoder {
     lat: Option<f64>,
     lon: Option<f64>,
     doa: bool,
+    /// The elements read so far (bit `Tag as u16`): one given twice refuses the record, as
+    /// neither value can be told to be the right one.
+    seen: u16,
 }
 
 impl XmlDecoder {
@@ -188,6 +191,7 @@ impl XmlDecoder {
             lat: None,
             lon: None,
             doa: false,
+            seen: 0,
         }
     }
 
@@ -307,6 +311,13 @@ impl XmlDecoder {
     }
 
     fn value(&mut self, tag: Tag, text: &[u8]) -> Result<(), KrakenError> {
+        if tag != Tag::Other {
+            let bit = 1u16 << (tag as u16);
+            if self.seen & bit != 0 {
+                return Err(KrakenError::Structure);
+            }
+            self.seen |= bit;
+        }
         let t = text.trim_ascii();
         let bad = KrakenError::BadField(0);
         let num = || decimal(t).ok_or(bad);
@@ -322,7 +333,14 @@ impl XmlDecoder {
                 });
             }
             Tag::GpsTime => r.gps_time_ms = unsigned(t).ok_or(bad).map(|v| (v > 0).then_some(v))?,
-            Tag::Frequency => r.freq_mhz = Some(num()?).filter(|f| *f > 0.0),
+            Tag::Frequency => {
+                // A negative or zero frequency is no channel (the CSV refuses it too).
+                let f = num()?;
+                if !(f > 0.0) {
+                    return Err(bad);
+                }
+                r.freq_mhz = Some(f);
+            }
             Tag::Latitude => self.lat = Some(num()?),
             Tag::Longitude => self.lon = Some(num()?),
             Tag::Heading => {

@@ -82,15 +82,30 @@ impl<'a> UnitSentence<'a> {
                 if f.count != 14 {
                     return Err(bad(14));
                 }
+                let (major_m, minor_m) = (size(6)?, size(7)?);
+                // An ellipse's semi-minor axis is the smaller; its major axis points within
+                // [0, 180] (180.0 is 179.96 at one decimal); no fix uses more bearings than
+                // its window holds.
+                if minor_m > major_m {
+                    return Err(bad(7));
+                }
+                let orientation_deg = size(8)?;
+                if orientation_deg > 180.0 {
+                    return Err(bad(8));
+                }
+                let (used, window) = (f.uint(10)?, f.uint(11)?);
+                if used > window {
+                    return Err(bad(10));
+                }
                 Ok(Self::Fix(FixSentence {
                     time: time(f.get(1)?).ok_or(bad(1))?,
                     position,
-                    major_m: size(6)?,
-                    minor_m: size(7)?,
-                    orientation_deg: size(8)?,
+                    major_m,
+                    minor_m,
+                    orientation_deg,
                     cep50_m: size(9)?,
-                    used: f.uint(10)?,
-                    window: f.uint(11)?,
+                    used,
+                    window,
                     sigma_deg: f.real(12)?,
                     status,
                 }))

@@ -126,3 +126,23 @@ fn an_overflowing_sentence_is_never_cut() {
     }
     assert!(s.finish().is_none());
 }
+
+#[test]
+fn a_fix_no_unit_could_have_made_is_refused() {
+    let ok = "PFOXF,100101.25,4700.607404,N,00800.325926,W,123.5,6.0,180.0,40.0,117,120,1.23,A";
+    assert!(UnitSentence::parse(ok).is_ok());
+    for (bad, field) in [
+        // The major axis turned past 180 degrees.
+        (ok.replace(",180.0,", ",400.0,"), 8),
+        // The semi-minor axis longer than the semi-major.
+        (ok.replace("123.5,6.0", "123.5,600.0"), 7),
+        // More bearings used than the window holds.
+        (ok.replace(",117,120,", ",600,60,"), 10),
+    ] {
+        assert_eq!(
+            UnitSentence::parse(&bad),
+            Err(TelemetryError::BadField(field)),
+            "{bad}"
+        );
+    }
+}

@@ -158,6 +158,7 @@ fn rejected_by(b: &crate::bridge::BridgeCounters) -> u32 {
         b.no_heading,
         b.no_fix,
         b.stale_fix,
+        b.time_jump,
         b.short_mt,
         b.unknown_anchor,
     ]

@@ -177,9 +177,19 @@ fn reader(
     Ok(rx)
 }
 
+/// How a live line ended.
+#[derive(Debug)]
+pub struct LiveEnd {
+    /// Everything decoded (for the maps and the statistics).
+    pub decoded: Decoded,
+    /// Why the last update had no fix (`None`: it had one).
+    pub no_fix: Option<String>,
+}
+
 /// Read the line until it closes or stays quiet, printing each updated fix and `guide`'s advice
-/// to `out`; what was decoded, for the final report.
-pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<Decoded, Stop> {
+/// to `out`: a line per update, and one at the end if the line brought nothing to update on
+/// (why there is no fix). What was decoded, and whether the last update had a fix.
+pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd, Stop> {
     o.locate.check()?;
     let rx = reader(&o.source, o.gpsd.as_ref())?;
     let mut dec = Decoder::new(BridgeConfig::default(), o.keep_track);
@@ -196,6 +206,8 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<Decoded,
     let mut last_byte = Instant::now();
     let mut reported = (0usize, 0u32);
     let mut ended = false;
+    // The last update's outcome; `None` until one is printed.
+    let mut last: Option<Option<String>> = None;
     while !ended {
         // Block for the first chunk (or the idle timeout), then take all that is waiting.
         let mut next = rx.recv_timeout(IDLE);
@@ -238,18 +250,25 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<Decoded,
         }
         // New bearings, or a new fix sentence of a DF unit (its user port carries no bearings).
         let n = (dec.decoded.observations.len(), dec.decoded.unit.fixes);
-        if n != reported {
+        // New bearings (or a unit's fix) make an update; a line that ends without any makes
+        // one too, so that it says why there is no fix.
+        if n != reported || (ended && last.is_none()) {
             reported = n;
             dec.snapshot();
-            let line = match (locate_guided(&dec.decoded, &o.locate, guide), o.json) {
+            let located = locate_guided(&dec.decoded, &o.locate, guide);
+            let line = match (&located, o.json) {
                 (Ok(l), true) => serde_json::to_string(&l.report).map_err(|e| e.to_string())?,
                 (Ok(l), false) => l.report.update_line(),
-                (Err(e), true) => serde_json::to_string(&e).map_err(|e| e.to_string())?,
+                (Err(e), true) => serde_json::to_string(e).map_err(|e| e.to_string())?,
                 (Err(e), false) => e.line(),
             };
+            last = Some(located.err().map(|e| e.error));
             out.line(&line)?;
             out.flush()?;
         }
     }
-    Ok(dec.finish())
+    Ok(LiveEnd {
+        decoded: dec.finish(),
+        no_fix: last.flatten(),
+    })
 }

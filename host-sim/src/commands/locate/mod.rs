@@ -3,11 +3,11 @@
 
 pub mod live;
 
-use super::{GuidanceArgs, method};
+use super::{GuidanceArgs, method, values};
 use crate::estimate::options::{LocateOptions, PARTICLES};
-use crate::inputs::calibration::Calibration;
+use crate::inputs::calibration::{Calibration, CalibrationCheck};
 use crate::inputs::capture::{Decoded, Decoder};
-use crate::inputs::files::{Source, stream};
+use crate::inputs::files::{InputKind, Source, stream};
 use crate::inputs::gpsd::GpsdAddress;
 use crate::inputs::kraken_http::KrakenUrl;
 use crate::inputs::stations::{Network, parse_reference};
@@ -38,21 +38,33 @@ pub struct Args {
     pub method: Method,
     /// Bearings whose frequencies lie within this many MHz share a channel (one emitter
     /// each).
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = 0.05,
+          value_parser = values::f32_where(|w| w >= 0.0 && w.is_finite(), "a number of MHz >= 0"))]
     pub channel_width_mhz: f32,
-    /// Measure the DF unit's mounting offset on a drive past a transmitter at LAT,LON (decimal
-    /// degrees) and save it to --calibration FILE, instead of locating.
-    #[arg(long, allow_hyphen_values = true, requires = "calibration")]
-    pub calibrate: Option<String>,
+    /// Measure the DF unit's mounting offset on the CAPTURE of a drive past a transmitter at
+    /// LAT,LON (decimal degrees) and save it to --calibration FILE, instead of locating. The
+    /// transmitter must lie 100 m to 50 km from the bearings, which must agree with it; an
+    /// offset beyond --max-offset-deg is reported, not saved.
+    #[arg(long, allow_hyphen_values = true, requires = "calibration", value_name = "LAT,LON",
+          value_parser = values::lat_lon)]
+    pub calibrate: Option<[f64; 2]>,
+    /// With --calibrate: the largest offset saved, degrees (a larger one is a mounting or
+    /// cabling fault, or the wrong transmitter position, until shown otherwise).
+    #[arg(long, default_value_t = CalibrationCheck::default().max_offset_deg,
+          requires = "calibrate", value_name = "DEG",
+          value_parser = values::f32_where(|d| (0.0..=180.0).contains(&d), "a number of degrees from 0 to 180"))]
+    pub max_offset_deg: f32,
     /// A calibration file: with --calibrate where to save it; otherwise the offset to apply.
     #[arg(long)]
     pub calibration: Option<PathBuf>,
-    /// Particles of sequential methods (a compiled count).
-    #[arg(long, default_value_t = PARTICLES)]
-    pub particles: usize,
+    /// Particles of the particle methods (sir, gpf, the swarms; a compiled count): 1000, or
+    /// 200 for fa-pf, whose cost grows with their square.
+    #[arg(long, value_parser = values::particles)]
+    pub particles: Option<usize>,
     /// Bearing noise of the DF unit, degrees, in (0, 90) (default: estimated from the
     /// residuals).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, allow_hyphen_values = true,
+          value_parser = values::f32_where(|s| s > 0.0 && s < 90.0, "a number of degrees between 0 and 90"))]
     pub sigma_deg: Option<f32>,
     /// Print one JSON object (stable field names); live: one per update. Its `advice` (the
     /// first emitter's; before a fix, from the bearings alone): heading_deg (clockwise from
@@ -84,11 +96,12 @@ pub struct Args {
     pub seed: u64,
     /// Read the one CAPTURE as a serial device at this baud rate, updating the fix as bytes
     /// arrive (4800 is NMEA 0183's usual rate).
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub baud: Option<u32>,
     /// Live: stop after this many seconds without a byte (`inf`: until the line closes, the
     /// default).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, allow_hyphen_values = true,
+          value_parser = values::f64_where(|s| s >= 0.0, "a number of seconds >= 0, or inf"))]
     pub quiet_exit: Option<f64>,
     /// Print `stats: bearings N, seconds S, peak_bytes B` on stderr at the end.
     #[arg(long)]
@@ -165,58 +178,82 @@ enum Input {
     Kraken(Vec<KrakenUrl>, Option<GpsdAddress>),
 }
 
-fn input(a: &Args) -> Result<Input, String> {
-    let gpsd = a.gpsd.as_deref().map(GpsdAddress::parse).transpose()?;
+fn input(a: &Args) -> Result<Input, Stop> {
+    let gpsd = a
+        .gpsd
+        .as_deref()
+        .map(GpsdAddress::parse)
+        .transpose()
+        .map_err(Stop::Usage)?;
     if !a.kraken.is_empty() {
         if !a.captures.is_empty() || a.baud.is_some() {
-            return Err("--kraken reads the unit's web page: give no CAPTURE and no --baud".into());
+            return Err(Stop::usage(
+                "--kraken reads the unit's web page: give no CAPTURE and no --baud",
+            ));
         }
         let urls = a
             .kraken
             .iter()
             .map(|u| KrakenUrl::parse(u))
-            .collect::<Result<Vec<_>, _>>()?;
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(Stop::Usage)?;
         return Ok(Input::Kraken(urls, gpsd));
     }
     if let Some(g) = gpsd {
         return match line_input(a)? {
             Input::Live(source) => Ok(Input::Gpsd(source, g)),
-            _ => Err(
+            _ => Err(Stop::usage(
                 "--gpsd gives positions beside a live line of bearings: a serial device \
-                      with --baud, or - for standard input"
-                    .into(),
-            ),
+                 with --baud, or - for standard input",
+            )),
         };
     }
     line_input(a)
 }
 
-fn line_input(a: &Args) -> Result<Input, String> {
+fn line_input(a: &Args) -> Result<Input, Stop> {
     match (a.baud, a.captures.as_slice()) {
-        (Some(baud), [path]) => Ok(Input::Live(LiveSource::Serial {
-            path: path.to_string_lossy().into_owned(),
-            baud,
-        })),
-        (Some(_), _) => Err("--baud reads one serial device: give exactly one path".into()),
+        (Some(baud), [path]) => {
+            let name = path.display();
+            match crate::inputs::files::kind_of(path) {
+                Ok(InputKind::File(_)) => Err(Stop::usage(format!(
+                    "--baud reads a serial device, and {name} is a file: drop --baud to read \
+                     it as a recorded capture"
+                ))),
+                Ok(
+                    InputKind::Directory | InputKind::Device | InputKind::Pipe | InputKind::Other,
+                ) => Err(Stop::usage(format!(
+                    "--baud reads a serial device, and {name} is none (a pipe is read with \
+                         -, as standard input)"
+                ))),
+                // A missing device is the open's error, with its own words.
+                Ok(InputKind::Serial) | Err(_) => Ok(Input::Live(LiveSource::Serial {
+                    path: path.to_string_lossy().into_owned(),
+                    baud,
+                })),
+            }
+        }
+        (Some(_), _) => Err(Stop::usage(
+            "--baud reads one serial device: give exactly one path",
+        )),
         (None, []) => Ok(Input::Sample),
         (None, [one]) if one.as_os_str() == "-" => Ok(Input::Live(LiveSource::Stdin)),
-        (None, many) if many.iter().any(|p| p.as_os_str() == "-") => {
-            Err("standard input (-) is read live: give it alone".into())
+        (None, many) if many.iter().any(|p| p.as_os_str() == "-") => Err(Stop::usage(
+            "standard input (-) is read live: give it alone",
+        )),
+        (None, many) => {
+            let sources: Vec<Source> = many.iter().map(|p| Source::from_path(p)).collect();
+            for s in &sources {
+                if s.kind()? == InputKind::Serial {
+                    return Err(Stop::usage(format!(
+                        "{} is a serial device: give --baud (4800 for NMEA 0183)",
+                        s.name()
+                    )));
+                }
+                s.check_capture()?;
+            }
+            Ok(Input::Files(sources))
         }
-        (None, many) => Ok(Input::Files(
-            many.iter().map(|p| Source::from_path(p)).collect(),
-        )),
-    }
-}
-
-fn quiet_exit(a: &Args) -> Result<Option<Duration>, String> {
-    match a.quiet_exit {
-        None => Ok(None),
-        Some(s) if s == f64::INFINITY => Ok(None),
-        Some(s) if s >= 0.0 && s.is_finite() => Ok(Some(Duration::from_secs_f64(s))),
-        Some(s) => Err(format!(
-            "--quiet-exit wants a number of seconds >= 0 (or inf), not {s}"
-        )),
     }
 }
 
@@ -232,32 +269,63 @@ fn peak_bytes() -> u64 {
         .map_or(0, |kb| kb * 1024)
 }
 
+/// Particles of fa-pf unless `--particles` says otherwise: its firefly move pairs every
+/// particle with every brighter one at each bearing, so its time grows with their square (1000
+/// on 60 bearings: over 20 s).
+const FA_PF_PARTICLES: usize = 200;
+
 /// Run `foxhunt locate`.
 pub fn run(a: &Args, out: &mut Out) -> Outcome {
     let started = Instant::now();
     let calibrating = a.calibrate.is_some();
+    let particles = match a.particles {
+        Some(_) if !a.method.uses_particles() => {
+            return Err(Stop::usage(format!(
+                "--particles sets the particle count of the particle methods; {} has no \
+                 particles",
+                a.method.name()
+            )));
+        }
+        Some(n) => n,
+        None if a.method == Method::FaPf => FA_PF_PARTICLES,
+        None => PARTICLES,
+    };
+    if calibrating && a.captures.is_empty() && a.kraken.is_empty() {
+        return Err(Stop::usage(
+            "--calibrate measures the offset on a drive past the transmitter: give that \
+             drive's CAPTURE",
+        ));
+    }
     let offset = match (&a.calibration, calibrating) {
         (Some(f), false) => Some(Calibration::load(f)?.prior()),
         _ => None,
     };
     let options = LocateOptions {
         method: a.method,
-        particles: a.particles,
+        particles,
         sigma_deg: a.sigma_deg,
         seed: a.seed,
         offset,
         channel_width_mhz: a.channel_width_mhz,
         network: network(a)?,
     };
-    options.check()?;
-    let quiet = quiet_exit(a)?;
+    options.check().map_err(Stop::Usage)?;
+    // `inf` (the default): until the line closes.
+    let quiet = a
+        .quiet_exit
+        .filter(|s| s.is_finite())
+        .map(Duration::from_secs_f64);
     let input = input(a)?;
     let live = matches!(input, Input::Live(_) | Input::Gpsd(..) | Input::Kraken(..));
     if calibrating && live {
-        return Err("--calibrate reads a recorded drive, not a live line".into());
+        return Err(Stop::usage(
+            "--calibrate reads a recorded drive, not a live line",
+        ));
     }
-    if quiet.is_some() && !live {
-        return Err("--quiet-exit applies to a live line (--baud, or -)".into());
+    if a.quiet_exit.is_some() && !live {
+        return Err(Stop::usage(
+            "--quiet-exit applies to a live line (--baud, or -)",
+        ));
     }
     // Refuse every output that would destroy an input before reading anything.
     let mut inputs: Vec<&Path> = a.captures.iter().map(PathBuf::as_path).collect();
@@ -310,16 +378,32 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
                 json: a.json,
                 keep_track,
             };
-            let d = live::run(&o, &mut guide, out)?;
+            let end = live::run(&o, &mut guide, out)?;
             // The live updates were the output; a final fix goes only to the maps.
-            if keep_track && let Ok(l) = locate(&d, &options) {
-                write_maps(&l, &d, &paths, &outputs)?;
+            if keep_track && let Ok(l) = locate(&end.decoded, &options) {
+                write_maps(&l, &end.decoded, &paths, &outputs)?;
             }
-            return finish(a, &d, started);
+            finish(a, &end.decoded, started);
+            // The last update says how the line ended: with a fix, or why there is none.
+            return end.no_fix.map_or(Ok(()), |e| Err(Stop::Error(e)));
         }
     };
-    if let (Some(target), Some(file)) = (&a.calibrate, &a.calibration) {
-        let c = Calibration::measure(&decoded, target)?;
+    if let (Some(target), Some(file)) = (a.calibrate, &a.calibration) {
+        // How well the bearings agree with a point of their own choosing, for the check that
+        // they agree with the transmitter given.
+        let free = locate(&decoded, &LocateOptions::default())
+            .ok()
+            .and_then(|l| {
+                l.emitters
+                    .iter()
+                    .max_by_key(|e| e.used)
+                    .map(|e| e.sigma.to_degrees())
+            });
+        let check = CalibrationCheck {
+            max_offset_deg: a.max_offset_deg,
+            free_fit_noise_deg: free,
+        };
+        let c = Calibration::measure(&decoded, target, &check)?;
         outputs.write(file, c.to_toml().as_bytes(), true)?;
         let text = if a.json {
             serde_json::to_string(&c).map_err(|e| e.to_string())?
@@ -327,18 +411,34 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
             c.text()
         };
         out.line(text.trim_end())?;
-        return finish(a, &decoded, started);
+        finish(a, &decoded, started);
+        return Ok(());
     }
-    let l = locate_guided(&decoded, &options, &mut guide).map_err(|e| e.error)?;
-    write_maps(&l, &decoded, &paths, &outputs)?;
-    if a.json {
-        let text = serde_json::to_string(&l.report).map_err(|e| e.to_string())?;
-        out.line(&text)?;
-    } else {
-        out.text(&l.report.text())?;
-    }
+    let located = locate_guided(&decoded, &options, &mut guide);
+    let result = match located {
+        Ok(l) => {
+            write_maps(&l, &decoded, &paths, &outputs)?;
+            if a.json {
+                let text = serde_json::to_string(&l.report).map_err(|e| e.to_string())?;
+                out.line(&text)?;
+            } else {
+                out.text(&l.report.text())?;
+            }
+            Ok(())
+        }
+        Err(no_fix) => {
+            // `--json` promises one object on standard output: why there is none, and the
+            // advice from the bearings alone.
+            if a.json {
+                let text = serde_json::to_string(&no_fix).map_err(|e| e.to_string())?;
+                out.line(&text)?;
+            }
+            Err(Stop::Error(no_fix.error))
+        }
+    };
     out.flush()?;
-    finish(a, &decoded, started)
+    finish(a, &decoded, started);
+    result
 }
 
 fn write_maps(
@@ -360,7 +460,8 @@ fn write_maps(
     Ok(())
 }
 
-fn finish(a: &Args, d: &Decoded, started: Instant) -> Outcome {
+/// `--stats`: the bearings, the time and the memory.
+fn finish(a: &Args, d: &Decoded, started: Instant) {
     if a.stats {
         note(&format!(
             "stats: bearings {}, seconds {:.3}, peak_bytes {}",
@@ -369,5 +470,4 @@ fn finish(a: &Args, d: &Decoded, started: Instant) -> Outcome {
             peak_bytes()
         ));
     }
-    Ok(())
 }

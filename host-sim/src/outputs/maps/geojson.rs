@@ -4,6 +4,7 @@
 use super::{ellipse_ring, lonlat, rays, sources};
 use crate::inputs::capture::Decoded;
 use crate::locate::report::Located;
+use crate::outputs::json::Short;
 use serde_json::{Value, json};
 
 /// A line as GeoJSON pieces that never cross the antimeridian (RFC 7946, 3.1.9): where two
@@ -129,9 +130,11 @@ pub fn geojson(l: &Located, d: &Decoded) -> Value {
     for (r, s) in sources(l) {
         let kind = if s.other { "other_source" } else { "emitter" };
         features.push(json!({"type": "Feature",
-            "properties": {"kind": kind, "method": l.report.method, "freq_mhz": r.freq_mhz,
-                "cep50_m": r.cep50_m, "crlb_m": r.crlb_m, "semi_major_m": r.ellipse.major_m,
-                "semi_minor_m": r.ellipse.minor_m, "bias_deg": r.bias_deg, "used": r.used},
+            "properties": {"kind": kind, "method": l.report.method,
+                "freq_mhz": r.freq_mhz.short(), "cep50_m": r.cep50_m.short(),
+                "crlb_m": r.crlb_m.short(), "semi_major_m": r.ellipse.major_m.short(),
+                "semi_minor_m": r.ellipse.minor_m.short(), "bias_deg": r.bias_deg.short(),
+                "used": r.used},
             "geometry": {"type": "Point", "coordinates": [r.lon, r.lat]}}));
         let ring: Vec<[f64; 2]> = ellipse_ring(s.position, &s.ellipse)
             .into_iter()
@@ -139,7 +142,8 @@ pub fn geojson(l: &Located, d: &Decoded) -> Value {
             .collect();
         if !ring.is_empty() {
             features.push(json!({"type": "Feature",
-                "properties": {"kind": "ellipse", "of": kind, "confidence": s.ellipse.confidence},
+                "properties": {"kind": "ellipse", "of": kind,
+                    "confidence": s.ellipse.confidence.short()},
                 "geometry": polygon_geometry(&ring)}));
         }
     }

@@ -16,6 +16,7 @@ pub mod state;
 
 use crate::guidance::guide::Guide;
 use crate::inputs::capture::Decoder;
+use crate::inputs::files::CHUNK;
 use crate::inputs::roads::RoadGraph;
 use axum::Router;
 use axum::extract::State;
@@ -180,20 +181,21 @@ fn feed(
                     .map_err(|e| format!("cannot read {}: {e}", f.display()))?;
                 let mut reader = std::io::BufReader::new(file);
                 let mut chunk = Vec::new();
-                let mut line = Vec::new();
                 loop {
+                    // `lines` lines, each cut at CHUNK bytes and the chunk at CHUNK: memory
+                    // stays bounded on a file without line ends.
                     chunk.clear();
                     let mut eof = false;
                     for _ in 0..lines.max(1) {
-                        line.clear();
-                        let n = reader
-                            .read_until(b'\n', &mut line)
+                        let room = CHUNK.saturating_sub(chunk.len()) as u64;
+                        let n = (&mut reader)
+                            .take(room)
+                            .read_until(b'\n', &mut chunk)
                             .map_err(|e| format!("cannot read {}: {e}", f.display()))?;
                         if n == 0 {
-                            eof = true;
+                            eof = room > 0;
                             break;
                         }
-                        chunk.extend_from_slice(&line);
                     }
                     dec.feed(&chunk);
                     publish(&mut dec, false);
