@@ -256,3 +256,42 @@ fn the_live_map_shows_the_df_units_own_fix_beside_the_hosts() {
     // Its marker (a diamond, not the emitters' discs) is on the map.
     assert!(dom.contains("unit-fix"), "no unit marker:\n{dom}");
 }
+
+#[test]
+fn the_live_map_draws_fixed_stations_as_squares() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("web-stations");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("network.xml");
+    let out = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .args([
+            "simulate",
+            "--condition",
+            "network-mobile",
+            "--force",
+            "--out",
+        ])
+        .arg(&path)
+        .output()
+        .expect("run foxhunt simulate");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let osm = dir.join("grid.osm");
+    grid_osm(&osm);
+    let dom = page_dom(&dir, &path, &osm);
+    assert!(dom.contains("data-ended=\"1\""), "{dom}");
+    // Two masts as squares (each titled with its id); the car is drawn as a dot, not a square.
+    assert_eq!(
+        dom.matches("leaflet-marker-icon station-fixed").count(),
+        2,
+        "{dom}"
+    );
+    for id in ["mast-1", "mast-2"] {
+        assert!(
+            dom.contains(&format!("title=\"{id}\"")),
+            "{id} not on the page:\n{dom}"
+        );
+    }
+}

@@ -83,6 +83,19 @@ function render(st) {
   if (st.route.length) L.polyline(st.route, { color: "#1f77b4", weight: 3 }).addTo(layers);
   for (const r of st.rays) L.polyline(r, { color: "#ff7f0e", weight: 1, opacity: 0.5 }).addTo(layers);
   const bounds = L.latLngBounds(st.route.length ? st.route : []);
+  // Every DF station: fixed ones as squares, each with its latest line of bearing and offset.
+  for (const s of st.stations || []) {
+    L.polyline(s.ray, { color: "#8c564b", weight: 1.5, opacity: 0.8 }).addTo(layers);
+    const tip = `${s.id} (${s.fixed ? "fixed" : "mobile"}): offset ${fmt(s.offset_deg[0], 1)} ± `
+      + `${fmt(s.offset_deg[1], 1)}°, ${s.bearings} bearings`;
+    if (s.fixed) {
+      const icon = L.divIcon({ className: "station-fixed", html: "<div></div>", iconSize: [12, 12] });
+      L.marker(s.at, { icon, keyboard: false, title: s.id }).addTo(layers).bindTooltip(tip);
+    } else {
+      L.circleMarker(s.at, { radius: 4, color: "#8c564b", fillOpacity: 1 }).addTo(layers).bindTooltip(tip);
+    }
+    bounds.extend(s.at);
+  }
   let fix = "";
   const verdicts = (st.advice && st.advice.emitters) || [];
   const served = (st.advice && st.advice.for_emitters) || [];

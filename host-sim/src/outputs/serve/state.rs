@@ -4,15 +4,18 @@
 //! sentences, the unit's fix as the unit said it. Everything is in latitude and longitude
 //! (the page draws, it does not compute).
 
-use crate::estimate::Pipeline;
 use crate::estimate::options::LocateOptions;
+use crate::estimate::stations::station_setup;
+use crate::estimate::{Pipeline, PipelineRun};
 use crate::guidance::guide::Guide;
 use crate::inputs::capture::Decoded;
 use crate::inputs::unit::UnitReport;
 use crate::locate::report::geodetic;
+use crate::locate::stations::station_reports;
 use crate::outputs::maps::ellipse_ring;
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;
+use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::fix::ellipse::Ellipse;
 use foxhunt_core::fix::locate::{ChannelOutcome, LocateConfig, NoEmitter, Source};
 use serde::Serialize;
@@ -44,6 +47,24 @@ pub struct MapSource {
     pub consistent: bool,
     /// The DF unit's offset, degrees, and its sd.
     pub offset_deg: [f32; 2],
+}
+
+/// A DF station on the map: fixed ones are drawn as squares, vehicles as their route.
+#[derive(Debug, Clone, Serialize)]
+pub struct MapStation {
+    /// Its id.
+    pub id: String,
+    /// Whether it stands still.
+    pub fixed: bool,
+    /// Where its latest bearing was taken.
+    pub at: LL,
+    /// Its latest line of bearing.
+    pub ray: [LL; 2],
+    /// Its offset and the offset's sd, degrees (from the fix holding most of its bearings;
+    /// the prior's where no fix used it).
+    pub offset_deg: [f32; 2],
+    /// Bearings it gave.
+    pub bearings: u32,
 }
 
 /// The advice on the map.
@@ -93,6 +114,8 @@ pub struct MapState {
     pub route: Vec<LL>,
     /// The latest bearings: from the vehicle to a point along the bearing.
     pub rays: Vec<[LL; 2]>,
+    /// Every DF station heard.
+    pub stations: Vec<MapStation>,
     /// One emitter per channel.
     pub emitters: Vec<MapSource>,
     /// Other sources (reflections, a second transmitter on a channel).
@@ -186,15 +209,56 @@ fn map_unit(report: UnitReport) -> MapUnit {
 }
 
 /// The field pipeline on the observations, as `foxhunt locate` runs it.
-fn fix(d: &Decoded) -> Result<Pipeline, String> {
+fn fix(d: &Decoded) -> Result<PipelineRun, String> {
     crate::estimate::pipeline(
         &d.observations,
         &LocateConfig::default(),
         &crate::estimate::Priors::default(),
         1,
     )
-    .map(|r| r.report)
     .map_err(|e| e.to_string())
+}
+
+/// Every station with its latest bearing (a ray `reach` metres long) and its offset.
+fn map_stations(
+    d: &Decoded,
+    frame: &LocalFrame,
+    run: Option<&PipelineRun>,
+    reach: f32,
+) -> Vec<MapStation> {
+    let setup = station_setup(
+        d.stations.iter().map(|s| s.id.as_str()),
+        None,
+        BiasPrior::default(),
+        false,
+    );
+    let offsets = run.map_or(&[][..], |r| &r.offsets[..]);
+    let reports = station_reports(d, None, &setup, offsets, &[], &[]);
+    let mut latest: Vec<Option<foxhunt_core::Bearing>> = vec![None; d.stations.len()];
+    for o in &d.observations {
+        if let Some(slot) = latest.get_mut(usize::from(o.station)) {
+            *slot = Some(o.bearing);
+        }
+    }
+    reports
+        .into_iter()
+        .filter_map(|r| {
+            let i = d.stations.iter().position(|s| s.id == r.id)?;
+            let b = latest[i]?;
+            let end = [
+                b.vehicle[0] + reach * b.theta.cos(),
+                b.vehicle[1] + reach * b.theta.sin(),
+            ];
+            Some(MapStation {
+                id: r.id,
+                fixed: r.fixed,
+                at: ll(frame, b.vehicle),
+                ray: [ll(frame, b.vehicle), ll(frame, end)],
+                offset_deg: [r.offset_deg, r.offset_sd_deg],
+                bearings: r.bearings,
+            })
+        })
+        .collect()
 }
 
 fn no_emitter(r: &Pipeline) -> String {
@@ -239,7 +303,8 @@ pub fn build(
         .chain(bearings.last())
         .map(|b| ll(&frame, b.vehicle))
         .collect();
-    let report = fix(d);
+    let run = fix(d);
+    let report = run.as_ref().map(|r| r.report).map_err(String::clone);
     let sources: Vec<Source> = report
         .as_ref()
         .map(|r| r.emitters().to_vec())
@@ -252,6 +317,7 @@ pub fn build(
         })
         .unwrap_or(3000.0)
         .clamp(500.0, 20_000.0);
+    st.stations = map_stations(d, &frame, run.as_ref().ok(), reach);
     st.rays = bearings[bearings.len().saturating_sub(RAYS)..]
         .iter()
         .map(|b| {
@@ -325,6 +391,39 @@ mod tests {
             (en[0] - 400.0).abs() < 0.01 && en[1].abs() < 0.01,
             "t = 0 at {en:?}"
         );
+    }
+
+    #[test]
+    fn every_station_is_on_the_map_with_its_latest_bearing_and_offset() {
+        let origin = LatLon {
+            lat: 47.0,
+            lon: 8.0,
+        };
+        let (bytes, _, _) = crate::runs::network::capture(
+            crate::runs::network::NetworkCondition::Mobile,
+            0,
+            origin,
+        )
+        .unwrap();
+        let d = crate::inputs::capture::decode(&bytes, Default::default(), false);
+        let mut guide = Guide::new(None, 100.0).unwrap();
+        let st = build(&d, 1, &[], &mut guide, true);
+        let ids: Vec<(&str, bool)> = st
+            .stations
+            .iter()
+            .map(|s| (s.id.as_str(), s.fixed))
+            .collect();
+        assert_eq!(ids, [("mast-1", true), ("mast-2", true), ("car-1", false)]);
+        for s in &st.stations {
+            // The ray starts where the station stood and its offset is the fit's, a few degrees;
+            // 600 bearings each (the car loses one to the yaw gate at its corner).
+            assert_eq!(s.ray[0], s.at);
+            assert!(
+                s.offset_deg[0].abs() < 12.0 && s.offset_deg[1] > 0.0,
+                "{s:?}"
+            );
+            assert!(s.bearings >= 595, "{s:?}");
+        }
     }
 
     #[test]
