@@ -232,6 +232,16 @@ impl Method {
         !matches!(self.spec().swarm, SwarmMove::None)
     }
 
+    /// Whether its likelihood or loss down-weights wild bearings (Huber, Gaussian + uniform,
+    /// widened Cauchy, the pipeline's Tukey): the noise its residuals give is then estimated
+    /// robustly, from the inliers.
+    pub const fn robust_loss(self) -> bool {
+        matches!(
+            self,
+            Method::SirRobust | Method::SirWide | Method::MlHuber | Method::MlRobust
+        )
+    }
+
     /// Whether it steps through the bearings one at a time (particle filters and the EKF).
     pub const fn is_sequential(self) -> bool {
         matches!(self.spec().base, Base::Sir | Base::Gpf | Base::Ekf)

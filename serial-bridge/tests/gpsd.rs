@@ -13,9 +13,10 @@
 
 use foxhunt_bridge::nmea::{KNOT_MPS, LatLon, Sentence};
 use foxhunt_bridge::{Demux, Frame};
-use serde_json::Value;
-use std::collections::HashSet;
+use gpsd_capture::{captures, gpsd_tpvs, sent, stream_of};
 use std::path::PathBuf;
+
+mod gpsd_capture;
 
 /// The vendored captures: part of the repository, so a missing folder is a failure.
 fn data_dir() -> PathBuf {
@@ -38,38 +39,6 @@ struct OurFix {
 #[derive(Debug, Default)]
 struct Ours {
     fixes: Vec<OurFix>,
-}
-
-/// The serial bytes of a capture: GPSD's `#` comment lines are not part of the stream, nor is
-/// the delay cookie a header may declare (`# Delay-Cookie: | 0.01`: gpsfake's write
-/// boundaries).
-fn stream_of(raw: &[u8]) -> Vec<u8> {
-    let mut stream = Vec::new();
-    let mut cookie = None;
-    for line in raw.split_inclusive(|&b| b == b'\n') {
-        if let Some(rest) = line.strip_prefix(b"# Delay-Cookie: ") {
-            cookie = rest.first().copied();
-        } else if !line.starts_with(b"#") {
-            stream.extend(line.iter().filter(|&&b| Some(b) != cookie));
-        }
-    }
-    stream
-}
-
-/// Every sentence the receiver itself sent (from each `$` of each line to its end): GPSD's
-/// output also holds sentences it generated from binary packets, and TPVs from those.
-fn sent(stream: &[u8]) -> HashSet<Vec<u8>> {
-    let mut out = HashSet::new();
-    for line in stream.split(|&b| b == b'\n') {
-        let line = line.strip_suffix(b"\r").unwrap_or(line);
-        let line = line.strip_suffix(b"\r").unwrap_or(line);
-        for (i, &b) in line.iter().enumerate() {
-            if b == b'$' {
-                out.insert(line[i..].to_vec());
-            }
-        }
-    }
-    out
 }
 
 fn decode(stream: &[u8]) -> Ours {
@@ -97,51 +66,6 @@ fn decode(stream: &[u8]) -> Ours {
     ours
 }
 
-/// A TPV of GPSD's with a position.
-#[derive(Debug, Clone)]
-struct Tpv {
-    time: Option<u32>,
-    lat: f64,
-    lon: f64,
-}
-
-/// "2014-12-31T03:07:19.000Z" to ms of day.
-fn tpv_time(t: &str) -> Option<u32> {
-    let n = |a: usize, b: usize| t.get(a..b)?.parse::<u32>().ok();
-    Some(((n(11, 13)? * 60 + n(14, 16)?) * 60 + n(17, 19)?) * 1000 + n(20, 23).unwrap_or(0))
-}
-
-/// GPSD's TPVs with a position reported right after a sentence the receiver sent (not after a
-/// binary packet, nor after a sentence GPSD generated from one).
-fn gpsd_tpvs(chk: &str, sent: &HashSet<Vec<u8>>) -> Vec<Tpv> {
-    let mut out = Vec::new();
-    let mut from_receiver = false;
-    for line in chk.lines() {
-        if line.starts_with('$') {
-            from_receiver = sent.contains(line.as_bytes());
-            continue;
-        }
-        if !line.starts_with('{') {
-            from_receiver = false;
-            continue;
-        }
-        let Ok(v) = serde_json::from_str::<Value>(line) else {
-            continue;
-        };
-        if !from_receiver || v["class"] != "TPV" {
-            continue;
-        }
-        if let (Some(lat), Some(lon)) = (v["lat"].as_f64(), v["lon"].as_f64()) {
-            out.push(Tpv {
-                time: v["time"].as_str().and_then(tpv_time),
-                lat,
-                lon,
-            });
-        }
-    }
-    out
-}
-
 fn same_place(p: &LatLon, lat: f64, lon: f64) -> bool {
     (p.lat - lat).abs() <= 1e-7 && (p.lon - lon).abs() <= 1e-7
 }
@@ -160,28 +84,14 @@ struct Tally {
 /// compare.)
 fn speed_and_track(name: &str, chk: &str) -> Vec<String> {
     let mut out = Vec::new();
-    let lines: Vec<&str> = chk.lines().filter(|l| !l.starts_with('#')).collect();
-    for (i, line) in lines.iter().enumerate() {
-        let Some(body) = line
-            .strip_prefix('$')
-            .and_then(|l| l.rsplit_once('*'))
-            .map(|x| x.0)
-        else {
-            continue;
-        };
-        let (kn, track) = match Sentence::parse(body) {
+    for a in gpsd_capture::answered(chk) {
+        let (kn, track) = match Sentence::parse(a.body) {
             Ok(Sentence::Rmc(r)) => (r.speed_kn, r.course_deg),
             Ok(Sentence::Vtg(v)) => (v.speed_kn, v.course_deg),
             _ => continue,
         };
-        let Some(tpv) = lines[i + 1..]
-            .iter()
-            .take_while(|l| !l.starts_with('$'))
-            .filter_map(|l| serde_json::from_str::<Value>(l).ok())
-            .find(|v| v["class"] == "TPV")
-        else {
-            continue;
-        };
+        let Some(tpv) = a.tpv else { continue };
+        let line = a.line;
         if let (Some(kn), Some(v)) = (kn, tpv["speed"].as_f64())
             && (kn * KNOT_MPS - v).abs() > 0.0005 + 1e-9
         {
@@ -198,31 +108,17 @@ fn speed_and_track(name: &str, chk: &str) -> Vec<String> {
 
 /// Sentences GPSD rejected (its TPV right after says no fix) from which we decode a fix.
 fn rejected_but_taken(name: &str, chk: &str) -> Vec<String> {
-    let lines: Vec<&str> = chk.lines().filter(|l| !l.starts_with('#')).collect();
-    let mut out = Vec::new();
-    for (i, line) in lines.iter().enumerate() {
-        let Some(body) = line
-            .strip_prefix('$')
-            .and_then(|l| l.rsplit_once('*'))
-            .map(|x| x.0)
-        else {
-            continue;
-        };
-        let fix = matches!(
-            Sentence::parse(body),
-            Ok(Sentence::Gga(_) | Sentence::Rmc(_) | Sentence::Gll(_) | Sentence::Gns(_))
-        );
-        let gpsd_no_fix = lines[i + 1..]
-            .iter()
-            .take_while(|l| !l.starts_with('$'))
-            .filter_map(|l| serde_json::from_str::<Value>(l).ok())
-            .find(|v| v["class"] == "TPV")
-            .is_some_and(|v| v["mode"].as_u64().unwrap_or(0) < 2 || v.get("lat").is_none());
-        if fix && gpsd_no_fix {
-            out.push(format!("{name}: GPSD says no fix, we take one: {line}"));
-        }
-    }
-    out
+    gpsd_capture::answered(chk)
+        .iter()
+        .filter(|a| gpsd_capture::rejected(a))
+        .filter(|a| {
+            matches!(
+                Sentence::parse(a.body),
+                Ok(Sentence::Gga(_) | Sentence::Rmc(_) | Sentence::Gll(_) | Sentence::Gns(_))
+            )
+        })
+        .map(|a| format!("{name}: GPSD says no fix, we take one: {}", a.line))
+        .collect()
 }
 
 fn check_capture(name: &str, raw: &[u8], chk: &str) -> Tally {
@@ -273,21 +169,6 @@ fn check_capture(name: &str, raw: &[u8], chk: &str) -> Tally {
         })
         .count();
     t
-}
-
-fn captures(dir: &std::path::Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .expect("data folder")
-        .filter_map(|e| e.ok())
-        .filter_map(|e| {
-            e.file_name()
-                .to_str()
-                .and_then(|n| n.strip_suffix(".log.chk"))
-                .map(str::to_string)
-        })
-        .collect();
-    names.sort();
-    names
 }
 
 #[test]

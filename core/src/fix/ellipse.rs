@@ -101,6 +101,15 @@ pub fn cep50(cov: &[[f32; 2]; 2]) -> Result<f32, Error> {
     Ok(CEP50_PER_SD_SUM * (e.major + e.minor) / k)
 }
 
+/// CEP50 from a 50 % ellipse whatever scale made it (chi-square, or 2 F(2, dof) when the noise
+/// was estimated): the 0.59 (s1 + s2) rule on its axes, each an sd times sqrt(chi2(2; 0.5)),
+/// so an F-scaled ellipse gives the F-scaled CEP50.
+pub fn cep50_of(half: &Ellipse) -> f32 {
+    // chi2(2; 0.5) = 2 ln 2; the fallback is never taken (0.5 is a valid probability).
+    let median = crate::stats::chi2_2_quantile(0.5).unwrap_or(core::f32::consts::LN_2 * 2.0);
+    CEP50_PER_SD_SUM * (half.major + half.minor) / libm::sqrtf(median)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

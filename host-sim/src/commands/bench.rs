@@ -12,8 +12,8 @@ use std::path::PathBuf;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// A canonical scenario, `all` of them, the field conditions (`field`: every one, or
-    /// `field/NAME`) or the closed-loop guidance sets (`guidance`: every one, or
-    /// `guidance/SET`).
+    /// `field/NAME`), `small-n` (every noise-estimating method's coverage with 4 to 50
+    /// bearings) or the closed-loop guidance sets (`guidance`: every one, or `guidance/SET`).
     #[arg(long, default_value = "aoa-afsa", conflicts_with = "scenario_file",
           value_parser = super::one_of(super::bench_scenarios()))]
     pub scenario: String,
@@ -143,6 +143,16 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
             return Err("--particles does not apply to the field conditions (N = 1000)".into());
         }
         let rows = crate::runs::field::bench(&conditions, a.runs.unwrap_or(100));
+        return print(a, &rows, out);
+    }
+    if a.scenario_file.is_none() && a.scenario == "small-n" {
+        if a.runs == Some(0) {
+            return Err("--runs must be at least 1, not 0".into());
+        }
+        if a.particles.is_some() {
+            return Err("--particles does not apply to small-n (N = 1000)".into());
+        }
+        let rows = crate::runs::small_n::bench(a.runs.unwrap_or(400));
         return print(a, &rows, out);
     }
     if a.scenario_file.is_none() && a.scenario.starts_with("guidance") {

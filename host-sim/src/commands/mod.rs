@@ -26,12 +26,14 @@ pub fn method() -> impl clap::builder::TypedValueParser<Value = Method> {
 }
 
 /// Every name `foxhunt bench --scenario` takes: the canonical scenarios, `all`, the field
-/// conditions (`field`, `field/NAME`) and the guidance sets (`guidance`, `guidance/SET`).
+/// conditions (`field`, `field/NAME`), the small-sample table (`small-n`) and the guidance
+/// sets (`guidance`, `guidance/SET`).
 pub fn bench_scenarios() -> Vec<String> {
     let mut names: Vec<String> = NAMES.iter().map(|n| n.to_string()).collect();
     names.push("all".into());
     names.push("field".into());
     names.extend(Condition::ALL.iter().map(|c| format!("field/{}", c.name())));
+    names.push("small-n".into());
     names.push("guidance".into());
     names.extend(Set::all().iter().map(|s| s.name()));
     names.push("guidance/plot".into());

@@ -4,6 +4,7 @@
 //! filter comes from the core's registry ([`foxhunt_core::estimator`]); this module only
 //! drives it.
 
+pub mod noise;
 pub mod options;
 
 use foxhunt_core::estimator::{batch_fix, with_bearing_filter};
@@ -11,7 +12,6 @@ use foxhunt_core::fix::ellipse::cep50;
 use foxhunt_core::fix::init::initial_particles;
 use foxhunt_core::fix::intersection::MIN_CROSSING;
 use foxhunt_core::fix::locate::{Buffers, Item, LocateConfig, Observation, Report, locate};
-use foxhunt_core::model::bearing::{predicted, wrap};
 use foxhunt_core::{
     Bearing, Error, Estimate, Filter, Method, ParticleSet, WithFilter, with_particles,
 };
@@ -108,8 +108,11 @@ pub struct BearingFix {
     pub position: [f32; 2],
     /// Covariance, m^2.
     pub covariance: [[f32; 2]; 2],
-    /// The 95 % ellipse is x^T C^-1 x <= this (chi-square, or F-scaled by the pipeline).
+    /// The 95 % ellipse is x^T C^-1 x <= this (chi-square, or 2 F(2, dof) when the noise was
+    /// estimated).
     pub ellipse_scale: f32,
+    /// Degrees of freedom of the estimated noise (`None`: the bearings' stated sigmas).
+    pub dof: Option<f32>,
     /// Circular error probable, metres.
     pub cep50: f32,
     /// Likelihood evaluations (0 for batch fixes).
@@ -142,6 +145,7 @@ pub fn locate_bearings(
             position: e.position,
             covariance: e.covariance,
             ellipse_scale: e.ellipse_scale,
+            dof: e.sigma_estimated.then_some(e.dof),
             cep50: e.cep50,
             evaluations: 0,
             outliers: r.rejected.outliers,
@@ -154,6 +158,7 @@ pub fn locate_bearings(
             position: f.position,
             covariance: f.covariance,
             ellipse_scale: CHI2_2_95,
+            dof: None,
             cep50: cep50(&f.covariance).unwrap_or(f32::NAN),
             evaluations: 0,
             outliers: f.outliers,
@@ -176,58 +181,13 @@ pub fn locate_bearings(
         position: run.estimate.mean,
         covariance: run.estimate.covariance,
         ellipse_scale: CHI2_2_95,
+        dof: None,
         cep50: cep50(&run.estimate.covariance).unwrap_or(f32::NAN),
         evaluations: run.evaluations,
         outliers: 0,
         cloud: run.cloud,
     })
 }
-
-/// `method` on `bearings` as `foxhunt locate` runs it when the DF unit's noise is unknown: a
-/// Huber ML with a nominal 1 degree first, the noise estimated from its residuals, then the
-/// method with that noise on every bearing. The fix and the noise used (radians).
-pub fn with_estimated_noise(
-    method: Method,
-    particles: usize,
-    jitter_var: f32,
-    bearings: &[Bearing],
-    keep_cloud: bool,
-    rng: &mut XorShiftRng,
-) -> Result<(BearingFix, f32), Error> {
-    let with =
-        |sigma: f32| -> Vec<Bearing> { bearings.iter().map(|b| Bearing { sigma, ..*b }).collect() };
-    let nominal = with(1.0f32.to_radians());
-    let first = batch_fix(Method::MlHuber, &nominal)?;
-    let sigma = estimate_sigma(&nominal, &first.position);
-    let fix = locate_bearings(method, particles, jitter_var, &with(sigma), keep_cloud, rng)?;
-    Ok((fix, sigma))
-}
-
-/// Bearing noise from the residuals at `p`: a MAD scale (1.4826 x median |r|) finds the
-/// inliers (within 3 of it), whose RMS over n - 2 degrees of freedom, corrected for the
-/// truncation (a Gaussian cut at 3 sigma keeps 0.9733 of its variance), is the estimate: about
-/// 9 % standard error at 60 bearings against the MAD's 15 %. At least 0.05 degrees.
-pub fn estimate_sigma(bearings: &[Bearing], p: &[f32; 2]) -> f32 {
-    let floor = 0.05f32.to_radians();
-    let mut r: Vec<f32> = bearings
-        .iter()
-        .map(|b| wrap(b.theta - predicted(p, &b.vehicle)).abs())
-        .filter(|r| r.is_finite())
-        .collect();
-    if r.len() < 3 {
-        return 1.0f32.to_radians();
-    }
-    let mid = r.len() / 2;
-    let (_, median, _) = r.select_nth_unstable_by(mid, f32::total_cmp);
-    let mad = (1.4826 * *median).max(floor);
-    let inliers: Vec<f32> = r.into_iter().filter(|x| *x <= 3.0 * mad).collect();
-    if inliers.len() < 3 {
-        return mad;
-    }
-    let ss: f64 = inliers.iter().map(|x| f64::from(x * x)).sum();
-    ((ss / (inliers.len() - 2) as f64 / 0.9733).sqrt() as f32).max(floor)
-}
-
 /// The thread pool of every estimation on the host (fixes and Monte Carlo runs): one worker per core, with 64 MiB stacks. Filters are sized at
 /// compile time and built on the stack (a 100 000-particle filter is megabytes); a rayon
 /// worker that waits on a join can also run a stolen run on top of its own, so the default

@@ -7,5 +7,6 @@ pub mod capture;
 pub mod files;
 pub mod gpsd;
 pub mod kraken_http;
+pub mod osm_pbf;
 pub mod roads;
 pub mod unit;

@@ -1,5 +1,5 @@
 //! The road network guidance drives on: read once per area from an OpenStreetMap extract
-//! (`.osm.pbf` through the osmpbf crate, or OSM XML through quick-xml), kept as a compact
+//! (`.osm.pbf` through [`super::osm_pbf`], or OSM XML through quick-xml), kept as a compact
 //! graph (compressed adjacency: one offset per node, 12 bytes per directed edge), placed in
 //! the drive's local frame when the drive's origin is known.
 //!
@@ -182,13 +182,8 @@ impl RoadGraph {
     /// Read an extract: `.pbf` as OSM PBF, anything else as OSM XML. Nodes are placed in a
     /// frame at the extract's first kept node until [`RoadGraph::localise`] moves them.
     pub fn load(path: &Path) -> Result<Self, String> {
-        let osm = if path.to_string_lossy().ends_with(".pbf") {
-            read_pbf(path)?
-        } else {
-            let text =
-                std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-            read_xml(&text).map_err(|e| format!("{}: {e}", path.display()))?
-        };
+        let mut osm = Osm::default();
+        read_extract(path, &mut osm)?;
         osm.graph().map_err(|e| format!("{}: {e}", path.display()))
     }
 }
@@ -263,6 +258,15 @@ impl WayTags {
     }
 }
 
+/// What the two readers hand over, element by element, whichever the format.
+trait Extract {
+    /// A node and where it is (as the file says: not checked).
+    fn node(&mut self, id: i64, at: LatLon);
+    /// A way: its nodes in order, their locations when the file carries them on the way
+    /// (else empty), and its tags.
+    fn way(&mut self, refs: &[i64], at: &[LatLon], tags: &mut dyn Iterator<Item = (&str, &str)>);
+}
+
 /// What an extract holds for the graph: node coordinates by id and the drivable ways.
 #[derive(Debug, Default)]
 struct Osm {
@@ -270,15 +274,31 @@ struct Osm {
     ways: Vec<(Vec<i64>, f32, i8)>,
 }
 
-impl Osm {
-    fn way(&mut self, refs: Vec<i64>, tags: &WayTags) {
-        if let Some((speed, dir)) = tags.drivable()
-            && refs.len() >= 2
-        {
-            self.ways.push((refs, speed, dir));
+impl Extract for Osm {
+    /// Nodes off the globe are dropped (their ways end there).
+    fn node(&mut self, id: i64, at: LatLon) {
+        if at.lat.abs() <= 90.0 && at.lon.abs() <= 180.0 {
+            self.nodes.insert(id, at);
         }
     }
 
+    fn way(&mut self, refs: &[i64], at: &[LatLon], tags: &mut dyn Iterator<Item = (&str, &str)>) {
+        let mut kept = WayTags::default();
+        for (k, v) in tags {
+            kept.set(k, v);
+        }
+        if let Some((speed, dir)) = kept.drivable()
+            && refs.len() >= 2
+        {
+            for (id, ll) in refs.iter().zip(at) {
+                self.node(*id, *ll);
+            }
+            self.ways.push((refs.to_vec(), speed, dir));
+        }
+    }
+}
+
+impl Osm {
     /// The graph of the ways, their nodes numbered in order of first use; nodes a way names
     /// but the extract lacks end that way's run there.
     fn graph(&self) -> Result<RoadGraph, String> {
@@ -325,13 +345,25 @@ impl Osm {
     }
 }
 
+/// Read the extract at `path`: `.pbf` as OSM PBF, anything else as OSM XML.
+fn read_extract(path: &Path, into: &mut impl Extract) -> Result<(), String> {
+    if path.to_string_lossy().ends_with(".pbf") {
+        return read_pbf(path, into);
+    }
+    let text = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    read_xml(&text, into).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// A tag as read from XML: key, value.
+type Tag = (String, String);
+
 /// Read OSM XML (`<node id lat lon>`, `<way><nd ref/><tag k v/></way>`).
-fn read_xml(bytes: &[u8]) -> Result<Osm, String> {
+fn read_xml(bytes: &[u8], into: &mut impl Extract) -> Result<(), String> {
     use quick_xml::events::Event;
     let mut reader = quick_xml::Reader::from_reader(bytes);
-    let mut osm = Osm::default();
     let mut buf = Vec::new();
-    let mut way: Option<(Vec<i64>, WayTags)> = None;
+    // The way being read: its refs and tags.
+    let mut way: Option<(Vec<i64>, Vec<Tag>)> = None;
     let attr = |e: &quick_xml::events::BytesStart<'_>, key: &[u8]| -> Option<String> {
         e.attributes()
             .flatten()
@@ -348,15 +380,12 @@ fn read_xml(bytes: &[u8]) -> Result<Osm, String> {
                     let id = attr(e, b"id").and_then(|v| v.parse::<i64>().ok());
                     let lat = attr(e, b"lat").and_then(|v| v.parse::<f64>().ok());
                     let lon = attr(e, b"lon").and_then(|v| v.parse::<f64>().ok());
-                    if let (Some(id), Some(lat), Some(lon)) = (id, lat, lon)
-                        && lat.abs() <= 90.0
-                        && lon.abs() <= 180.0
-                    {
-                        osm.nodes.insert(id, LatLon { lat, lon });
+                    if let (Some(id), Some(lat), Some(lon)) = (id, lat, lon) {
+                        into.node(id, LatLon { lat, lon });
                     }
                 }
                 b"way" => {
-                    way = Some((Vec::new(), WayTags::default()));
+                    way = Some((Vec::new(), Vec::new()));
                     if matches!(ev, Event::Empty(_)) {
                         way = None;
                     }
@@ -372,14 +401,15 @@ fn read_xml(bytes: &[u8]) -> Result<Osm, String> {
                     if let (Some(w), Some(k), Some(v)) =
                         (way.as_mut(), attr(e, b"k"), attr(e, b"v"))
                     {
-                        w.1.set(&k, &v);
+                        w.1.push((k, v));
                     }
                 }
                 _ => {}
             },
             Event::End(e) if e.name().as_ref() == b"way" => {
                 if let Some((refs, tags)) = way.take() {
-                    osm.way(refs, &tags);
+                    let mut tags = tags.iter().map(|(k, v)| (k.as_str(), v.as_str()));
+                    into.way(&refs, &[], &mut tags);
                 }
             }
             Event::Eof => break,
@@ -387,53 +417,41 @@ fn read_xml(bytes: &[u8]) -> Result<Osm, String> {
         }
         buf.clear();
     }
-    Ok(osm)
+    Ok(())
 }
 
-/// Read an OSM PBF extract.
-fn read_pbf(path: &Path) -> Result<Osm, String> {
-    use osmpbf::{Element, ElementReader};
-    let reader = ElementReader::from_path(path)
-        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    let mut osm = Osm::default();
-    reader
-        .for_each(|el| match el {
-            Element::Node(n) => {
-                osm.nodes.insert(
-                    n.id(),
-                    LatLon {
-                        lat: n.lat(),
-                        lon: n.lon(),
-                    },
-                );
-            }
-            Element::DenseNode(n) => {
-                osm.nodes.insert(
-                    n.id(),
-                    LatLon {
-                        lat: n.lat(),
-                        lon: n.lon(),
-                    },
-                );
-            }
-            Element::Way(w) => {
-                let mut tags = WayTags::default();
-                for (k, v) in w.tags() {
-                    tags.set(k, v);
-                }
-                if tags.drivable().is_some() {
-                    osm.way(w.refs().collect(), &tags);
-                }
-            }
-            Element::Relation(_) => {}
-        })
-        .map_err(|e| format!("{}: {e}", path.display()))?;
-    Ok(osm)
+/// Read an OSM PBF extract (its errors name the file).
+fn read_pbf(path: &Path, into: &mut impl Extract) -> Result<(), String> {
+    use super::osm_pbf::{self, Element};
+    let (mut refs, mut at) = (Vec::new(), Vec::new());
+    osm_pbf::read(path, |el| match el {
+        Element::Node(n) => into.node(
+            n.id,
+            LatLon {
+                lat: n.lat,
+                lon: n.lon,
+            },
+        ),
+        Element::Way(w) => {
+            refs.clear();
+            refs.extend(w.refs());
+            at.clear();
+            at.extend(w.locations().map(|(lat, lon)| LatLon { lat, lon }));
+            into.way(&refs, &at, &mut w.tags());
+        }
+    })
+    .map_err(|e| e.to_string())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn xml(bytes: &[u8]) -> Result<Osm, String> {
+        let mut osm = Osm::default();
+        read_xml(bytes, &mut osm)?;
+        Ok(osm)
+    }
 
     const XML: &str = r#"<?xml version="1.0"?>
 <osm version="0.6">
@@ -450,7 +468,7 @@ mod tests {
 
     #[test]
     fn osm_xml_gives_drivable_directed_roads() {
-        let g = read_xml(XML.as_bytes()).unwrap().graph().unwrap();
+        let g = xml(XML.as_bytes()).unwrap().graph().unwrap();
         assert_eq!(g.len(), 4);
         // 1-2, 2-3 both ways; 3-4 backwards only; the footway and the dangling service road
         // add nothing.
@@ -465,12 +483,118 @@ mod tests {
         assert_eq!(g.segments().count(), 3);
         assert_eq!(g.nearest([800.0, 10.0]), Some(1));
         assert!(
-            read_xml(b"<osm><node id='1' lat='x'/></osm>")
+            xml(b"<osm><node id='1' lat='x'/></osm>")
                 .unwrap()
                 .graph()
                 .is_err()
         );
-        assert!(read_xml(b"<osm><way></nd></osm>").is_err());
+        assert!(xml(b"<osm><way></nd></osm>").is_err());
+    }
+
+    /// Every element as a reader gives it, to compare the two readers.
+    #[derive(Debug, Default)]
+    struct Everything {
+        nodes: Vec<(i64, LatLon)>,
+        ways: Vec<(Vec<i64>, Vec<LatLon>, Vec<Tag>)>,
+    }
+
+    impl Extract for Everything {
+        fn node(&mut self, id: i64, at: LatLon) {
+            self.nodes.push((id, at));
+        }
+
+        fn way(
+            &mut self,
+            refs: &[i64],
+            at: &[LatLon],
+            tags: &mut dyn Iterator<Item = (&str, &str)>,
+        ) {
+            let mut tags: Vec<_> = tags.map(|(k, v)| (k.into(), v.into())).collect();
+            tags.sort();
+            self.ways.push((refs.to_vec(), at.to_vec(), tags));
+        }
+    }
+
+    fn data(name: &str) -> std::path::PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/osm")
+            .join(name)
+    }
+
+    fn everything(name: &str) -> Everything {
+        let mut all = Everything::default();
+        read_extract(&data(name), &mut all).unwrap_or_else(|e| panic!("{e}"));
+        all
+    }
+
+    /// Within 1e-7 degree: the PBF stores the XML's coordinates in steps of 100 nanodegrees
+    /// (the files' granularity), so rounded by half a step at most.
+    fn near(a: LatLon, b: LatLon) -> bool {
+        (a.lat - b.lat).abs() < 1e-7 && (a.lon - b.lon).abs() < 1e-7
+    }
+
+    #[test]
+    fn pbf_reads_as_the_xml_of_the_same_data() {
+        let xml = everything("test.osm");
+        assert_eq!(xml.nodes.len(), 3);
+        assert_eq!(xml.ways.len(), 1);
+        let xml_error = RoadGraph::load(&data("test.osm")).unwrap_err();
+        // zlib and dense nodes, raw and dense, raw and plain nodes.
+        for name in [
+            "test.osm.pbf",
+            "test_nozlib.osm.pbf",
+            "test_nozlib_nodense.osm.pbf",
+        ] {
+            let pbf = everything(name);
+            let ids = |e: &Everything| e.nodes.iter().map(|n| n.0).collect::<Vec<_>>();
+            assert_eq!(ids(&pbf), ids(&xml), "{name}");
+            for ((id, p), (_, x)) in pbf.nodes.iter().zip(&xml.nodes) {
+                assert!(near(*p, *x), "{name}: node {id} at {p:?}, XML {x:?}");
+            }
+            assert_eq!(pbf.ways, xml.ways, "{name}");
+            // No road in either (the way is a building): the same graph, none, the same words.
+            let pbf_error = RoadGraph::load(&data(name)).unwrap_err();
+            assert_eq!(
+                pbf_error.replace(name, "FILE"),
+                xml_error.replace("test.osm", "FILE")
+            );
+        }
+    }
+
+    #[test]
+    fn locations_on_ways_stand_for_the_missing_nodes() {
+        let xml = everything("test.osm");
+        let pbf = everything("loc_on_ways.osm.pbf");
+        assert!(pbf.nodes.is_empty(), "{:?}", pbf.nodes);
+        let [(refs, at, tags)] = &pbf.ways[..] else {
+            panic!("one way: {:?}", pbf.ways)
+        };
+        assert_eq!((refs, tags), (&xml.ways[0].0, &xml.ways[0].2));
+        assert_eq!(at.len(), refs.len());
+        for (id, p) in refs.iter().zip(at) {
+            let x = xml
+                .nodes
+                .iter()
+                .find(|n| n.0 == *id)
+                .expect("the XML's node")
+                .1;
+            assert!(near(*p, x), "node {id} at {p:?}, XML {x:?}");
+        }
+        // A drivable way so written makes its graph from those locations alone.
+        let mut osm = Osm::default();
+        osm.way(refs, at, &mut [("highway", "residential")].into_iter());
+        let g = osm.graph().unwrap();
+        assert_eq!((g.len(), g.edge_count()), (3, 6));
+        assert!(near(g.geodetic(0).unwrap(), at[0]));
+    }
+
+    #[test]
+    fn history_files_are_refused() {
+        let e = RoadGraph::load(&data("deleted_nodes.osh.pbf")).unwrap_err();
+        assert!(
+            e.contains("deleted_nodes.osh.pbf") && e.contains("history") && !e.contains('\n'),
+            "{e}"
+        );
     }
 
     #[test]

@@ -1,8 +1,9 @@
 //! `locate` by any other method of the registry: one emitter from all bearings, the noise
 //! estimated from the residuals unless given, no offset.
 
+use crate::estimate::noise::{claim, with_estimated_noise};
 use crate::estimate::options::{LocateOptions, SEEDS_JITTER_M2};
-use crate::estimate::{locate_bearings, pool, with_estimated_noise};
+use crate::estimate::{locate_bearings, pool};
 use crate::inputs::capture::Decoded;
 use crate::locate::Parts;
 use crate::locate::explain::explain;
@@ -11,7 +12,7 @@ use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_core::Bearing;
 use foxhunt_core::fix::consistency::check_cloud;
 use foxhunt_core::fix::crlb::crlb;
-use foxhunt_core::fix::ellipse::{Ellipse, cep50};
+use foxhunt_core::fix::ellipse::Ellipse;
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 use std::collections::BTreeMap;
@@ -51,16 +52,21 @@ pub(crate) fn located_by(
                 )
             });
             match r {
-                Ok((fix, sigma)) => (Ok(fix), sigma, true),
+                Ok((fix, noise)) => (Ok(fix), noise.sigma, true),
                 Err(e) => (Err(e), 1.0f32.to_radians(), true),
             }
         }
     };
     let bearings = d.bearings_with_sigma(sigma);
-    let s = s.map_err(|e| explain(e, &bearings))?;
-    let ellipse =
-        Ellipse::from_covariance(&s.covariance, 0.95).map_err(|e| explain(e, &bearings))?;
-    let cep = cep50(&s.covariance).map_err(|e| explain(e, &bearings))?;
+    let mut s = s.map_err(|e| explain(e, &bearings))?;
+    if !estimated {
+        // With the noise given the claim is chi-square's, still no tighter than the bound.
+        claim(&mut s, &bearings).map_err(|e| explain(e, &bearings))?;
+    }
+    // Chi-square with the stated noise, 2 F(2, dof) with an estimated one (the fix says which).
+    let ellipse = Ellipse::with_scale(&s.covariance, s.ellipse_scale, 0.95)
+        .map_err(|e| explain(e, &bearings))?;
+    let cep = s.cep50;
     let bound = crlb(&s.position, &bearings).map_err(|e| explain(e, &bearings))?;
     rejected.insert("outlier", s.outliers);
     // A particle cloud far tighter than the bearings allow is no estimate of the uncertainty.
@@ -82,6 +88,7 @@ pub(crate) fn located_by(
         bias_sd_deg: None,
         sigma_deg: sigma.to_degrees(),
         sigma_estimated: estimated,
+        sigma_dof: s.dof,
         used: bearings.len() as u32,
         effective: None,
         consistent,

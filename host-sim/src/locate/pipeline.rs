@@ -27,6 +27,7 @@ fn source_report(s: &Source, frame: &LocalFrame, why: Option<&'static str>) -> S
         bias_sd_deg: Some(s.bias_sd.to_degrees()),
         sigma_deg: s.sigma.to_degrees(),
         sigma_estimated: s.sigma_estimated,
+        sigma_dof: s.sigma_estimated.then_some(s.dof),
         used: s.used,
         effective: Some(s.effective),
         consistent: Some(s.consistent),

@@ -74,6 +74,9 @@ pub struct SourceReport {
     pub sigma_deg: f32,
     /// Whether `sigma_deg` was estimated from the residuals.
     pub sigma_estimated: bool,
+    /// Degrees of freedom of the estimated noise (residuals less unknowns); the ellipse is
+    /// then 2 F(2, dof) wide, not chi-square (null: the noise was given).
+    pub sigma_dof: Option<f32>,
     /// Bearings used.
     pub used: u32,
     /// Their effective number (correlated bearings count less; null: not estimated).

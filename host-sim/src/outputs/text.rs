@@ -66,16 +66,15 @@ impl SourceReport {
             Some(false) => "; NOT consistent: the uncertainty is understated",
             None => "",
         };
+        let how = match (self.sigma_estimated, self.sigma_dof) {
+            (true, Some(d)) => format!("estimated, {d:.0} degrees of freedom"),
+            (true, None) => "estimated".to_string(),
+            (false, _) => "given".to_string(),
+        };
         let _ = writeln!(
             out,
-            "  {offset}noise {:.2} deg ({}); {} bearings{effective}{consistent}",
-            self.sigma_deg,
-            if self.sigma_estimated {
-                "estimated"
-            } else {
-                "given"
-            },
-            self.used,
+            "  {offset}noise {:.2} deg ({how}); {} bearings{effective}{consistent}",
+            self.sigma_deg, self.used,
         );
         if let Some(why) = self.why {
             let _ = writeln!(out, "  {why}");

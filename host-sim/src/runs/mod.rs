@@ -10,5 +10,6 @@ pub mod perf;
 pub mod run;
 pub mod scenario;
 pub mod simulate;
+pub mod small_n;
 pub mod tracking;
 pub mod writer;

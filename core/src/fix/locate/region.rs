@@ -4,11 +4,10 @@
 
 use super::super::bias::{BiasPrior, BiasedFix, MAX_SOURCES};
 use super::super::consistency;
-use super::super::ellipse::{CEP50_PER_SD_SUM, Ellipse};
+use super::super::ellipse::{Ellipse, cep50_of};
 use super::super::reach;
 use super::{Item, LocateConfig, NoEmitter};
 use crate::error::Error;
-use crate::stats;
 
 /// The noise a region is drawn at.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -83,23 +82,10 @@ pub(super) fn confidence_region(
         covariance,
         ellipse,
         scale: k,
-        cep50: cep50(&half),
+        cep50: cep50_of(&half),
         stretch: held.stretch,
         crlb,
     })
-}
-
-/// The median of chi-square with 2 degrees of freedom, 2 ln 2 = 1.3863 to four figures: the
-/// fallback should [`stats::chi2_2_quantile`] fail at 0.5 (it computes -2 ln(1 - p) and does
-/// not).
-const CHI2_2_MEDIAN: f32 = 1.386;
-
-/// CEP50 ~ 0.59 (s1 + s2) for a Gaussian ([`CEP50_PER_SD_SUM`]); the same rule on the 50 %
-/// ellipse's axes, which carry the F scaling: 0.59 (a1 + a2) / sqrt(chi2(2; 0.5)) scaled as the
-/// ellipse is.
-fn cep50(half: &Ellipse) -> f32 {
-    CEP50_PER_SD_SUM * (half.major + half.minor)
-        / libm::sqrtf(stats::chi2_2_quantile(0.5).unwrap_or(CHI2_2_MEDIAN))
 }
 
 /// The covariance stretched along the line of sight so its ellipse reaches the far end of the

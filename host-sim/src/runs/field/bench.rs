@@ -2,10 +2,12 @@
 
 use super::Condition;
 use super::drives::simulate;
+use super::judge::THREE_SIGMA_TAIL;
 use super::judge::measure;
 use crate::outputs::tables::Row;
 use foxhunt_core::Method;
 use foxhunt_core::fix::bias::{self, BiasPrior};
+use foxhunt_core::fix::consistency::ellipse_scale;
 use foxhunt_core::fix::ellipse::mahalanobis;
 use foxhunt_core::fix::locate::LocateConfig;
 use foxhunt_core::model::bearing::Bearing;
@@ -106,7 +108,7 @@ fn method_row(c: Condition, m: Method, runs: usize) -> Row {
                 let d = simulate(c, run);
                 let bearings: Vec<Bearing> = d.observations.iter().map(|o| o.bearing).collect();
                 let mut rng = XorShiftRng::seed_from_u64(run as u64);
-                let (f, _) = crate::estimate::with_estimated_noise(
+                let (f, _) = crate::estimate::noise::with_estimated_noise(
                     m,
                     BENCH_PARTICLES,
                     0.0,
@@ -133,8 +135,8 @@ fn method_row(c: Condition, m: Method, runs: usize) -> Row {
                     error as f64,
                     m * m <= f.ellipse_scale,
                     error <= f.cep50,
-                    // Beyond the 99.73 % region of a chi-square(2) ellipse: m^2 > 11.83.
-                    m * m > 11.829,
+                    // Beyond the 99.73 % region of the fix's own distribution (2 F(2, dof)).
+                    m * m > ellipse_scale(1.0 - THREE_SIGMA_TAIL, f.dof).unwrap_or(f32::INFINITY),
                     bound,
                 ))
             })

@@ -7,58 +7,19 @@
 
 use foxhunt_bridge::nmea::Sentence;
 use foxhunt_bridge::{Demux, Frame};
-use serde_json::Value;
-use std::collections::HashSet;
+use gpsd_capture::{sent, stream_of};
 
-fn stream_of(raw: &[u8]) -> Vec<u8> {
-    let mut stream = Vec::new();
-    let mut cookie = None;
-    for line in raw.split_inclusive(|&b| b == b'\n') {
-        if let Some(rest) = line.strip_prefix(b"# Delay-Cookie: ") {
-            cookie = rest.first().copied();
-        } else if !line.starts_with(b"#") {
-            stream.extend(line.iter().filter(|&&b| Some(b) != cookie));
-        }
-    }
-    stream
-}
+// The captures read as the decoder test reads them.
+#[path = "../../../tests/gpsd_capture/mod.rs"]
+#[allow(dead_code)]
+mod gpsd_capture;
 
-fn sent(stream: &[u8]) -> HashSet<Vec<u8>> {
-    let mut out = HashSet::new();
-    for line in stream.split(|&b| b == b'\n') {
-        let line = line.strip_suffix(b"\r").unwrap_or(line);
-        let line = line.strip_suffix(b"\r").unwrap_or(line);
-        for (i, &b) in line.iter().enumerate() {
-            if b == b'$' {
-                out.insert(line[i..].to_vec());
-            }
-        }
-    }
-    out
-}
-
-fn gpsd_positions(chk: &str, sent: &HashSet<Vec<u8>>) -> Vec<(f64, f64)> {
-    let mut out = Vec::new();
-    let mut from_receiver = false;
-    for line in chk.lines() {
-        if line.starts_with('$') {
-            from_receiver = sent.contains(line.as_bytes());
-            continue;
-        }
-        if !line.starts_with('{') {
-            from_receiver = false;
-            continue;
-        }
-        let Ok(v) = serde_json::from_str::<Value>(line) else {
-            continue;
-        };
-        if from_receiver
-            && v["class"] == "TPV"
-            && let (Some(a), Some(b)) = (v["lat"].as_f64(), v["lon"].as_f64())
-        {
-            out.push((a, b));
-        }
-    }
+/// GPSD's distinct positions from the receiver's own sentences.
+fn gpsd_positions(chk: &str, sent: &std::collections::HashSet<Vec<u8>>) -> Vec<(f64, f64)> {
+    let mut out: Vec<(f64, f64)> = gpsd_capture::gpsd_tpvs(chk, sent)
+        .iter()
+        .map(|t| (t.lat, t.lon))
+        .collect();
     out.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
     out.dedup();
     out
@@ -106,44 +67,18 @@ fn bodies(stream: &[u8]) -> Vec<String> {
 
 /// Sentence bodies GPSD answered with a no-fix TPV.
 fn rejected(chk: &str) -> Vec<String> {
-    let lines: Vec<&str> = chk.lines().filter(|l| !l.starts_with('#')).collect();
-    let mut out = Vec::new();
-    for (i, line) in lines.iter().enumerate() {
-        let Some(body) = line
-            .strip_prefix('$')
-            .and_then(|l| l.rsplit_once('*'))
-            .map(|x| x.0)
-        else {
-            continue;
-        };
-        let no_fix = lines[i + 1..]
-            .iter()
-            .take_while(|l| !l.starts_with('$'))
-            .filter_map(|l| serde_json::from_str::<Value>(l).ok())
-            .find(|v| v["class"] == "TPV")
-            .is_some_and(|v| v["mode"].as_u64().unwrap_or(0) < 2 || v.get("lat").is_none());
-        if no_fix {
-            out.push(body.to_string());
-        }
-    }
-    out
+    gpsd_capture::answered(chk)
+        .iter()
+        .filter(|a| gpsd_capture::rejected(a))
+        .map(|a| a.body.to_string())
+        .collect()
 }
 
 fn main() {
     let dir = std::env::args()
         .nth(1)
         .unwrap_or_else(|| concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/data/gpsd").into());
-    let mut names: Vec<String> = std::fs::read_dir(&dir)
-        .expect("data folder")
-        .filter_map(|e| {
-            e.ok()?
-                .file_name()
-                .to_str()?
-                .strip_suffix(".log.chk")
-                .map(String::from)
-        })
-        .collect();
-    names.sort();
+    let names = gpsd_capture::captures(std::path::Path::new(&dir));
     let (mut total, mut hit_ours, mut hit_theirs, mut bad_ours, mut bad_theirs) = (0, 0, 0, 0, 0);
     for name in &names {
         let raw = std::fs::read(format!("{dir}/{name}.log")).expect("log");
