@@ -34,6 +34,12 @@ pub fn bench_scenarios() -> Vec<String> {
     names.push("field".into());
     names.extend(Condition::ALL.iter().map(|c| format!("field/{}", c.name())));
     names.push("small-n".into());
+    names.push("moving".into());
+    names.extend(
+        crate::runs::moving::NAMES
+            .iter()
+            .map(|n| format!("moving/{n}")),
+    );
     names.push("guidance".into());
     names.extend(Set::all().iter().map(|s| s.name()));
     names.push("guidance/plot".into());

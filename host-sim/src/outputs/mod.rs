@@ -9,3 +9,4 @@ pub mod serve;
 pub mod tables;
 pub mod terminal;
 pub mod text;
+pub mod tracks;

@@ -5,4 +5,5 @@
 pub mod capture;
 pub mod indoor;
 pub mod moving;
+pub mod tracks;
 pub mod updates;

@@ -14,7 +14,8 @@ use crate::estimate::pool;
 use crate::outputs::tables::Row;
 use crate::runs::montecarlo::Progress;
 use crate::track::moving::{
-    DEFAULT_METHOD, K, PARTICLES, STATE_SIZES, Settings, TRACK_METHODS, TrackPoint, TrackRun, track,
+    DEFAULT_METHOD, K, PARTICLES, STATE_SIZES, Settings, TRACK_METHODS, TRACK_PARTICLES,
+    TrackPoint, TrackRun, track,
 };
 use foxhunt_core::track::MODE;
 use foxhunt_core::track::bound::{estimated, information, position_rmse, prior, step, transition};
@@ -284,9 +285,10 @@ pub fn total_runs(s: &MovingScenario) -> u64 {
     ((TRACK_METHODS.len() - swarms) * s.runs + (swarms + 1) * SWARM_RUNS.min(s.runs)) as u64
 }
 
-/// The table of scenario `s`: every tracking method (the default smoothed too), the swarms at
-/// [`SWARM_PARTICLES`] over [`SWARM_RUNS`] runs beside the default at the same settings.
-pub fn bench(s: &MovingScenario, progress: &Progress) -> Vec<Row> {
+/// The table of scenario `s`: every tracking method with `particles` (the default smoothed
+/// too), the swarms at [`SWARM_PARTICLES`] over [`SWARM_RUNS`] runs beside the default at the
+/// same settings.
+pub fn bench(s: &MovingScenario, particles: usize, progress: &Progress) -> Vec<Row> {
     let bound = pcrb(s);
     let mut rows = Vec::new();
     for m in TRACK_METHODS {
@@ -294,8 +296,8 @@ pub fn bench(s: &MovingScenario, progress: &Progress) -> Vec<Row> {
             continue;
         }
         let smooth = m == DEFAULT_METHOD;
-        let runs = measure(s, m, PARTICLES, s.runs, smooth, progress);
-        rows.push(row(s, m.name(), m, PARTICLES, &runs, bound));
+        let runs = measure(s, m, particles, s.runs, smooth, progress);
+        rows.push(row(s, m.name(), m, particles, &runs, bound));
     }
     let few = SWARM_RUNS.min(s.runs);
     let base = measure(s, DEFAULT_METHOD, SWARM_PARTICLES, few, false, progress);
@@ -312,4 +314,44 @@ pub fn bench(s: &MovingScenario, progress: &Progress) -> Vec<Row> {
         rows.push(row(s, m.name(), *m, SWARM_PARTICLES, &runs, bound));
     }
     rows
+}
+
+/// `foxhunt bench --scenario moving` (every scenario) or `moving/NAME`: the tables, with
+/// `runs` and the non-swarm rows' `particles` overridden where given.
+pub fn bench_named(
+    name: &str,
+    runs: Option<usize>,
+    particles: Option<usize>,
+    show: bool,
+) -> Result<Vec<Row>, String> {
+    let mut list = match name.strip_prefix("moving").unwrap_or(name) {
+        "" => MovingScenario::all(),
+        rest => {
+            let n = rest.strip_prefix('/').unwrap_or(rest);
+            vec![MovingScenario::named(n).ok_or_else(|| {
+                format!(
+                    "unknown moving scenario `{n}`; known: {}",
+                    super::NAMES.join(", ")
+                )
+            })?]
+        }
+    };
+    let particles = particles.unwrap_or(PARTICLES);
+    if !TRACK_PARTICLES.contains(&particles) {
+        return Err(format!(
+            "--particles {particles}: the tracker is compiled for {TRACK_PARTICLES:?}"
+        ));
+    }
+    for s in list.iter_mut() {
+        if let Some(r) = runs {
+            s.runs = r;
+        }
+    }
+    let progress = Progress::new(list.iter().map(total_runs).sum(), show);
+    let rows = list
+        .iter()
+        .flat_map(|s| bench(s, particles, &progress))
+        .collect();
+    progress.finish();
+    Ok(rows)
 }
