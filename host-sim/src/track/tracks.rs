@@ -62,11 +62,13 @@ impl Tracks {
 /// The settings of one channel: an offset for each of its DF sources, RSSI terms as the
 /// anchors file says, the room and a start region for RSSI alone.
 fn settings(c: &Channel, anchors: Option<&AnchorsFile>, o: &Options) -> Settings {
-    let indoor = anchors.is_some() && c.sources.is_empty();
-    let mut motion = if indoor {
-        Motion::INDOOR
-    } else {
-        Motion::OUTDOOR
+    let indoor = anchors.filter(|_| c.sources.is_empty());
+    let mut motion = match indoor {
+        Some(f) => Motion {
+            accel_sd: file_accel_sd(f),
+            ..Motion::INDOOR
+        },
+        None => Motion::OUTDOOR,
     };
     if let Some(a) = o.accel_sd {
         motion.accel_sd = a;
@@ -89,12 +91,25 @@ fn settings(c: &Channel, anchors: Option<&AnchorsFile>, o: &Options) -> Settings
     if let Some(f) = anchors.filter(|_| c.rssi) {
         s.power_sd = f.power_sd_db;
         s.exponent_sd = f.exponent_sd;
-        if indoor {
+        if indoor.is_some() {
             s.room = f.room;
             s.region = Some(start_region(f));
         }
     }
     s
+}
+
+/// The acceleration sd of the nearly-constant-velocity model that moves at least as the
+/// anchors file's model does: its `process_q` adds variance q_x to a position and q_v to a
+/// velocity every `dt_s`, the white-noise acceleration q dt^3 / 3 and q dt (module
+/// [`foxhunt_core::track::motion`]), so q = max(3 q_x / dt^3, q_v / dt). Measured on
+/// `rssi-sim` and `rssi-lab` (docs/src/tracking.md): the indoor default of 0.5 m/s^2 is far
+/// smoother than those nodes and trails them (4.0 m rmse against 0.6 m).
+fn file_accel_sd(f: &AnchorsFile) -> f32 {
+    let [qx, qvx, qy, qvy] = f.process_q;
+    let dt = f.dt_s;
+    let q = (3.0 * qx.max(qy) / (dt * dt * dt)).max(qvx.max(qvy) / dt);
+    q.sqrt()
 }
 
 /// Where an RSSI-only track starts: the room's middle, else the anchors' centre, spread over
