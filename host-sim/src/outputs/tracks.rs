@@ -54,7 +54,8 @@ pub fn json(t: &Tracks) -> Value {
         .iter()
         .map(|c| {
             json!({
-                "freq_mhz": c.freq_mhz.map(|f| num(f64::from(f))),
+                // Hertz resolution: the f32's own digits beyond it are noise.
+                "freq_mhz": c.freq_mhz.map(|f| num((f64::from(f) * 1e6).round() / 1e6)),
                 "points": c.points.iter().map(|p| point(t, p)).collect::<Vec<_>>(),
             })
         })
