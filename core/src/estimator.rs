@@ -20,6 +20,8 @@ use crate::model::Model;
 use crate::model::bearing::{Bearing, StaticEmitter};
 use crate::resample::{ResamplePolicy, Resampling};
 use crate::roughen::Roughening;
+use crate::track::imm::ImmEkf;
+use crate::track::{Epoch, Mover};
 use crate::{Afsa, Firefly, Gsa, ImprovedFirefly, Pso};
 
 /// An estimator's name.
@@ -354,6 +356,26 @@ where
     match method {
         Method::Ekf => Ok(w.visit(&mut BearingEkf::new(0.0))),
         _ => with_particle_filter::<N, 2, _, W>(method, StaticEmitter { process_var }, w),
+    }
+}
+
+/// Build sequential method `method` on the moving emitter `model` (state of `D` components,
+/// epochs of up to `K` of each measurement: [`crate::track`]) and hand it to `w`: the particle
+/// methods with `N` particles, as on a static emitter, each with its own settings and
+/// likelihood; `ekf` as the interacting multiple model of a still and a moving EKF
+/// ([`crate::track::imm::ImmEkf`]). Batch fixes and the pipeline: [`Error::Unsupported`]
+/// (they assume an emitter that stands still).
+pub fn with_moving_filter<const N: usize, const D: usize, const K: usize, W>(
+    method: Method,
+    model: Mover<K>,
+    w: W,
+) -> Result<W::Output, Error>
+where
+    W: WithFilter<D, Epoch<K>>,
+{
+    match method {
+        Method::Ekf => Ok(w.visit(&mut ImmEkf::<D, K>::new(model))),
+        _ => with_particle_filter::<N, D, _, W>(method, model, w),
     }
 }
 

@@ -77,6 +77,7 @@ pub mod canonical;
 pub mod estimator;
 pub mod preprocess;
 pub mod swarm;
+pub mod track;
 
 pub use swarm::afsa::Afsa;
 pub use swarm::firefly::{Firefly, FireflyParams, ImprovedFirefly};

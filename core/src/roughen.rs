@@ -40,30 +40,76 @@ impl Roughening {
         cov: &[[f32; D]; D],
         rng: &mut R,
     ) {
+        self.apply_to(set, mean, cov, &[true; D], rng);
+    }
+
+    /// [`Roughening::apply`] to the components `kernel` marks only (the model's
+    /// [`Model::regularised`](crate::Model::regularised)): a component the motion model drives
+    /// itself (a velocity) or keeps discrete (a motion mode) is left as it is. The kernel's
+    /// bandwidth is that of the marked components' dimension; with every component marked this
+    /// is [`Roughening::apply`], to the bit.
+    pub fn apply_to<R: Rng + ?Sized, const N: usize, const D: usize>(
+        self,
+        set: &mut ParticleSet<N, D>,
+        mean: &[f32; D],
+        cov: &[[f32; D]; D],
+        kernel: &[bool; D],
+        rng: &mut R,
+    ) {
+        let marked = kernel.iter().filter(|k| **k).count();
+        if marked == 0 {
+            return;
+        }
         match self {
             Roughening::None => {}
             Roughening::Gordon { k } => {
                 let e = set.spread();
-                let f = k * libm::powf(N as f32, -1.0 / D as f32);
+                let f = k * libm::powf(N as f32, -1.0 / marked as f32);
                 for x in set.states.iter_mut() {
                     for j in 0..D {
-                        x[j] += f * e[j] * random::normal(rng);
+                        if kernel[j] {
+                            x[j] += f * e[j] * random::normal(rng);
+                        }
                     }
                 }
             }
             Roughening::Shrinkage { scale } => {
-                let Some(l) = linalg::cholesky(cov) else {
+                // The marked block alone, packed to the top left: only its components are
+                // drawn and moved (with every component marked, the same draws and sums as
+                // `random::gaussian`, so the same bits).
+                let mut idx = [0usize; D];
+                let mut m = 0;
+                for (j, k) in kernel.iter().enumerate() {
+                    if *k {
+                        idx[m] = j;
+                        m += 1;
+                    }
+                }
+                let mut block = [[0.0f32; D]; D];
+                for a in 0..m {
+                    for b in 0..m {
+                        block[a][b] = cov[idx[a]][idx[b]];
+                    }
+                }
+                let Some(l) = linalg::cholesky(&block) else {
                     return;
                 };
-                let d = D as f32;
+                let d = m as f32;
                 let a_opt = libm::powf(4.0 / (d + 2.0), 1.0 / (d + 4.0));
                 let h = (scale * a_opt * libm::powf(N as f32, -1.0 / (d + 4.0))).clamp(0.0, 1.0);
                 let a = libm::sqrtf(1.0 - h * h);
-                let zero = [0.0f32; D];
+                let mut z = [0.0f32; D];
                 for x in set.states.iter_mut() {
-                    let jitter = random::gaussian(rng, &zero, &l);
-                    for j in 0..D {
-                        x[j] = a * x[j] + (1.0 - a) * mean[j] + h * jitter[j];
+                    for zj in z.iter_mut().take(m) {
+                        *zj = random::normal(rng);
+                    }
+                    for r in 0..m {
+                        let mut jitter = 0.0f32;
+                        for (lrc, zc) in l[r].iter().zip(z.iter()).take(r + 1) {
+                            jitter += lrc * zc;
+                        }
+                        let j = idx[r];
+                        x[j] = a * x[j] + (1.0 - a) * mean[j] + h * jitter;
                     }
                 }
             }

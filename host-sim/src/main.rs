@@ -43,12 +43,16 @@ enum Command {
     ///   foxhunt locate /dev/ttyUSB0 --baud 4800 --roads area.osm.pbf --target-cep50-m 50
     #[command(verbatim_doc_comment, allow_negative_numbers = true)]
     Locate(commands::locate::Args),
-    /// Track a ZigBee node indoors from a coordinator's capture (AF_INCOMING_MSG frames).
+    /// Track an emitter that moves: bearings of any station and format, RSSI of known anchors.
     ///
-    /// The anchors file (TOML) gives each anchor's short address and position, and the
-    /// room, path loss and noise. Prints the track as CSV (or --json); --svg draws it.
+    /// Every channel of the captures is tracked with a particle filter (a still and a moving
+    /// model, each DF unit's offset learned): per update, position, velocity, 95 % ellipse and
+    /// P(moving). RSSI comes from a ZigBee coordinator's AF_INCOMING_MSG frames and needs the
+    /// anchors file (TOML: each anchor's short address and position, the room, path loss and
+    /// noise). Prints CSV (or --json); --geojson, --csv and --svg write files.
     ///
     /// Examples:
+    ///   foxhunt track drone.nmea --json
     ///   foxhunt track serial-bridge/captures/rssi-sim.znp --anchors serial-bridge/captures/rssi-sim.anchors.toml
     ///   foxhunt track node.cap --anchors lab.toml --json --svg track.svg
     #[command(verbatim_doc_comment, allow_negative_numbers = true)]

@@ -194,7 +194,12 @@ impl<const N: usize, const D: usize> ParticleState<N, D> {
         z: &M::Measurement,
         likelihood: &L,
     ) -> Result<Option<Weighed<D>>, Error> {
-        model.add_ln_likelihoods(&self.set.states, z, likelihood, &mut self.set.log_weights);
+        model.update_all(
+            &mut self.set.states,
+            z,
+            likelihood,
+            &mut self.set.log_weights,
+        );
         self.evaluations += N as u64;
         let ess = match self.set.normalise() {
             Ok(ess) => ess,

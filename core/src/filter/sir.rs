@@ -131,7 +131,10 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Fi
         if self.config.policy.due(ess, N) {
             let set = &mut self.state.set;
             set.resample(self.config.resampling, rng);
-            self.config.roughening.apply(set, &mean, &covariance, rng);
+            let kernel = self.model.regularised();
+            self.config
+                .roughening
+                .apply_to(set, &mean, &covariance, &kernel, rng);
         }
         Ok(self.state.record(Estimate {
             mean,

@@ -5,10 +5,11 @@
 //! D22 = Q^-1 + E[H^T R^-1 H]) reduces by the matrix inversion lemma to
 //! J_{k+1} = (Q + F J_k^-1 F^T)^-1 + E[H^T R^-1 H], which is what is computed here. The
 //! expectation over true trajectories is the caller's (average the information of simulated
-//! trajectories at each step).
+//! trajectories at each step). The inverses are taken scaled to unit diagonal: position,
+//! velocity and sensor parameters differ in size by many orders, more than f32 keeps otherwise.
 
 use crate::error::Error;
-use crate::linalg::inverse_spd;
+use crate::linalg::inverse_scaled;
 
 /// One step of the recursion: from J_k and the expected measurement information at k + 1.
 pub fn pcrb_step<const D: usize>(
@@ -17,7 +18,7 @@ pub fn pcrb_step<const D: usize>(
     q: &[[f32; D]; D],
     information: &[[f32; D]; D],
 ) -> Result<[[f32; D]; D], Error> {
-    let p = inverse_spd(j).ok_or(Error::DegenerateGeometry)?;
+    let p = inverse_scaled(j).ok_or(Error::DegenerateGeometry)?;
     // Q + F P F^T
     let mut m = *q;
     for r in 0..D {
@@ -31,7 +32,7 @@ pub fn pcrb_step<const D: usize>(
             m[r][c] += s;
         }
     }
-    let mut next = inverse_spd(&m).ok_or(Error::DegenerateGeometry)?;
+    let mut next = inverse_scaled(&m).ok_or(Error::DegenerateGeometry)?;
     for r in 0..D {
         for c in 0..D {
             next[r][c] += information[r][c];

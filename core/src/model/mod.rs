@@ -56,4 +56,25 @@ pub trait Model<const D: usize> {
             *lw += self.ln_likelihood(x, z, lik);
         }
     }
+    /// Weigh every particle by `z` ([`Model::add_ln_likelihoods`]) and, for a model whose
+    /// particles carry the sufficient statistics of a sub-state that enters the measurement
+    /// linearly (a Rao-Blackwellised filter: a DF unit's offset, an RSSI power), condition
+    /// those statistics on `z` in the same pass. The filters call this once per step, after
+    /// any swarm move; the default only weighs.
+    fn update_all<L: Likelihood>(
+        &self,
+        states: &mut [[f32; D]],
+        z: &Self::Measurement,
+        lik: &L,
+        log_weights: &mut [f32],
+    ) {
+        self.add_ln_likelihoods(states, z, lik, log_weights);
+    }
+    /// Which state components the roughening kernel may jitter after resampling
+    /// ([`crate::Roughening::apply_to`]): those the motion does not diversify itself (a still
+    /// emitter's position, a constant parameter). A component the model keeps discrete (a
+    /// motion mode) or drives with its own noise (a velocity) is left out. Default: every one.
+    fn regularised(&self) -> [bool; D] {
+        [true; D]
+    }
 }

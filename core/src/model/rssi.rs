@@ -63,6 +63,27 @@ impl<const A: usize> RssiMeasurement<A> {
     }
 }
 
+/// Mirror one coordinate `p` back into the wall-to-wall span [0, `size`], reversing its
+/// velocity `v` after an odd number of wall crossings: a node that walks into a wall bounces
+/// off it. A coordinate already inside, a non-finite one or a non-positive span is left alone.
+pub fn reflect(size: f32, p: &mut f32, v: &mut f32) {
+    if !(size > 0.0) || !p.is_finite() || (0.0..=size).contains(p) {
+        return;
+    }
+    // Fold into [0, 2 size), then mirror the upper half.
+    let period = 2.0 * size;
+    let folded = *p - period * libm::floorf(*p / period);
+    let crossings = libm::floorf(*p / size) as i64;
+    *p = if folded > size {
+        period - folded
+    } else {
+        folded
+    };
+    if crossings % 2 != 0 {
+        *v = -*v;
+    }
+}
+
 /// The constant-velocity RSSI tracker with `A` anchors.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RssiTracker<const A: usize> {
@@ -104,24 +125,9 @@ impl<const A: usize> RssiTracker<A> {
         let Some(room) = self.room else {
             return x;
         };
-        for (p, v, size) in [(0, 1, room[0]), (2, 3, room[1])] {
-            if !(size > 0.0) || !x[p].is_finite() || (0.0..=size).contains(&x[p]) {
-                continue;
-            }
-            // Fold into [0, 2 size), then mirror the upper half; an odd number of wall
-            // crossings reverses the velocity.
-            let period = 2.0 * size;
-            let folded = x[p] - period * libm::floorf(x[p] / period);
-            let crossings = libm::floorf(x[p] / size) as i64;
-            x[p] = if folded > size {
-                period - folded
-            } else {
-                folded
-            };
-            if crossings % 2 != 0 {
-                x[v] = -x[v];
-            }
-        }
+        let [px, vx, py, vy] = &mut x;
+        reflect(room[0], px, vx);
+        reflect(room[1], py, vy);
         x
     }
 

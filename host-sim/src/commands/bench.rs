@@ -14,7 +14,9 @@ pub struct Args {
     /// A canonical scenario, `all` of them, the field conditions (`field`: every one, or
     /// `field/NAME`), the network conditions (`network`: every one, or `network/fixed3` and
     /// the like: the default pipeline beside df-aggregator's algorithm), `small-n` (every
-    /// noise-estimating method's coverage with 4 to 50 bearings) or the closed-loop guidance sets (`guidance`: every one, or `guidance/SET`).
+    /// noise-estimating method's coverage with 4 to 50 bearings), the moving emitters
+    /// (`moving`: every one, or `moving/NAME`) or the closed-loop guidance sets (`guidance`:
+    /// every one, or `guidance/SET`).
     #[arg(long, default_value = "aoa-afsa", conflicts_with = "scenario_file",
           value_parser = super::one_of(super::bench_scenarios()))]
     pub scenario: String,
@@ -167,6 +169,14 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
             return Err("--particles does not apply to small-n (N = 1000)".into());
         }
         let rows = crate::runs::small_n::bench(a.runs.unwrap_or(400));
+        return print(a, &rows, out);
+    }
+    if a.scenario_file.is_none() && a.scenario.starts_with("moving") {
+        if a.runs == Some(0) {
+            return Err("--runs must be at least 1, not 0".into());
+        }
+        let rows =
+            crate::runs::moving::bench::bench_named(&a.scenario, a.runs, a.particles, !a.quiet)?;
         return print(a, &rows, out);
     }
     if a.scenario_file.is_none() && a.scenario.starts_with("guidance") {

@@ -41,6 +41,12 @@ pub fn bench_scenarios() -> Vec<String> {
             .map(|c| format!("network/{}", c.short_name())),
     );
     names.push("small-n".into());
+    names.push("moving".into());
+    names.extend(
+        crate::runs::moving::NAMES
+            .iter()
+            .map(|n| format!("moving/{n}")),
+    );
     names.push("guidance".into());
     names.extend(Set::all().iter().map(|s| s.name()));
     names.push("guidance/plot".into());

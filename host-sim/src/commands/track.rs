@@ -1,62 +1,202 @@
-//! `foxhunt track`: a ZigBee node tracked indoors from a coordinator's capture.
+//! `foxhunt track`: an emitter that moves, tracked from recorded captures: bearings of any
+//! station and format, the RSSI an anchors file's anchors report in MT frames, or both.
 
 use crate::inputs::files::{Source, stream};
 use crate::outputs::files::Outputs;
 use crate::outputs::terminal::{Out, Outcome, note};
-use crate::track::indoor::{AnchorsFile, track};
+use crate::outputs::tracks;
+use crate::track::capture::{Measured, TrackDecoder};
+use crate::track::indoor::AnchorsFile;
+use crate::track::moving::{DEFAULT_METHOD, PARTICLES, TRACK_METHODS, TRACK_PARTICLES};
+use crate::track::tracks::{Options, Tracks};
+use foxhunt_core::Method;
 use std::path::PathBuf;
 
 /// Options of `foxhunt track`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Capture file, or `-` for standard input.
-    pub capture: PathBuf,
-    /// The anchors file.
+    /// Capture files (read in order as one stream), or `-` for standard input.
+    #[arg(required = true)]
+    pub captures: Vec<PathBuf>,
+    /// The anchors file: where the anchors whose RSSI the captures hold stand.
     #[arg(long)]
-    pub anchors: PathBuf,
-    /// Print JSON (an array of track points) instead of CSV.
+    pub anchors: Option<PathBuf>,
+    /// Print JSON (`{"tracks": [...]}`) instead of CSV.
     #[arg(long)]
     pub json: bool,
-    /// Draw the room, anchors and track as SVG.
+    /// Write the tracks and their 95 % ellipses as GeoJSON (needs GPS positions, or an
+    /// anchors file with an origin).
+    #[arg(long)]
+    pub geojson: Option<PathBuf>,
+    /// Write the CSV to a file too.
+    #[arg(long)]
+    pub csv: Option<PathBuf>,
+    /// Draw the room, anchors and track as SVG (RSSI from an anchors file).
     #[arg(long)]
     pub svg: Option<PathBuf>,
+    /// The tracker: sir-robust (the default, a regularised PF), sir, sir-wide, sir-seed,
+    /// afsa-pf, fa-pf, fa-pf-imp, gpf, pso-gpf, gsa-gpf, ekf (an IMM of a still and a moving
+    /// EKF).
+    #[arg(long, default_value = DEFAULT_METHOD.name())]
+    pub method: String,
+    /// Particles: 200, 1000, 2000 or 10000.
+    #[arg(long, default_value_t = PARTICLES)]
+    pub particles: usize,
+    /// Prior sd of each DF unit's bearing offset, degrees.
+    #[arg(long, default_value_t = 2.0)]
+    pub offset_sd: f32,
+    /// Acceleration sd of the moving emitter, m/s^2 (default 1 outdoors, 0.5 indoors).
+    #[arg(long)]
+    pub accel_sd: Option<f32>,
+    /// Every bearing's noise, degrees (default: each record's own).
+    #[arg(long)]
+    pub sigma: Option<f32>,
+    /// Channel width for grouping bearings by frequency, MHz.
+    #[arg(long, default_value_t = 0.025)]
+    pub channel_width: f32,
     /// Seed of the particle filter.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
 }
 
+impl Args {
+    fn options(&self) -> Result<Options, String> {
+        let method = Method::from_name(&self.method)
+            .filter(|m| TRACK_METHODS.contains(m))
+            .ok_or_else(|| {
+                let names: Vec<&str> = TRACK_METHODS.iter().map(|m| m.name()).collect();
+                format!(
+                    "--method {}: not a tracking method (one of {})",
+                    self.method,
+                    names.join(", ")
+                )
+            })?;
+        if !TRACK_PARTICLES.contains(&self.particles) {
+            return Err(format!(
+                "--particles {}: give one of 200, 1000, 2000, 10000",
+                self.particles
+            ));
+        }
+        let positive = |name: &str, v: f32| {
+            if v.is_finite() && v > 0.0 {
+                Ok(v)
+            } else {
+                Err(format!("--{name} {v}: give a finite number > 0"))
+            }
+        };
+        if !(self.offset_sd.is_finite() && self.offset_sd >= 0.0) {
+            return Err(format!(
+                "--offset-sd {}: give a finite number >= 0",
+                self.offset_sd
+            ));
+        }
+        Ok(Options {
+            method,
+            particles: self.particles,
+            offset_sd: self.offset_sd.to_radians(),
+            accel_sd: self.accel_sd.map(|a| positive("accel-sd", a)).transpose()?,
+            sigma: self
+                .sigma
+                .map(|s| positive("sigma", s).map(f32::to_radians))
+                .transpose()?,
+            width_mhz: positive("channel-width", self.channel_width)?,
+            seed: self.seed,
+        })
+    }
+}
+
+/// What to say when a capture gave nothing of the anchors.
+fn no_anchor(m: &Measured, file: &AnchorsFile) -> Option<String> {
+    if !m.readings.is_empty() || !m.decoded.observations.is_empty() {
+        return None;
+    }
+    let heard: Vec<String> = m.unknown.1.iter().map(|a| format!("0x{a:04x}")).collect();
+    Some(if heard.is_empty() {
+        "no bearing and no AF_INCOMING_MSG frame in the capture: nothing to track".into()
+    } else {
+        let listed: Vec<String> = file
+            .anchor
+            .iter()
+            .map(|a| format!("0x{:04x}", a.addr))
+            .collect();
+        format!(
+            "no frame from a known anchor: heard {} but the anchors file lists {}",
+            heard.join(", "),
+            listed.join(", ")
+        )
+    })
+}
+
 /// Run `foxhunt track`.
 pub fn run(a: &Args, out: &mut Out) -> Outcome {
-    let outputs = Outputs::new([a.capture.as_path(), a.anchors.as_path()], false);
-    if let Some(p) = &a.svg {
+    let options = a.options()?;
+    let mut inputs: Vec<&std::path::Path> = a.captures.iter().map(PathBuf::as_path).collect();
+    inputs.extend(a.anchors.as_deref());
+    let outputs = Outputs::new(inputs, false);
+    for p in [&a.geojson, &a.csv, &a.svg].into_iter().flatten() {
         outputs.check(p, true)?;
     }
-    let file = AnchorsFile::load(&a.anchors)?;
-    let mut bytes = Vec::new();
-    stream(&[Source::from_path(&a.capture)], |b| {
-        bytes.extend_from_slice(b)
-    })?;
-    let t = track(&bytes, &file, a.seed)?;
-    if t.unknown.0 > 0 {
-        let addrs: Vec<String> = t.unknown.1.iter().map(|a| format!("0x{a:04x}")).collect();
-        note(&format!(
-            "foxhunt: skipped {} frames from addresses not in {}: {}",
-            t.unknown.0,
-            a.anchors.display(),
-            addrs.join(", ")
-        ));
+    let file = a.anchors.as_deref().map(AnchorsFile::load).transpose()?;
+    if a.svg.is_some() && file.is_none() {
+        return Err("--svg draws the anchors' room: give --anchors".into());
     }
-    if let Some(p) = &a.svg {
+    let mut dec = TrackDecoder::new(file.as_ref());
+    let sources: Vec<Source> = a.captures.iter().map(|p| Source::from_path(p)).collect();
+    stream(&sources, |b| dec.feed(b))?;
+    let m = dec.finish();
+    if let (Some(f), Some(path)) = (&file, &a.anchors) {
+        if let Some(e) = no_anchor(&m, f) {
+            return Err(e.into());
+        }
+        if m.unknown.0 > 0 {
+            let addrs: Vec<String> = m.unknown.1.iter().map(|a| format!("0x{a:04x}")).collect();
+            note(&format!(
+                "foxhunt: skipped {} frames from addresses not in {}: {}",
+                m.unknown.0,
+                path.display(),
+                addrs.join(", ")
+            ));
+        }
+    }
+    let t = crate::track::tracks::tracks(&m, file.as_ref(), &options)?;
+    write_files(a, &t, file.as_ref(), &outputs)?;
+    if a.json {
+        let text = serde_json::to_string(&tracks::json(&t)).map_err(|e| e.to_string())?;
+        out.line(&text)
+    } else {
+        out.text(&tracks::csv(&t))
+    }
+}
+
+/// The files asked for.
+fn write_files(
+    a: &Args,
+    t: &Tracks,
+    file: Option<&AnchorsFile>,
+    outputs: &Outputs,
+) -> Result<(), String> {
+    if let Some(p) = &a.geojson {
+        let g = tracks::geojson(t).ok_or(
+            "--geojson needs the track on the earth: a capture with GPS positions, or an \
+             anchors file with an `origin`",
+        )?;
+        let text = serde_json::to_string(&g).map_err(|e| e.to_string())?;
+        outputs.write(p, text.as_bytes(), true)?;
+    }
+    if let Some(p) = &a.csv {
+        outputs.write(p, tracks::csv(t).as_bytes(), true)?;
+    }
+    if let (Some(p), Some(f)) = (&a.svg, file) {
+        let path: Vec<[f32; 2]> = t
+            .tracks
+            .iter()
+            .flat_map(|c| c.points.iter().map(|p| p.position))
+            .collect();
         outputs.write(
             p,
-            crate::outputs::maps::track_svg(&t, &file).as_bytes(),
+            crate::outputs::maps::track_svg(&path, f).as_bytes(),
             true,
         )?;
     }
-    if a.json {
-        let text = serde_json::to_string(&t.points).map_err(|e| e.to_string())?;
-        out.line(&text)
-    } else {
-        out.text(&t.csv())
-    }
+    Ok(())
 }

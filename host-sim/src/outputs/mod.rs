@@ -10,3 +10,4 @@ pub mod serve;
 pub mod tables;
 pub mod terminal;
 pub mod text;
+pub mod tracks;

@@ -5,6 +5,7 @@
 pub mod field;
 pub mod guidance;
 pub mod montecarlo;
+pub mod moving;
 pub mod network;
 pub mod perf;
 pub mod run;

@@ -422,11 +422,16 @@ pub fn indoor_capture(name: &str, run: usize) -> Result<IndoorCapture, String> {
             d0_m: t.path_loss.d0,
             eta: t.path_loss.eta,
         },
+        origin: None,
+        power_sd_db: 0.0,
+        exponent_sd: 0.0,
         anchor: (0..3)
             .map(|i| Anchor {
                 addr: 0x0101 + i as u16,
                 x: t.anchors[i][0],
                 y: t.anchors[i][1],
+                p0_dbm: None,
+                eta: None,
             })
             .collect(),
     };

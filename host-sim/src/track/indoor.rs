@@ -30,6 +30,12 @@ pub struct Anchor {
     pub x: f32,
     /// North, metres.
     pub y: f32,
+    /// Its own RSSI at the reference distance, dBm (default: the file's `path_loss`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub p0_dbm: Option<f32>,
+    /// Its own path-loss exponent (default: the file's `path_loss`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub eta: Option<f32>,
 }
 
 /// The log-distance path loss of the anchors file.
@@ -79,8 +85,25 @@ pub struct AnchorsFile {
     /// Path loss.
     #[serde(default = "default_path_loss")]
     pub path_loss: PathLossEntry,
+    /// Latitude and longitude of the file's (0, 0), degrees: places the anchors beside GPS
+    /// positions and gives the track latitudes and longitudes. Without it a track is in the
+    /// file's metres.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub origin: Option<[f64; 2]>,
+    /// `foxhunt track`: how unsure the emitter's power is, dB; 0 (the default) takes the
+    /// path loss as known, more lets the tracker learn a power offset.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub power_sd_db: f32,
+    /// `foxhunt track`: how unsure the path-loss exponent is; 0 (the default) takes it as
+    /// known, more lets the tracker learn a correction to every anchor's exponent.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub exponent_sd: f32,
     /// The anchors.
     pub anchor: Vec<Anchor>,
+}
+
+fn is_zero(v: &f32) -> bool {
+    *v == 0.0
 }
 
 impl AnchorsFile {
@@ -88,8 +111,12 @@ impl AnchorsFile {
     /// error naming the key.
     pub fn from_toml(text: &str) -> Result<Self, String> {
         let f: Self = crate::inputs::files::parse_toml(text)?;
-        if !(3..=6).contains(&f.anchor.len()) {
-            return Err(format!("give 3 to 6 anchors, not {}", f.anchor.len()));
+        if !(3..=crate::track::capture::MAX_ANCHORS).contains(&f.anchor.len()) {
+            return Err(format!(
+                "give 3 to {} anchors, not {}",
+                crate::track::capture::MAX_ANCHORS,
+                f.anchor.len()
+            ));
         }
         let addrs: BTreeSet<u16> = f.anchor.iter().map(|a| a.addr).collect();
         if addrs.len() != f.anchor.len() {
@@ -101,6 +128,29 @@ impl AnchorsFile {
                     "anchor 0x{:04x}: position ({}, {}) must be finite",
                     a.addr, a.x, a.y
                 ));
+            }
+            if a.p0_dbm.is_some_and(|v| !v.is_finite())
+                || a.eta.is_some_and(|v| !(v > 0.0 && v.is_finite()))
+            {
+                return Err(format!(
+                    "anchor 0x{:04x}: `p0_dbm` must be finite and `eta` finite and positive",
+                    a.addr
+                ));
+            }
+        }
+        if let Some([lat, lon]) = f.origin
+            && !(lat.abs() <= 90.0 && lon.abs() <= 180.0)
+        {
+            return Err(format!(
+                "`origin` must be [latitude, longitude] within [-90, 90] and [-180, 180], not [{lat}, {lon}]"
+            ));
+        }
+        for (key, v) in [
+            ("power_sd_db", f.power_sd_db),
+            ("exponent_sd", f.exponent_sd),
+        ] {
+            if !(v >= 0.0 && v.is_finite()) {
+                return Err(format!("`{key}` must be a finite number >= 0, not {v}"));
             }
         }
         let positive = |key: &str, v: f32| {
@@ -128,6 +178,16 @@ impl AnchorsFile {
             positive("room", d)?;
         }
         Ok(f)
+    }
+
+    /// Anchor `i`'s path loss: its own P0 and eta where it gives them, else the file's.
+    pub fn law(&self, i: usize) -> PathLoss {
+        let a = self.anchor.get(i);
+        PathLoss {
+            p0: a.and_then(|a| a.p0_dbm).unwrap_or(self.path_loss.p0_dbm),
+            d0: self.path_loss.d0_m,
+            eta: a.and_then(|a| a.eta).unwrap_or(self.path_loss.eta),
+        }
     }
 
     /// The file's text as `foxhunt simulate --scenario NAME` writes it.

@@ -1,3 +1,9 @@
-//! Tracking a moving node: indoors from the RSSI fixed anchors report.
+//! Tracking what moves: the moving-emitter tracker on any mix of stations, bearings and RSSI
+//! ([`moving`]), and a ZigBee node indoors from the RSSI its fixed anchors report
+//! ([`indoor`]).
 
+pub mod capture;
 pub mod indoor;
+pub mod moving;
+pub mod tracks;
+pub mod updates;

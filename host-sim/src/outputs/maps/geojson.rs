@@ -91,7 +91,7 @@ fn clip(ring: &[[f64; 2]], edge: f64, keep_west: bool) -> Vec<[f64; 2]> {
 }
 
 /// A GeoJSON polygon geometry: a Polygon, or a MultiPolygon cut at the antimeridian.
-pub(super) fn polygon_geometry(ring: &[[f64; 2]]) -> Value {
+pub fn polygon_geometry(ring: &[[f64; 2]]) -> Value {
     let mut r = ring.to_vec();
     unwrap_longitudes(&mut r);
     let (lo, hi) = r.iter().fold((f64::MAX, f64::MIN), |(lo, hi), p| {

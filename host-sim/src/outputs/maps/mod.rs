@@ -10,7 +10,7 @@ mod svg;
 #[cfg(test)]
 mod tests;
 
-pub use geojson::{geojson, split_antimeridian};
+pub use geojson::{geojson, polygon_geometry, split_antimeridian};
 pub use kml::kml;
 pub use svg::{svg, track_svg};
 

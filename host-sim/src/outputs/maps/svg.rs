@@ -4,7 +4,7 @@ use super::{ellipse_ring, rays, sources};
 use crate::inputs::capture::Decoded;
 use crate::locate::report::Located;
 use crate::locate::report::{Drawn, SourceReport};
-use crate::track::indoor::{AnchorsFile, Track};
+use crate::track::indoor::AnchorsFile;
 use std::fmt::Write;
 
 /// A north-up square picture of local metres.
@@ -260,9 +260,10 @@ pub fn svg(l: &Located, d: &Decoded) -> String {
 }
 
 /// SVG of an indoor track: the room, the anchors and the estimated path, with a legend, a
-/// north arrow and a scale bar; 600 x 600 pixels.
-pub fn track_svg(track: &Track, anchors: &AnchorsFile) -> String {
-    let path_pts: Vec<[f32; 2]> = track.points.iter().map(|p| [p.x_m, p.y_m]).collect();
+/// north arrow and a scale bar; 600 x 600 pixels. `path`: the track's positions in the
+/// anchors file's metres.
+pub fn track_svg(path: &[[f32; 2]], anchors: &AnchorsFile) -> String {
+    let path_pts: Vec<[f32; 2]> = path.to_vec();
     let mut pts = path_pts.clone();
     pts.extend(anchors.anchor.iter().map(|a| [a.x, a.y]));
     if let Some([w, d]) = anchors.room {
@@ -304,7 +305,7 @@ pub fn track_svg(track: &Track, anchors: &AnchorsFile) -> String {
             format!(
                 "<line x1=\"0\" y1=\"0\" x2=\"24\" y2=\"0\" stroke=\"{TRACK_COLOUR}\" stroke-width=\"2\"/>"
             ),
-            format!("estimated track ({} steps)", track.points.len()),
+            format!("estimated track ({} steps)", path.len()),
         ),
         (
             format!("<path d=\"M12,-7 L19,5 L5,5 Z\" fill=\"{FIX_COLOUR}\"/>"),

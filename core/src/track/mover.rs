@@ -1,0 +1,607 @@
+//! The moving emitter as a particle filter's model: [`Mover`].
+
+use super::epoch::{Epoch, Level};
+use super::motion::Motion;
+use super::{MODE, PARAMETERS};
+use crate::error::{Error, check_finite};
+use crate::fastmath;
+use crate::fix::observation::Observation;
+use crate::likelihood::Likelihood;
+use crate::model::Model;
+use crate::model::bearing::wrap;
+use crate::model::rssi::{MIN_DISTANCE, reflect};
+use crate::random;
+use rand_core::Rng;
+
+/// Where the static parameters' statistics sit in the state (the module's table): for each of
+/// `sources` DF sources the mean and variance of its offset from [`PARAMETERS`]; then, with
+/// `rssi`, the means of the power offset and exponent correction and their covariance
+/// (pp, pe, ee). A state longer than [`Layout::dims`] carries the rest unused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Layout {
+    /// DF sources with an offset each: source s's mean is component [`PARAMETERS`] + 2 s, its
+    /// variance the next. A bearing from a source at or beyond this count is refused.
+    pub sources: u8,
+    /// Whether RSSI readings are modelled (five components after the offsets).
+    pub rssi: bool,
+}
+
+impl Layout {
+    /// Components used.
+    pub const fn dims(&self) -> usize {
+        PARAMETERS + 2 * self.sources as usize + if self.rssi { 5 } else { 0 }
+    }
+
+    /// The components of source `s`'s offset: its mean and variance.
+    pub fn offset(&self, s: usize) -> Option<(usize, usize)> {
+        (s < self.sources as usize).then_some((PARAMETERS + 2 * s, PARAMETERS + 2 * s + 1))
+    }
+
+    /// The first of the RSSI components: the power offset's mean (dB), the exponent
+    /// correction's mean, then their covariance pp, pe, ee.
+    pub fn rssi(&self) -> Option<usize> {
+        self.rssi.then_some(PARAMETERS + 2 * self.sources as usize)
+    }
+
+    /// The components whose values are estimates (the offsets' and RSSI terms' means), in
+    /// layout order: what a bound and a Kalman filter treat as the parameters.
+    pub fn means(&self) -> impl Iterator<Item = usize> + '_ {
+        let offsets = (0..self.sources as usize).map(|s| PARAMETERS + 2 * s);
+        let rssi = self.rssi().into_iter().flat_map(|r| [r, r + 1]);
+        offsets.chain(rssi)
+    }
+}
+
+/// How the parameters' statistics forget: each variance grows by its prior variance every
+/// `memory_s` seconds (a random walk), up to that prior variance; a variance of zero (a
+/// calibrated source, a known law) stays zero. The offset of a real DF unit varies with the
+/// direction it looks in, and a particle filter's particles soon share their ancestors, so
+/// statistics that never forget grow surer than the data allow (module [`Mover`]'s measure).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Forgetting {
+    /// Seconds in which a variance regains its prior (infinite: never forget).
+    pub memory_s: f32,
+    /// The offsets' prior variance, rad^2.
+    pub offset_var: f32,
+    /// The RSSI power offset's prior variance, dB^2.
+    pub power_var: f32,
+    /// The exponent correction's prior variance.
+    pub exponent_var: f32,
+}
+
+impl Forgetting {
+    /// Never forget.
+    pub const NEVER: Forgetting = Forgetting {
+        memory_s: f32::INFINITY,
+        offset_var: 0.0,
+        power_var: 0.0,
+        exponent_var: 0.0,
+    };
+
+    /// What each variance gains over `dt` seconds: (offset, power, exponent).
+    fn growth(&self, dt: f32) -> [f32; 3] {
+        let k = if self.memory_s > 0.0 {
+            dt / self.memory_s
+        } else {
+            0.0
+        };
+        [
+            self.offset_var * k,
+            self.power_var * k,
+            self.exponent_var * k,
+        ]
+    }
+}
+
+/// The moving emitter: the [`Motion`] between updates, bearings and RSSI readings at each
+/// ([`Epoch`] of up to `K` of each), the state laid out by `layout` in `D` components.
+///
+/// The sensors' parameters enter the measurements linearly (a bearing is the true one plus
+/// its source's offset; an RSSI reading is P0 + power offset - 10 (eta + correction)
+/// log10(d / d0)), so each particle carries their Gaussian posterior given its own trajectory
+/// instead of sampling them (a Rao-Blackwellised filter: Doucet, de Freitas, Murphy and
+/// Russell 2000): a measurement weighs a particle by its predictive density, the
+/// parameters' doubt added to the noise, then conditions the particle's statistics by a Kalman
+/// step. A heavy-tailed likelihood's step is scaled by its IRLS weight (the mixture's inlier
+/// probability: a wild bearing barely moves them). Sampled static parameters would collapse
+/// onto a few values and grow confidently wrong (measured: 2 degree offsets estimated to
+/// 0.1-0.2 degrees, 1-2 degrees off, the track's ellipses missing the truth all along).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Mover<const K: usize> {
+    /// How it moves.
+    pub motion: Motion,
+    /// Where the parameters sit.
+    pub layout: Layout,
+    /// The room [0, w] x [0, h] it cannot leave, if known: a position that would cross a wall
+    /// is mirrored back and that velocity reversed (as [`crate::RssiTracker`] does).
+    pub room: Option<[f32; 2]>,
+    /// How the parameters' statistics forget.
+    pub forgetting: Forgetting,
+}
+
+/// What one step's propagation needs, computed once for every particle.
+#[derive(Debug, Clone, Copy)]
+struct Advance {
+    dt: f32,
+    start: f32,
+    stop: f32,
+    factor: [f32; 3],
+    start_speed: f32,
+    growth: [f32; 3],
+}
+
+/// Mirror the position of state `x` (a tracker layout: position, then velocity) back into
+/// `room`, reversing the velocity of each wall crossed.
+pub(crate) fn bounce(room: [f32; 2], x: &mut [f32]) {
+    if let [px, py, vx, vy, ..] = x {
+        reflect(room[0], px, vx);
+        reflect(room[1], py, vy);
+    }
+}
+
+/// 5 log10(r) = 10 log10(sqrt(r)): the decibels of a squared-distance ratio.
+const DB_OF_SQUARED: f32 = 5.0 * core::f32::consts::LOG10_E;
+
+impl<const K: usize> Mover<K> {
+    /// A mover in open space whose parameters never forget.
+    pub const fn new(motion: Motion, layout: Layout) -> Self {
+        Self {
+            motion,
+            layout,
+            room: None,
+            forgetting: Forgetting::NEVER,
+        }
+    }
+
+    fn advance(&self, dt: f32) -> Advance {
+        let (start, stop) = self.motion.switches(dt);
+        Advance {
+            dt,
+            start,
+            stop,
+            factor: self.motion.axis_factor(dt),
+            start_speed: self.motion.start_speed_sd,
+            growth: self.forgetting.growth(dt),
+        }
+    }
+
+    /// One particle over one step, given a uniform `u` (the switch) and four normals; its
+    /// statistics kept valid (a variance below zero, as a Gaussian redraw can give, is zero).
+    #[inline(always)]
+    fn step<const D: usize>(&self, x: &mut [f32; D], a: &Advance, u: f32, n: [f32; 4]) {
+        let [l11, l21, l22] = a.factor;
+        if x[MODE] > 0.5 {
+            if u < a.stop {
+                x[2] = 0.0;
+                x[3] = 0.0;
+                x[MODE] = 0.0;
+            } else {
+                x[0] += a.dt * x[2] + l11 * n[0];
+                x[2] += l21 * n[0] + l22 * n[1];
+                x[1] += a.dt * x[3] + l11 * n[2];
+                x[3] += l21 * n[2] + l22 * n[3];
+                x[MODE] = 1.0;
+            }
+        } else if u < a.start {
+            x[2] = a.start_speed * n[0];
+            x[3] = a.start_speed * n[1];
+            x[MODE] = 1.0;
+        } else {
+            x[2] = 0.0;
+            x[3] = 0.0;
+            x[MODE] = 0.0;
+        }
+        if let Some(room) = self.room {
+            bounce(room, x);
+        }
+        let f = &self.forgetting;
+        let grow = |v: f32, by: f32, cap: f32| {
+            if v > 0.0 {
+                (v + by).min(cap.max(v))
+            } else {
+                0.0
+            }
+        };
+        for s in 0..self.layout.sources as usize {
+            let v = PARAMETERS + 2 * s + 1;
+            if v < D {
+                x[v] = grow(x[v], a.growth[0], f.offset_var);
+            }
+        }
+        if let Some(r) = self.layout.rssi().filter(|r| r + 4 < D) {
+            let pp = grow(x[r + 2], a.growth[1], f.power_var);
+            let ee = grow(x[r + 4], a.growth[2], f.exponent_var);
+            let bound = libm::sqrtf(pp * ee);
+            x[r + 2] = pp;
+            x[r + 3] = x[r + 3].clamp(-bound, bound);
+            x[r + 4] = ee;
+        }
+    }
+
+    /// A bearing's residual under state `x` with its source's offset mean taken off, and the
+    /// variance of that mean (0 for a source without one).
+    #[inline]
+    fn bearing_terms<const D: usize>(&self, x: &[f32; D], o: &Observation) -> (f32, f32) {
+        let b = &o.bearing;
+        let h = fastmath::atan2(x[1] - b.vehicle[1], x[0] - b.vehicle[0]);
+        match self
+            .layout
+            .offset(usize::from(o.station))
+            .filter(|(_, v)| *v < D)
+        {
+            Some((m, v)) => (wrap(b.theta - h - x[m]), x[v]),
+            None => (wrap(b.theta - h), 0.0),
+        }
+    }
+
+    /// An RSSI reading's residual under state `x` at the RSSI terms' means, its regressor on
+    /// (power, exponent) and the variance the terms' doubt adds.
+    #[inline]
+    fn level_terms<const D: usize>(&self, x: &[f32; D], l: &Level) -> (f32, f32, f32) {
+        let (dx, dy) = (x[0] - l.anchor[0], x[1] - l.anchor[1]);
+        let d2 = (dx * dx + dy * dy).max(MIN_DISTANCE * MIN_DISTANCE);
+        // The exponent's regressor: -10 log10(d / d0).
+        let g = -DB_OF_SQUARED * libm::logf(d2 / (l.law.d0 * l.law.d0));
+        let base = l.law.p0 + l.law.eta * g;
+        match self.layout.rssi().filter(|r| r + 4 < D) {
+            Some(r) => {
+                let pred = base + x[r] + g * x[r + 1];
+                let var = x[r + 2] + 2.0 * g * x[r + 3] + g * g * x[r + 4];
+                (l.dbm - pred, g, var.max(0.0))
+            }
+            None => (l.dbm - base, g, 0.0),
+        }
+    }
+
+    /// Expected RSSI of reading `l` from the state `x` (the RSSI terms at their means).
+    pub fn expected_dbm<const D: usize>(&self, x: &[f32; D], l: &Level) -> f32 {
+        l.dbm - self.level_terms(x, l).0
+    }
+}
+
+/// log L of residual `r` whose predictive sd is `s`: the likelihood's shape plus its
+/// normaliser -ln s, which differs between particles whose parameters are surer or less sure.
+#[inline(always)]
+fn ln_density<L: Likelihood>(lik: &L, r: f32, s: f32) -> f32 {
+    lik.ln(r, s) - libm::logf(s)
+}
+
+impl<const D: usize, const K: usize> Model<D> for Mover<K> {
+    type Measurement = Epoch<K>;
+
+    fn check(&self, z: &Epoch<K>) -> Result<(), Error> {
+        self.motion.check()?;
+        check_finite(&[z.dt])?;
+        if self.layout.dims() > D || z.dt < 0.0 {
+            return Err(Error::OutOfRange);
+        }
+        if let Some([w, h]) = self.room
+            && !(w > 0.0 && h > 0.0 && w.is_finite() && h.is_finite())
+        {
+            return Err(Error::OutOfRange);
+        }
+        for o in z.bearings() {
+            o.bearing.check()?;
+            if o.station >= u16::from(self.layout.sources) {
+                return Err(Error::OutOfRange);
+            }
+        }
+        if !z.levels().is_empty() && !self.layout.rssi {
+            return Err(Error::Unsupported);
+        }
+        for l in z.levels() {
+            l.check()?;
+        }
+        Ok(())
+    }
+
+    fn propagate<R: Rng + ?Sized>(&self, x: &mut [f32; D], z: &Epoch<K>, rng: &mut R) {
+        let a = self.advance(z.dt);
+        let u = random::uniform(rng);
+        let n = core::array::from_fn(|_| random::normal(rng));
+        self.step(x, &a, u, n);
+    }
+
+    /// Four particles per draw of the four-lane generator for the switches, one for each
+    /// particle's four normals.
+    fn propagate_all<R: Rng + ?Sized>(&self, states: &mut [[f32; D]], z: &Epoch<K>, rng: &mut R) {
+        let a = self.advance(z.dt);
+        let mut lanes = random::Lanes::seed_from(rng);
+        let mut fours = states.chunks_exact_mut(4);
+        for four in &mut fours {
+            let u = lanes.next_u32x4();
+            for (x, u) in four.iter_mut().zip(u) {
+                let n = lanes.normals(rng);
+                self.step(x, &a, (u >> 8) as f32 * (1.0 / 16_777_216.0), n);
+            }
+        }
+        for x in fours.into_remainder() {
+            self.propagate(x, z, rng);
+        }
+    }
+
+    /// The predictive density of the epoch's measurements given the state's position, the
+    /// parameters integrated out over their Gaussians (as [`Model::update_all`] weighs).
+    fn ln_likelihood<L: Likelihood>(&self, x: &[f32; D], z: &Epoch<K>, lik: &L) -> f32 {
+        let mut l = 0.0;
+        for o in z.bearings() {
+            let (r, var) = self.bearing_terms(x, o);
+            let s = o.bearing.sigma;
+            l += ln_density(lik, r, libm::sqrtf(s * s + var));
+        }
+        for lv in z.levels() {
+            let (r, _, var) = self.level_terms(x, lv);
+            let s = lv.sigma_db;
+            l += ln_density(lik, r, libm::sqrtf(s * s + var));
+        }
+        l
+    }
+
+    /// Weigh, then condition each particle's parameters on each measurement in turn (a
+    /// scalar Kalman step on the offset; a two-term one on the RSSI terms).
+    fn update_all<L: Likelihood>(
+        &self,
+        states: &mut [[f32; D]],
+        z: &Epoch<K>,
+        lik: &L,
+        log_weights: &mut [f32],
+    ) {
+        for o in z.bearings() {
+            let s2 = o.bearing.sigma * o.bearing.sigma;
+            let slot = self
+                .layout
+                .offset(usize::from(o.station))
+                .filter(|(_, v)| *v < D);
+            for (x, lw) in states.iter_mut().zip(log_weights.iter_mut()) {
+                let (r, var) = self.bearing_terms(x, o);
+                let total = s2 + var;
+                let s = libm::sqrtf(total);
+                *lw += ln_density(lik, r, s);
+                if let Some((m, v)) = slot
+                    && var > 0.0
+                {
+                    let w = lik.irls_weight(r, s);
+                    let gain = w * var / total;
+                    x[m] += gain * r;
+                    x[v] = var - gain * var;
+                }
+            }
+        }
+        for l in z.levels() {
+            let s2 = l.sigma_db * l.sigma_db;
+            let slot = self.layout.rssi().filter(|r| r + 4 < D);
+            for (x, lw) in states.iter_mut().zip(log_weights.iter_mut()) {
+                let (r, g, var) = self.level_terms(x, l);
+                let total = s2 + var;
+                let s = libm::sqrtf(total);
+                *lw += ln_density(lik, r, s);
+                if let Some(i) = slot
+                    && var > 0.0
+                {
+                    // P h with h = [1, g]; P <- P - w (P h)(P h)^T / S.
+                    let ph = [x[i + 2] + g * x[i + 3], x[i + 3] + g * x[i + 4]];
+                    let w = lik.irls_weight(r, s) / total;
+                    x[i] += w * ph[0] * r;
+                    x[i + 1] += w * ph[1] * r;
+                    x[i + 2] -= w * ph[0] * ph[0];
+                    x[i + 3] -= w * ph[0] * ph[1];
+                    x[i + 4] -= w * ph[1] * ph[1];
+                }
+            }
+        }
+    }
+
+    /// The position alone: the velocity and the mode are the motion's, the parameters'
+    /// statistics follow from the measurements.
+    fn regularised(&self) -> [bool; D] {
+        core::array::from_fn(|j| j < 2)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::likelihood::{Gaussian, GaussianUniform};
+    use crate::model::bearing::{Bearing, predicted};
+    use crate::model::rssi::PathLoss;
+    use rand_core::SeedableRng;
+    use rand_xorshift::XorShiftRng;
+
+    const LAYOUT: Layout = Layout {
+        sources: 2,
+        rssi: true,
+    };
+    const LAW: PathLoss = PathLoss {
+        p0: -40.0,
+        d0: 1.0,
+        eta: 2.5,
+    };
+
+    fn bearing(v: [f32; 2], theta: f32, source: u8) -> Observation {
+        let mut o = Observation::new(
+            Bearing {
+                vehicle: v,
+                theta,
+                sigma: 0.03,
+            },
+            0.0,
+        );
+        o.station = u16::from(source);
+        o
+    }
+
+    #[test]
+    fn weights_are_the_predictive_density_before_conditioning() {
+        let m = Mover::<4>::new(Motion::OUTDOOR, LAYOUT);
+        let mut rng = XorShiftRng::seed_from_u64(3);
+        let mut states: [[f32; 14]; 37] = core::array::from_fn(|_| {
+            core::array::from_fn(|j| match j {
+                0 | 1 => random::uniform_in(&mut rng, -2000.0, 2000.0),
+                5 | 7 => random::uniform_in(&mut rng, -0.2, 0.2),
+                6 | 8 => random::uniform_in(&mut rng, 0.0, 0.01),
+                9 => random::uniform_in(&mut rng, -5.0, 5.0),
+                10 => random::uniform_in(&mut rng, -0.5, 0.5),
+                11 => 36.0,
+                12 => 0.1,
+                13 => 0.04,
+                _ => 0.0,
+            })
+        });
+        let lik = GaussianUniform { eps: 0.05 };
+        for z in [
+            {
+                let mut e = Epoch::<4>::new(1.0);
+                e.push_bearing(bearing([900.0, -300.0], 1.0, 1)).unwrap();
+                e
+            },
+            {
+                let mut e = Epoch::<4>::new(1.0);
+                e.push_level(Level {
+                    anchor: [50.0, 60.0],
+                    dbm: -95.0,
+                    sigma_db: 4.0,
+                    law: LAW,
+                })
+                .unwrap();
+                e
+            },
+        ] {
+            let before = states;
+            let mut lw = [0.0f32; 37];
+            m.update_all(&mut states, &z, &lik, &mut lw);
+            for ((x, w), after) in before.iter().zip(lw).zip(states.iter()) {
+                let slow = m.ln_likelihood(x, &z, &lik);
+                assert!((w - slow).abs() <= 1e-4 * slow.abs().max(1.0), "{w} {slow}");
+                // Conditioning never widens.
+                assert!(after[6] <= x[6] && after[8] <= x[8] && after[11] <= x[11]);
+                assert!(after[13] <= x[13]);
+            }
+        }
+    }
+
+    #[test]
+    fn a_particle_on_the_emitter_learns_the_offset_at_the_kalman_rate() {
+        let m = Mover::<4>::new(
+            Motion::OUTDOOR,
+            Layout {
+                sources: 1,
+                rssi: false,
+            },
+        );
+        let p = [1000.0f32, 500.0];
+        let mut x = [p[0], p[1], 0.0, 0.0, 0.0, 0.0, 0.01];
+        for k in 0..100 {
+            let v = [0.0, 10.0 * k as f32];
+            let mut z = Epoch::<4>::new(1.0);
+            // The unit reads 0.05 rad high, alternately 0.03 either side.
+            let noise = if k % 2 == 0 { 0.03 } else { -0.03 };
+            z.push_bearing(bearing(v, predicted(&p, &v) + 0.05 + noise, 0))
+                .unwrap();
+            let mut lw = [0.0];
+            let mut one = [x];
+            m.update_all(&mut one, &z, &Gaussian, &mut lw);
+            x = one[0];
+        }
+        // Prior variance 0.01, 100 bearings of variance 9e-4: posterior 1 / (100 + 1111).
+        assert!((x[5] - 0.05).abs() < 0.003, "{x:?}");
+        assert!((x[6] - 1.0 / (100.0 + 100.0 / 9e-4)).abs() < 1e-7, "{x:?}");
+    }
+
+    #[test]
+    fn the_rssi_terms_are_learned_from_readings_at_several_ranges() {
+        let m = Mover::<4>::new(
+            Motion::OUTDOOR,
+            Layout {
+                sources: 0,
+                rssi: true,
+            },
+        );
+        let p = [0.0f32, 0.0];
+        // Power 4 dB above the law, exponent 0.3 steeper; noise-free readings.
+        let truth = PathLoss {
+            p0: LAW.p0 + 4.0,
+            eta: LAW.eta + 0.3,
+            ..LAW
+        };
+        let mut x = [0.0f32; 10];
+        x[7] = 100.0;
+        x[9] = 1.0;
+        for k in 0..200 {
+            let anchor = [10.0 + 20.0 * (k % 10) as f32, 0.0];
+            let mut z = Epoch::<4>::new(1.0);
+            z.push_level(Level {
+                anchor,
+                dbm: truth.rssi(anchor[0]),
+                sigma_db: 2.0,
+                law: LAW,
+            })
+            .unwrap();
+            let mut one = [x];
+            m.update_all(&mut one, &z, &Gaussian, &mut [0.0]);
+            x = one[0];
+            let _ = p;
+        }
+        assert!(
+            (x[5] - 4.0).abs() < 0.2 && (x[6] - 0.3).abs() < 0.02,
+            "{x:?}"
+        );
+        assert!(x[7] < 1.0 && x[9] < 0.01, "{x:?}");
+    }
+
+    #[test]
+    fn still_stays_moving_moves_and_switches_happen_at_their_rates() {
+        let motion = Motion {
+            accel_sd: 0.5,
+            start_rate: 0.1,
+            stop_rate: 0.2,
+            start_speed_sd: 3.0,
+        };
+        let m = Mover::<4>::new(motion, Layout::default());
+        let mut rng = XorShiftRng::seed_from_u64(9);
+        let z = Epoch::<4>::new(1.0);
+        let mut still = [[0.0f32; 5]; 4000];
+        m.propagate_all(&mut still, &z, &mut rng);
+        let started = still.iter().filter(|x| x[MODE] > 0.5).count() as f32 / 4000.0;
+        // 1 - exp(-0.1) = 0.095; binomial sd over 4000 draws is 0.005.
+        assert!((started - 0.0952).abs() < 0.02, "{started}");
+        for x in still.iter().filter(|x| x[MODE] < 0.5) {
+            assert_eq!(x[..4], [0.0; 4]);
+        }
+        let mut moving = [[0.0f32, 0.0, 10.0, 0.0, 1.0]; 4000];
+        m.propagate_all(&mut moving, &z, &mut rng);
+        let stopped = moving.iter().filter(|x| x[MODE] < 0.5).count() as f32 / 4000.0;
+        assert!((stopped - 0.1813).abs() < 0.025, "{stopped}");
+        let went: f32 = moving
+            .iter()
+            .filter(|x| x[MODE] > 0.5)
+            .map(|x| x[0])
+            .sum::<f32>()
+            / moving.iter().filter(|x| x[MODE] > 0.5).count() as f32;
+        assert!((went - 10.0).abs() < 0.1, "{went}");
+    }
+
+    #[test]
+    fn the_kernel_moves_the_position_only_and_the_layout_must_fit() {
+        let m = Mover::<4>::new(
+            Motion::OUTDOOR,
+            Layout {
+                sources: 1,
+                rssi: false,
+            },
+        );
+        let mask: [bool; 8] = m.regularised();
+        assert_eq!(mask, [true, true, false, false, false, false, false, false]);
+        let mut z = Epoch::<4>::new(1.0);
+        z.push_bearing(bearing([0.0, 0.0], 0.0, 0)).unwrap();
+        assert_eq!(
+            <Mover<4> as Model<6>>::check(&m, &z),
+            Err(Error::OutOfRange)
+        );
+        assert_eq!(<Mover<4> as Model<7>>::check(&m, &z), Ok(()));
+        z.push_bearing(bearing([0.0, 0.0], 0.0, 1)).unwrap();
+        assert_eq!(
+            <Mover<4> as Model<7>>::check(&m, &z),
+            Err(Error::OutOfRange)
+        );
+    }
+}

@@ -1,0 +1,155 @@
+//! A moving emitter's tracks as `foxhunt track` writes them: JSON (one object, docs/src/
+//! formats/json.md#track), CSV (one line per point) and GeoJSON (the track line and every
+//! point with its 95 % ellipse).
+
+use crate::locate::report::EllipseReport;
+use crate::outputs::json::Short;
+use crate::outputs::maps::{ellipse_ring, polygon_geometry, split_antimeridian};
+use crate::track::moving::TrackPoint;
+use crate::track::tracks::Tracks;
+use serde_json::{Map, Value, json};
+use std::fmt::Write;
+
+/// Milliseconds of a point's time.
+fn t_ms(p: &TrackPoint) -> i64 {
+    (f64::from(p.t_s) * 1000.0).round() as i64
+}
+
+/// A number JSON can hold: non-finite values become null.
+fn num(v: f64) -> Value {
+    serde_json::Number::from_f64(v).map_or(Value::Null, Value::Number)
+}
+
+/// The ellipse of a point as JSON (null when its covariance gives none), its orientation
+/// clockwise from north as `locate` reports it.
+fn ellipse(p: &TrackPoint) -> Value {
+    p.ellipse().map_or(Value::Null, |e| {
+        let r = EllipseReport::from(&e);
+        json!({
+            "major_m": r.major_m.short(),
+            "minor_m": r.minor_m.short(),
+            "orientation_deg": r.orientation_deg.short(),
+            "confidence": r.confidence.short(),
+        })
+    })
+}
+
+/// One point as JSON: latitude and longitude only when the tracks are placed.
+pub fn point(t: &Tracks, p: &TrackPoint) -> Value {
+    let mut o = Map::new();
+    o.insert("t_ms".into(), json!(t_ms(p)));
+    if let Some(g) = t.geodetic(p.position) {
+        o.insert("lat".into(), num(g.lat));
+        o.insert("lon".into(), num(g.lon));
+    }
+    o.insert("east_m".into(), p.position[0].short());
+    o.insert("north_m".into(), p.position[1].short());
+    o.insert("vel_e_mps".into(), p.velocity[0].short());
+    o.insert("vel_n_mps".into(), p.velocity[1].short());
+    o.insert("ellipse".into(), ellipse(p));
+    o.insert("p_moving".into(), p.p_moving.short());
+    Value::Object(o)
+}
+
+/// `{"tracks": [{"freq_mhz", "points": [...]}]}`.
+pub fn json(t: &Tracks) -> Value {
+    let tracks: Vec<Value> = t
+        .tracks
+        .iter()
+        .map(|c| {
+            json!({
+                "freq_mhz": c.freq_mhz.short(),
+                "points": c.points.iter().map(|p| point(t, p)).collect::<Vec<_>>(),
+            })
+        })
+        .collect();
+    json!({ "tracks": tracks })
+}
+
+/// The CSV header.
+pub const CSV_HEADER: &str = "freq_mhz,t_ms,lat,lon,east_m,north_m,vel_e_mps,vel_n_mps,\
+                              major_m,minor_m,orientation_deg,p_moving";
+
+/// One point as a CSV line (empty fields for what it lacks).
+pub fn csv_line(t: &Tracks, freq_mhz: Option<f32>, p: &TrackPoint) -> String {
+    let mut s = String::new();
+    let freq = freq_mhz.map_or(String::new(), |f| format!("{f:.4}"));
+    let (lat, lon) = t
+        .geodetic(p.position)
+        .map_or((String::new(), String::new()), |g| {
+            (format!("{:.7}", g.lat), format!("{:.7}", g.lon))
+        });
+    let (major, minor, orient) = p.ellipse().map_or_else(
+        || (String::new(), String::new(), String::new()),
+        |e| {
+            (
+                format!("{:.2}", e.major),
+                format!("{:.2}", e.minor),
+                format!("{:.1}", EllipseReport::from(&e).orientation_deg),
+            )
+        },
+    );
+    let _ = write!(
+        s,
+        "{freq},{},{lat},{lon},{:.2},{:.2},{:.3},{:.3},{major},{minor},{orient},{:.3}",
+        t_ms(p),
+        p.position[0],
+        p.position[1],
+        p.velocity[0],
+        p.velocity[1],
+        p.p_moving
+    );
+    s
+}
+
+/// Every track as CSV: the header, then one line per point.
+pub fn csv(t: &Tracks) -> String {
+    let mut out = format!("{CSV_HEADER}\n");
+    for c in &t.tracks {
+        for p in &c.points {
+            out.push_str(&csv_line(t, c.freq_mhz, p));
+            out.push('\n');
+        }
+    }
+    out
+}
+
+/// The tracks as GeoJSON: per channel its line, and each point with its ellipse (RFC 7946);
+/// `None` when the tracks are not placed on the earth.
+pub fn geojson(t: &Tracks) -> Option<Value> {
+    t.frame.as_ref()?;
+    let lonlat = |p: [f32; 2]| t.geodetic(p).map(|g| [g.lon, g.lat]);
+    let mut features = Vec::new();
+    for c in &t.tracks {
+        let line: Vec<[f64; 2]> = c.points.iter().filter_map(|p| lonlat(p.position)).collect();
+        let parts = split_antimeridian(&line);
+        let geometry = match parts.as_slice() {
+            [one] => json!({"type": "LineString", "coordinates": one}),
+            _ => json!({"type": "MultiLineString", "coordinates": parts}),
+        };
+        features.push(json!({"type": "Feature",
+            "properties": {"kind": "track", "freq_mhz": c.freq_mhz},
+            "geometry": geometry}));
+        for p in &c.points {
+            let Some(at) = lonlat(p.position) else {
+                continue;
+            };
+            features.push(json!({"type": "Feature",
+                "properties": point(t, p),
+                "geometry": {"type": "Point", "coordinates": at}}));
+            if let Some(e) = p.ellipse() {
+                let ring: Vec<[f64; 2]> = ellipse_ring(p.position, &e)
+                    .into_iter()
+                    .filter_map(lonlat)
+                    .collect();
+                if ring.len() > 3 {
+                    features.push(json!({"type": "Feature",
+                        "properties": {"kind": "ellipse", "t_ms": t_ms(p),
+                            "confidence": num(f64::from(e.confidence))},
+                        "geometry": polygon_geometry(&ring)}));
+                }
+            }
+        }
+    }
+    Some(json!({"type": "FeatureCollection", "features": features}))
+}

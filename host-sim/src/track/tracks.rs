@@ -1,0 +1,168 @@
+//! `foxhunt track`'s tracks: each channel of a capture ([`crate::track::updates`]) tracked
+//! with the moving-emitter tracker ([`crate::track::moving`]), every update's point placed in
+//! latitude and longitude when the capture (or the anchors file's origin) gives a frame.
+
+use crate::track::capture::Measured;
+use crate::track::indoor::AnchorsFile;
+use crate::track::moving::{Settings, TrackPoint, track};
+use crate::track::updates::{Channel, channels};
+use foxhunt_bridge::geo::LocalFrame;
+use foxhunt_bridge::nmea::LatLon;
+use foxhunt_core::Method;
+use foxhunt_core::fix::bias::BiasPrior;
+use foxhunt_core::track::{Layout, Motion};
+
+/// What the user chose of the tracker.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Options {
+    /// The estimator.
+    pub method: Method,
+    /// Particles.
+    pub particles: usize,
+    /// Prior sd of each DF source's offset, radians.
+    pub offset_sd: f32,
+    /// Acceleration sd of the moving model, m/s^2 (none: outdoors or indoors by the input).
+    pub accel_sd: Option<f32>,
+    /// Every bearing's noise, radians (none: each record's own).
+    pub sigma: Option<f32>,
+    /// Channel width for grouping bearings by frequency, MHz.
+    pub width_mhz: f32,
+    /// Seed.
+    pub seed: u64,
+}
+
+/// One channel's track.
+#[derive(Debug, Clone)]
+pub struct ChannelTrack {
+    /// Its frequency, MHz (none for bearings without one, or RSSI alone).
+    pub freq_mhz: Option<f32>,
+    /// Every update's point.
+    pub points: Vec<TrackPoint>,
+}
+
+/// Every channel's track and the frame that places them on the earth.
+#[derive(Debug, Clone)]
+pub struct Tracks {
+    /// One per channel.
+    pub tracks: Vec<ChannelTrack>,
+    /// The frame of the points' metres (none: the anchors file's metres, unplaced).
+    pub frame: Option<LocalFrame>,
+    /// Bridge time of the track's t = 0, ms (the capture's first bearing, or first fix).
+    pub first_ms: Option<i64>,
+}
+
+impl Tracks {
+    /// Latitude and longitude of local metres `p`, if the tracks are placed.
+    pub fn geodetic(&self, p: [f32; 2]) -> Option<LatLon> {
+        let f = self.frame.as_ref()?;
+        f.to_geodetic([f64::from(p[0]), f64::from(p[1])]).ok()
+    }
+}
+
+/// The settings of one channel: an offset for each of its DF sources, RSSI terms as the
+/// anchors file says, the room and a start region for RSSI alone.
+fn settings(c: &Channel, anchors: Option<&AnchorsFile>, o: &Options) -> Settings {
+    let indoor = anchors.filter(|_| c.sources.is_empty());
+    let mut motion = match indoor {
+        Some(f) => Motion {
+            accel_sd: file_accel_sd(f),
+            ..Motion::INDOOR
+        },
+        None => Motion::OUTDOOR,
+    };
+    if let Some(a) = o.accel_sd {
+        motion.accel_sd = a;
+    }
+    let layout = Layout {
+        sources: c.sources.len() as u8,
+        rssi: c.rssi,
+    };
+    let mut s = Settings::new(layout, motion);
+    s.method = o.method;
+    s.particles = o.particles;
+    s.seed = o.seed;
+    s.offsets = vec![
+        BiasPrior {
+            mean: 0.0,
+            sd: o.offset_sd,
+        };
+        c.sources.len()
+    ];
+    if let Some(f) = anchors.filter(|_| c.rssi) {
+        s.power_sd = f.power_sd_db;
+        s.exponent_sd = f.exponent_sd;
+        if indoor.is_some() {
+            s.room = f.room;
+            s.region = Some(start_region(f));
+        }
+    }
+    s
+}
+
+/// The acceleration sd of the nearly-constant-velocity model that moves at least as the
+/// anchors file's model does: its `process_q` adds variance q_x to a position and q_v to a
+/// velocity every `dt_s`, the white-noise acceleration q dt^3 / 3 and q dt (module
+/// [`foxhunt_core::track::motion`]), so q = max(3 q_x / dt^3, q_v / dt). Measured on
+/// `rssi-sim` and `rssi-lab` (docs/src/tracking.md): the indoor default of 0.5 m/s^2 is far
+/// smoother than those nodes and trails them (4.0 m rmse against 0.6 m).
+fn file_accel_sd(f: &AnchorsFile) -> f32 {
+    let [qx, qvx, qy, qvy] = f.process_q;
+    let dt = f.dt_s;
+    let q = (3.0 * qx.max(qy) / (dt * dt * dt)).max(qvx.max(qvy) / dt);
+    q.sqrt()
+}
+
+/// Where an RSSI-only track starts: the room's middle, else the anchors' centre, spread over
+/// a third of the room or the anchors' reach.
+fn start_region(f: &AnchorsFile) -> ([f32; 2], f32) {
+    if let Some([w, d]) = f.room {
+        return ([w / 2.0, d / 2.0], w.max(d) / 3.0);
+    }
+    let n = f.anchor.len().max(1) as f32;
+    let c = [
+        f.anchor.iter().map(|a| a.x).sum::<f32>() / n,
+        f.anchor.iter().map(|a| a.y).sum::<f32>() / n,
+    ];
+    let reach = f
+        .anchor
+        .iter()
+        .map(|a| (a.x - c[0]).hypot(a.y - c[1]))
+        .fold(1.0, f32::max);
+    (c, reach)
+}
+
+/// Track every channel of `m`.
+pub fn tracks(m: &Measured, anchors: Option<&AnchorsFile>, o: &Options) -> Result<Tracks, String> {
+    let found = channels(m, anchors, o.width_mhz, o.sigma)?;
+    if found.is_empty() {
+        return Err(if anchors.is_some() {
+            "no bearing and no RSSI reading of a listed anchor in the capture: nothing to track"
+                .into()
+        } else {
+            "no bearing in the capture: nothing to track (RSSI needs --anchors)".into()
+        });
+    }
+    let mut out = Vec::with_capacity(found.len());
+    for c in &found {
+        let run = track(&c.updates, &settings(c, anchors, o)).map_err(|e| {
+            let what = c
+                .freq_mhz
+                .map_or(String::new(), |f| format!(" on {f:.3} MHz"));
+            format!("cannot track{what}: {e}")
+        })?;
+        out.push(ChannelTrack {
+            freq_mhz: c.freq_mhz,
+            points: run.points,
+        });
+    }
+    let frame = match (m.decoded.frame, anchors.and_then(|f| f.origin)) {
+        (Some(f), _) => Some(f),
+        (None, Some([lat, lon])) => LocalFrame::new(LatLon { lat, lon }, 0.0).ok(),
+        (None, None) => None,
+    };
+    Ok(Tracks {
+        tracks: out,
+        frame,
+        first_ms: m.decoded.first_ms,
+    })
+}

@@ -1,0 +1,299 @@
+//! A capture's measurements as the tracker's updates, one list per channel: bearings grouped
+//! by frequency as `locate` groups them, each channel's bearings within [`WINDOW_S`] of each
+//! other one update, its DF sources numbered from 0, and the anchors' RSSI readings placed by
+//! their time (after the GPS fix before them) or, in a capture without GPS, one reading per
+//! anchor per epoch as the indoor tracker has always taken them.
+
+use crate::track::capture::Measured;
+use crate::track::indoor::AnchorsFile;
+use crate::track::moving::{K, Update};
+use foxhunt_bridge::geo::LocalFrame;
+use foxhunt_bridge::nmea::LatLon;
+use foxhunt_core::fix::channel::{NO_CHANNEL, group};
+use foxhunt_core::fix::observation::Observation;
+use foxhunt_core::track::{Epoch, Level};
+
+/// Bearings no more than this many seconds after an update's first belong to it (stations
+/// reporting "once a second" are rarely in step to the millisecond).
+pub const WINDOW_S: f32 = 0.25;
+/// Channels a capture may hold.
+const CHANNELS: usize = 16;
+
+/// One channel's updates.
+#[derive(Debug, Clone)]
+pub struct Channel {
+    /// Its frequency, MHz (none for bearings without one, or RSSI alone).
+    pub freq_mhz: Option<f32>,
+    /// The updates, in time order.
+    pub updates: Vec<Update>,
+    /// DF stations with bearings here, by their number in the updates (the capture's own
+    /// station index of each).
+    pub sources: Vec<u16>,
+    /// Whether RSSI readings are in the updates.
+    pub rssi: bool,
+}
+
+/// Where the anchors are in the track's frame, and that frame: the capture's GPS frame when it
+/// has one (the anchors file then needs its origin), else the anchors file's own metres.
+pub fn anchor_positions(
+    file: &AnchorsFile,
+    frame: Option<&LocalFrame>,
+) -> Result<Vec<[f32; 2]>, String> {
+    let local: Vec<[f32; 2]> = file.anchor.iter().map(|a| [a.x, a.y]).collect();
+    let Some(frame) = frame else {
+        return Ok(local);
+    };
+    let Some([lat, lon]) = file.origin else {
+        return Err(
+            "the capture has GPS positions: give the anchors file an `origin = [lat, lon]` so \
+             its anchors can be placed beside them"
+                .into(),
+        );
+    };
+    let own = LocalFrame::new(LatLon { lat, lon }, 0.0)
+        .map_err(|_| format!("the anchors file's origin {lat}, {lon} is out of range"))?;
+    local
+        .iter()
+        .map(|p| {
+            let g = own
+                .to_geodetic([f64::from(p[0]), f64::from(p[1])])
+                .map_err(|_| "an anchor is out of range".to_string())?;
+            let l = frame
+                .to_local(g)
+                .map_err(|_| "an anchor is out of range".to_string())?;
+            Ok([l[0] as f32, l[1] as f32])
+        })
+        .collect()
+}
+
+/// The measurements of `m` as updates, one list per channel. `sigma`: every bearing's noise
+/// (radians) instead of its own.
+pub fn channels(
+    m: &Measured,
+    anchors: Option<&AnchorsFile>,
+    width_mhz: f32,
+    sigma: Option<f32>,
+) -> Result<Vec<Channel>, String> {
+    let obs = &m.decoded.observations;
+    let n = obs.len();
+    let mut order = vec![0u32; n];
+    let mut of = vec![NO_CHANNEL; n];
+    let groups = group::<CHANNELS>(n, |i| Some(obs[i].freq_mhz), width_mhz, &mut order, &mut of)
+        .map_err(|e| format!("cannot group the bearings by frequency: {e}"))?;
+    let mut out = Vec::new();
+    for c in 0..groups.len() {
+        let mut mine: Vec<Observation> = obs
+            .iter()
+            .zip(&of)
+            .filter(|(_, k)| usize::from(**k) == c)
+            .map(|(o, _)| *o)
+            .collect();
+        if let Some(s) = sigma {
+            for o in mine.iter_mut() {
+                o.bearing.sigma = s;
+            }
+        }
+        mine.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+        // The channel's stations numbered from 0, as the tracker's offsets are.
+        let mut sources: Vec<u16> = mine.iter().map(|o| o.station).collect();
+        sources.sort_unstable();
+        sources.dedup();
+        for o in mine.iter_mut() {
+            o.station = sources.iter().position(|s| *s == o.station).unwrap_or(0) as u16;
+        }
+        out.push(Channel {
+            freq_mhz: groups.freq(c).flatten(),
+            updates: bearing_updates(&mine),
+            sources,
+            rssi: false,
+        });
+    }
+    if let Some(file) = anchors
+        && !m.readings.is_empty()
+    {
+        let at = anchor_positions(file, m.decoded.frame.as_ref())?;
+        let timed = m.readings.iter().all(|r| r.after_fix_ms.is_some());
+        let levels = |r: &crate::track::capture::Reading| Level {
+            anchor: at[r.anchor],
+            dbm: r.dbm,
+            sigma_db: file.sigma_db,
+            law: file.law(r.anchor),
+        };
+        match (timed, out.len()) {
+            (true, 1) => {
+                let first = m.decoded.first_ms.unwrap_or(0);
+                let timed: Vec<(f32, Level)> = m
+                    .readings
+                    .iter()
+                    .map(|r| {
+                        let ms = r.after_fix_ms.unwrap_or(first);
+                        ((ms - first) as f32 / 1000.0, levels(r))
+                    })
+                    .collect();
+                let c = &mut out[0];
+                c.updates = merge(&c.updates, &timed);
+                c.rssi = true;
+            }
+            (true, _) | (false, 0) => {
+                let epochs = anchor_epochs(&m.readings, file.anchor.len());
+                let mut updates = Vec::with_capacity(epochs.len());
+                for (k, e) in epochs.iter().enumerate() {
+                    let mut epoch = Epoch::<K>::new(if k == 0 { 0.0 } else { file.dt_s });
+                    for r in e {
+                        let _ = epoch.push_level(levels(r));
+                    }
+                    updates.push(Update {
+                        t_s: k as f32 * file.dt_s,
+                        epoch,
+                    });
+                }
+                out.push(Channel {
+                    freq_mhz: None,
+                    updates,
+                    sources: Vec::new(),
+                    rssi: true,
+                });
+            }
+            (false, _) => {
+                return Err(
+                    "the capture has bearings and RSSI without GPS times to put them in \
+                     one order: track them from separate captures"
+                        .into(),
+                );
+            }
+        }
+    }
+    out.retain(|c| !c.updates.is_empty());
+    Ok(out)
+}
+
+/// Bearings (in time order) as updates: each update the bearings within [`WINDOW_S`] of its
+/// first, at most [`K`].
+pub fn bearing_updates(obs: &[Observation]) -> Vec<Update> {
+    let mut out: Vec<Update> = Vec::new();
+    let mut start = f32::NEG_INFINITY;
+    let mut previous = None;
+    for o in obs {
+        let open = out
+            .last()
+            .is_some_and(|u| o.time_s - start <= WINDOW_S && !u.epoch.is_full());
+        if !open {
+            let dt = previous.map_or(0.0, |p: f32| (o.time_s - p).max(0.0));
+            out.push(Update {
+                t_s: o.time_s,
+                epoch: Epoch::new(dt),
+            });
+            start = o.time_s;
+            previous = Some(o.time_s);
+        }
+        if let Some(u) = out.last_mut() {
+            let _ = u.epoch.push_bearing(*o);
+        }
+    }
+    out
+}
+
+/// Bearing updates and timed RSSI readings in one time order: a reading within [`WINDOW_S`]
+/// after an update's time joins it, others make updates of their own.
+fn merge(updates: &[Update], levels: &[(f32, Level)]) -> Vec<Update> {
+    let mut all: Vec<(f32, Option<&Update>, Option<&Level>)> = updates
+        .iter()
+        .map(|u| (u.t_s, Some(u), None))
+        .chain(levels.iter().map(|(t, l)| (*t, None, Some(l))))
+        .collect();
+    all.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut out: Vec<Update> = Vec::new();
+    let mut previous: Option<f32> = None;
+    for (t, u, l) in all {
+        let joins = out
+            .last()
+            .is_some_and(|last| t - last.t_s <= WINDOW_S && u.is_none() && !last.epoch.is_full());
+        if !joins {
+            let dt = previous.map_or(0.0, |p| (t - p).max(0.0));
+            let mut epoch = Epoch::new(dt);
+            if let Some(u) = u {
+                epoch = u.epoch;
+                epoch.dt = dt;
+            }
+            out.push(Update { t_s: t, epoch });
+            previous = Some(t);
+            if u.is_some() {
+                continue;
+            }
+        }
+        if let (Some(l), Some(last)) = (l, out.last_mut()) {
+            let _ = last.epoch.push_level(*l);
+        }
+    }
+    out
+}
+
+/// Readings without times grouped one per anchor: a second reading from an anchor already
+/// heard starts the next epoch (unit-free, whatever the receiver's timestamp ticks are).
+pub fn anchor_epochs(
+    readings: &[crate::track::capture::Reading],
+    anchors: usize,
+) -> Vec<Vec<crate::track::capture::Reading>> {
+    let mut out = Vec::new();
+    let mut current: Vec<crate::track::capture::Reading> = Vec::new();
+    let mut heard = vec![false; anchors];
+    for r in readings {
+        if heard.get(r.anchor).copied().unwrap_or(false) {
+            out.push(std::mem::take(&mut current));
+            heard.iter_mut().for_each(|h| *h = false);
+        }
+        if let Some(h) = heard.get_mut(r.anchor) {
+            *h = true;
+        }
+        current.push(*r);
+    }
+    if !current.is_empty() {
+        out.push(current);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::track::capture::Reading;
+    use foxhunt_core::model::bearing::Bearing;
+
+    fn at(t: f32) -> Observation {
+        Observation::new(
+            Bearing {
+                vehicle: [0.0, 0.0],
+                theta: 0.0,
+                sigma: 0.03,
+            },
+            t,
+        )
+    }
+
+    #[test]
+    fn bearings_within_the_window_share_an_update() {
+        let u = bearing_updates(&[at(0.0), at(0.1), at(0.2), at(1.0), at(1.3), at(3.0)]);
+        let counts: Vec<usize> = u.iter().map(|u| u.epoch.bearings().len()).collect();
+        assert_eq!(counts, [3, 1, 1, 1]);
+        for (u, dt) in u.iter().zip([0.0, 1.0, 0.3, 1.7]) {
+            assert!((u.epoch.dt - dt).abs() < 1e-5, "{} {dt}", u.epoch.dt);
+        }
+        // More than K at once start a new update.
+        let many: Vec<Observation> = (0..K + 1).map(|_| at(5.0)).collect();
+        let u = bearing_updates(&many);
+        assert_eq!(u.len(), 2);
+        assert_eq!(u[1].epoch.dt, 0.0);
+    }
+
+    #[test]
+    fn a_second_reading_of_an_anchor_starts_an_epoch() {
+        let r = |anchor| Reading {
+            anchor,
+            dbm: -60.0,
+            after_fix_ms: None,
+        };
+        let e = anchor_epochs(&[r(0), r(1), r(2), r(1), r(0), r(0)], 3);
+        let sizes: Vec<usize> = e.iter().map(Vec::len).collect();
+        assert_eq!(sizes, [3, 2, 1]);
+    }
+}

@@ -1,0 +1,237 @@
+//! `foxhunt track` through the binary: bearings of a recorded drive, MT-frame RSSI with an
+//! anchors file, the JSON schema, CSV and GeoJSON, and one-line refusals.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn capture(name: &str) -> String {
+    format!(
+        "{}/../serial-bridge/captures/{name}",
+        env!("CARGO_MANIFEST_DIR")
+    )
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("foxhunt-track-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    dir
+}
+
+fn foxhunt(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .current_dir(scratch("cwd"))
+        .args(args)
+        .output()
+        .expect("run foxhunt")
+}
+
+fn json(out: &Output) -> serde_json::Value {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("one JSON object")
+}
+
+const POINT_KEYS: [&str; 7] = [
+    "t_ms",
+    "east_m",
+    "north_m",
+    "vel_e_mps",
+    "vel_n_mps",
+    "ellipse",
+    "p_moving",
+];
+
+#[test]
+fn a_drive_s_bearings_give_a_placed_track_that_sees_a_still_emitter() {
+    let v = json(&foxhunt(&["track", &capture("aoa-drive.nmea"), "--json"]));
+    let tracks = v["tracks"].as_array().expect("tracks");
+    assert_eq!(tracks.len(), 1, "{v}");
+    let points = tracks[0]["points"].as_array().expect("points");
+    assert!(points.len() > 20, "{} points", points.len());
+    for p in points {
+        for k in POINT_KEYS.iter().chain(&["lat", "lon"]) {
+            assert!(p.get(*k).is_some(), "a point lacks `{k}`: {p}");
+        }
+    }
+    let last = points.last().expect("a point");
+    let e = &last["ellipse"];
+    for k in ["major_m", "minor_m", "orientation_deg", "confidence"] {
+        assert!(e[k].is_number(), "ellipse lacks `{k}`: {e}");
+    }
+    // Each f32 as its shortest decimal.
+    assert_eq!(e["confidence"].as_f64(), Some(0.95));
+    // The drive's emitter stands still where `foxhunt locate` puts it (1340 m east, 793 m
+    // north; its 95 % ellipse 211 x 98 m): the track's last ellipse holds that fix.
+    let inside = |p: &serde_json::Value| {
+        let e = &p["ellipse"];
+        let num = |v: &serde_json::Value| v.as_f64().expect("number");
+        let (dx, dy) = (1340.0 - num(&p["east_m"]), 793.0 - num(&p["north_m"]));
+        // The major axis clockwise from north: along (sin a, cos a) in (east, north).
+        let a = num(&e["orientation_deg"]).to_radians();
+        let (u, w) = (dx * a.sin() + dy * a.cos(), dx * a.cos() - dy * a.sin());
+        (u / num(&e["major_m"])).powi(2) + (w / num(&e["minor_m"])).powi(2)
+    };
+    let p = last["p_moving"].as_f64().expect("p_moving");
+    println!("aoa-drive: last P(moving) {p:.3}, ellipse {e}");
+    assert!(
+        inside(last) <= 1.0,
+        "the last ellipse misses the fix: {last}"
+    );
+    // The IMM of EKFs, from one vehicle, says it stands still.
+    let v = json(&foxhunt(&[
+        "track",
+        &capture("aoa-drive.nmea"),
+        "--json",
+        "--method",
+        "ekf",
+    ]));
+    let last = v["tracks"][0]["points"]
+        .as_array()
+        .and_then(|p| p.last().cloned())
+        .expect("a point");
+    let p = last["p_moving"].as_f64().expect("p_moving");
+    println!(
+        "aoa-drive, ekf: last P(moving) {p:.3}, ellipse {}",
+        last["ellipse"]
+    );
+    assert!(p < 0.5, "a still emitter called moving: {p}");
+    assert!(
+        inside(&last) <= 1.0,
+        "the last ellipse misses the fix: {last}"
+    );
+    // Times rise.
+    let t: Vec<i64> = points
+        .iter()
+        .map(|p| p["t_ms"].as_i64().expect("t"))
+        .collect();
+    assert!(t.windows(2).all(|w| w[0] <= w[1]), "{t:?}");
+}
+
+#[test]
+fn rssi_of_anchors_without_an_origin_is_in_metres_only() {
+    let v = json(&foxhunt(&[
+        "track",
+        &capture("rssi-sim.znp"),
+        "--anchors",
+        &capture("rssi-sim.anchors.toml"),
+        "--json",
+    ]));
+    let points = v["tracks"][0]["points"].as_array().expect("points");
+    assert_eq!(points.len(), 60);
+    assert!(v["tracks"][0]["freq_mhz"].is_null());
+    for p in points {
+        for k in POINT_KEYS {
+            assert!(p.get(k).is_some(), "a point lacks `{k}`: {p}");
+        }
+        assert!(p.get("lat").is_none() && p.get("lon").is_none(), "{p}");
+        // Inside the 10 m room (a margin for the mean of a cloud at a wall).
+        for k in ["east_m", "north_m"] {
+            let x = p[k].as_f64().expect("number");
+            assert!((-0.5..=10.5).contains(&x), "{k} {x}");
+        }
+    }
+    // No origin: no GeoJSON, one line, exit 1.
+    let dir = scratch("geo");
+    let g = dir.join("t.geojson");
+    let out = foxhunt(&[
+        "track",
+        &capture("rssi-sim.znp"),
+        "--anchors",
+        &capture("rssi-sim.anchors.toml"),
+        "--geojson",
+        g.to_str().expect("path"),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("origin") && err.trim().lines().count() == 1,
+        "{err}"
+    );
+}
+
+#[test]
+fn csv_and_geojson_of_a_drive() {
+    let dir = scratch("files");
+    let g = dir.join("t.geojson");
+    let c = dir.join("t.csv");
+    let out = foxhunt(&[
+        "track",
+        &capture("aoa-drive.nmea"),
+        "--geojson",
+        g.to_str().expect("path"),
+        "--csv",
+        c.to_str().expect("path"),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert_eq!(std::fs::read_to_string(&c).expect("csv"), stdout);
+    let mut lines = stdout.lines();
+    assert_eq!(
+        lines.next(),
+        Some(
+            "freq_mhz,t_ms,lat,lon,east_m,north_m,vel_e_mps,vel_n_mps,major_m,minor_m,\
+             orientation_deg,p_moving"
+        )
+    );
+    let rows: Vec<&str> = lines.collect();
+    assert!(rows.iter().all(|r| r.split(',').count() == 12), "{rows:?}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&g).expect("geojson")).expect("JSON");
+    assert_eq!(v["type"], "FeatureCollection");
+    let features = v["features"].as_array().expect("features");
+    let kinds = |k: &str| {
+        features
+            .iter()
+            .filter(|f| f["properties"]["kind"] == k)
+            .count()
+    };
+    assert_eq!(kinds("track"), 1);
+    assert_eq!(kinds("ellipse"), rows.len());
+    for f in features
+        .iter()
+        .filter(|f| f["properties"]["kind"] == "ellipse")
+    {
+        let ring = f["geometry"]["coordinates"][0].as_array().expect("ring");
+        assert_eq!(ring.first(), ring.last(), "an open ring");
+    }
+}
+
+#[test]
+fn bad_options_are_one_line_refusals() {
+    for (args, words) in [
+        (vec!["--method", "ml-robust"], "not a tracking method"),
+        (vec!["--particles", "300"], "--particles 300"),
+        (vec!["--sigma=-1"], "--sigma"),
+        (vec!["--svg", "x.svg"], "--anchors"),
+    ] {
+        let mut all = vec!["track", "AOA"];
+        all.extend(args);
+        let path = capture("aoa-drive.nmea");
+        let all: Vec<&str> = all
+            .into_iter()
+            .map(|a| if a == "AOA" { path.as_str() } else { a })
+            .collect();
+        let out = foxhunt(&all);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{all:?}: {err}");
+        assert!(
+            err.contains(words) && err.trim().lines().count() == 1,
+            "{err}"
+        );
+        assert!(out.stdout.is_empty());
+    }
+    // An empty capture has nothing to track.
+    let dir = scratch("empty");
+    let f = dir.join("empty.nmea");
+    std::fs::write(&f, b"").expect("write");
+    let out = foxhunt(&["track", f.to_str().expect("path")]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("nothing to track"));
+}
