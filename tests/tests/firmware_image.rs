@@ -1,7 +1,7 @@
 //! The linked firmware image, read back from its disassembly and debug lines:
 //!
-//! - **Budgets**: flash (text + data) at most 128 KiB; static RAM (data + bss) at most 24 KiB,
-//!   so that with the painted stack's 8 KiB (asserted on the hour-long QEMU run) RAM + stack
+//! - **Budgets**: flash (text + data) at most 128 KiB; static RAM (data + bss) at most 26 KiB,
+//!   so that with the painted stack's 6 KiB (asserted on the hour-long QEMU run) RAM + stack
 //!   stay within 32 KiB.
 //! - **No panic path in the image's own code**: every call to a panic entry point
 //!   (`core::panicking::*`, slice-index failures, `unwrap_failed`, ...) is attributed, through
@@ -214,7 +214,10 @@ fn the_image_fits_panics_nowhere_of_its_own_and_keeps_f64_off_the_fix_path() {
     let (text, data, bss) = (row[0], row[1], row[2]);
     eprintln!("flash {} B, static RAM {} B", text + data, data + bss);
     assert!(text + data <= 128 * 1024, "flash {} B", text + data);
-    assert!(data + bss <= 24 * 1024, "static RAM {} B", data + bss);
+    // RAM + stack <= 32 KiB, split 26 + 6 (firmware_qemu.rs asserts the hour's painted stack
+    // <= 6 KiB; about 2.9 KiB is used): the station table, the per-unit clocks and the window
+    // fill 24.3 KiB.
+    assert!(data + bss <= 26 * 1024, "static RAM {} B", data + bss);
 
     let dis = tool(
         "arm-none-eabi-objdump",

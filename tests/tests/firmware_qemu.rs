@@ -377,7 +377,8 @@ fn an_hour_keeps_updating_in_flat_memory_within_the_latency_budget() {
     );
     // The budgets: RAM + stack <= 32 KiB (static RAM is checked in firmware_image.rs against
     // 32 KiB less this), and a fix within 20 ms at 168 MHz of its bearing's last byte.
-    assert!(last.stack_bytes <= 8 * 1024, "{last:?}");
+    // The split: static RAM <= 26 KiB, the stack <= 6 KiB (about 2.9 KiB is painted).
+    assert!(last.stack_bytes <= 6 * 1024, "{last:?}");
     let instructions = f64::from(last.latency_ticks) / 0.168;
     let ms = instructions / 168e3;
     assert!(
