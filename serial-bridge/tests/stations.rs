@@ -1,7 +1,7 @@
 //! Stations: who took each bearing, each with its own headings and motion; a full table, a
 //! surveyed position, one unit's two logs.
 
-use foxhunt_bridge::bridge::{BearingMeasurement, MCU_STATIONS, StationKey};
+use foxhunt_bridge::bridge::{BearingMeasurement, StationKey};
 use foxhunt_bridge::kraken::{ArrayType, KrakenCsv, KrakenXml, Station};
 use foxhunt_bridge::nmea::LatLon;
 use foxhunt_bridge::{BridgeConfig, Event, Receiver};
@@ -150,7 +150,8 @@ fn a_full_table_is_counted_and_a_surveyed_station_stands_where_surveyed() {
         lat: 47.0,
         lon: 8.0,
     };
-    let mut rx = Receiver::<0, MCU_STATIONS>::new(BridgeConfig::default(), []);
+    // A table of two rows.
+    let mut rx = Receiver::<0, 2>::new(BridgeConfig::default(), []);
     let mast = LatLon {
         lat: 47.01,
         lon: 8.02,
@@ -166,7 +167,7 @@ fn a_full_table_is_counted_and_a_surveyed_station_stands_where_surveyed() {
         bytes.extend(xml(id, 1_780_000_000_000 + 1000 * k as u64, at, 0.0, 10.0));
     }
     let m = measurements(&mut rx, &bytes);
-    // "mast" and "b" fill the MCU's two rows; "c" is refused three times.
+    // "mast" and "b" fill the two rows; "c" is refused three times.
     assert_eq!(rx.bridge.counters().stations_full, 3);
     assert_eq!(m.len(), 4);
     let s = &rx.bridge.stations()[0];

@@ -18,8 +18,10 @@ use crate::kraken::Station;
 use crate::nmea::LatLon;
 
 /// Stations the MCU's bridge tells apart (about 340 bytes each): its DF port carries one unit,
-/// and a second row keeps a unit that names itself apart from one that does not.
-pub const MCU_STATIONS: usize = 2;
+/// in any of the formats the bridge decodes (a record kind without an id is a station of its
+/// own, so a port switched from `$PFOXB` to Agrelo to a named KrakenSDR needs three rows), and a
+/// fourth keeps a second named unit apart.
+pub const MCU_STATIONS: usize = 4;
 /// Heading samples kept per station for its yaw rate (16 bytes each), at most one per
 /// [`TURN_SPACING_MS`]: 1.5 s or more, past the default yaw window of 1 s.
 pub const STATION_TURNS: usize = 16;
