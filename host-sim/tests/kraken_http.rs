@@ -7,11 +7,11 @@ use foxhunt_sim::inputs::capture::decode;
 use foxhunt_sim::locate::{LocateOptions, locate};
 use foxhunt_sim::runs::scenario::Scenario;
 use foxhunt_sim::runs::simulate::{CaptureFormat, CaptureOptions, drive_capture};
-use std::io::{BufRead, BufReader};
-use std::process::{Command, Stdio};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Duration;
+
+mod common;
 
 /// The drive's records (one per bearing) in `format`.
 fn records(format: CaptureFormat) -> (Vec<String>, Vec<u8>) {
@@ -80,20 +80,10 @@ fn live(format: CaptureFormat, path: &'static str, url_page: &str) {
     let done = Arc::new(AtomicBool::new(false));
     let (port, served) = serve(recs.clone(), path, done.clone());
     let url = format!("http://127.0.0.1:{port}{url_page}");
-    let child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
-        .args(["locate", "--kraken", &url, "--quiet-exit", "2", "--json"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run foxhunt");
-    let out = child.wait_with_output().expect("foxhunt ends");
+    let updates = common::json_lines(
+        &["locate", "--kraken", &url, "--quiet-exit", "2", "--json"].map(String::from),
+    );
     done.store(true, Ordering::Relaxed);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{err}");
-    let updates: Vec<serde_json::Value> = BufReader::new(&out.stdout[..])
-        .lines()
-        .map(|l| serde_json::from_str(&l.expect("line")).expect("JSON"))
-        .collect();
     let used: Vec<u64> = updates.iter().filter_map(|v| v["used"].as_u64()).collect();
     // An update for each poll that brought new bearings, never for a repeat.
     assert!(used.windows(2).all(|w| w[0] < w[1]), "{used:?}");

@@ -6,11 +6,11 @@ use foxhunt_bridge::nmea::LatLon;
 use foxhunt_sim::inputs::capture::decode;
 use foxhunt_sim::locate::{LocateOptions, locate};
 use foxhunt_sim::runs::network::{NetworkCondition, capture};
-use std::io::{BufRead, BufReader};
-use std::process::{Command, Stdio};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
+
+mod common;
 
 /// Records a poll brings: 100 new ones and the 20 before them again (a page that overlaps the
 /// last one, as a unit's page does between polls).
@@ -71,20 +71,8 @@ fn three_krakens_polled_at_once_give_the_recorded_drives_fix() {
         ]);
     }
     args.extend(["--quiet-exit".into(), "2".into(), "--json".into()]);
-    let child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
-        .args(&args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run foxhunt");
-    let out = child.wait_with_output().expect("foxhunt ends");
+    let updates = common::json_lines(&args);
     done.store(true, Ordering::Relaxed);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{err}");
-    let updates: Vec<serde_json::Value> = BufReader::new(&out.stdout[..])
-        .lines()
-        .map(|l| serde_json::from_str(&l.expect("line")).expect("JSON"))
-        .collect();
     let last = updates.last().expect("updates");
     // The same records read once from the file.
     let d = decode(&bytes, Default::default(), false);

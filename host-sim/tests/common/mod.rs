@@ -74,3 +74,21 @@ pub fn line_reader(child: &mut Child) -> Receiver<String> {
     });
     rx
 }
+
+/// `foxhunt ARGS` run to its end, which must succeed: each line of its standard output as JSON
+/// (a live `locate --json` prints one object per update).
+pub fn json_lines(args: &[String]) -> Vec<serde_json::Value> {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .args(args)
+        .output()
+        .expect("run foxhunt");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    BufReader::new(&out.stdout[..])
+        .lines()
+        .map(|l| serde_json::from_str(&l.expect("line")).expect("JSON"))
+        .collect()
+}
