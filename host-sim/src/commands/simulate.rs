@@ -3,6 +3,7 @@
 use crate::outputs::files::Outputs;
 use crate::outputs::terminal::{Outcome, Stop, note};
 use crate::runs::field::Condition;
+use crate::runs::moving;
 use crate::runs::network::NetworkCondition;
 use crate::runs::scenario::{NAMES, Scenario, ScenarioModel};
 use crate::runs::simulate::indoor_capture;
@@ -24,7 +25,9 @@ pub struct Args {
     /// bearings carrying their own position and frequency; or a network condition
     /// (`network-*`, see `bench --scenario network`): KrakenSDR XML records of every station
     /// with its STATION_ID, and the stations file beside them (OUT with the extension
-    /// `.stations.toml`, which must not exist yet unless --force).
+    /// `.stations.toml`, which must not exist yet unless --force); or a moving emitter
+    /// (`move-*`, see `bench --scenario moving`): the same, and the emitter's true track
+    /// (OUT with the extension `.truth.csv`).
     #[arg(long, conflicts_with_all = ["scenario_file", "format", "wild", "bias_deg"],
           value_parser = super::one_of(condition_names()))]
     pub condition: Option<String>,
@@ -120,14 +123,44 @@ fn origin(text: &str) -> Result<LatLon, String> {
     Ok(LatLon { lat, lon })
 }
 
-/// The names `--condition` takes: the field conditions, then the network ones.
+/// The names `--condition` takes: the field conditions, the network ones, then the moving
+/// emitters seen through bearings.
 fn condition_names() -> Vec<String> {
     Condition::ALL
         .iter()
         .map(|c| c.name())
         .chain(NetworkCondition::ALL.iter().map(|c| c.name()))
         .map(str::to_string)
+        .chain(
+            moving::MovingScenario::all()
+                .into_iter()
+                .filter(|s| s.bearings)
+                .map(|s| s.name),
+        )
         .collect()
+}
+
+/// `simulate --condition move-*`: one run of a moving emitter, its capture, its stations
+/// file and its truth.
+fn moving(a: &Args, s: &moving::MovingScenario) -> Outcome {
+    let origin = a.origin.unwrap_or(crate::runs::simulate::DEFAULT_ORIGIN);
+    let stations_path = a.out.with_extension("stations.toml");
+    let truth_path = a.out.with_extension("truth.csv");
+    if stations_path == a.out || truth_path == a.out {
+        return Err("the side files and the capture cannot be one file".into());
+    }
+    let outputs = Outputs::new(std::iter::empty(), a.force);
+    let c = moving::capture(s, a.run, origin)?;
+    outputs.write(&a.out, &c.bytes, true)?;
+    outputs.write(&stations_path, c.stations.as_bytes(), false)?;
+    outputs.write(&truth_path, c.truth.as_bytes(), false)?;
+    note(&format!(
+        "{} bytes; {} stations; the emitter's track in {}",
+        c.bytes.len(),
+        s.stations.len(),
+        truth_path.display()
+    ));
+    Ok(())
 }
 
 /// `simulate --condition network-*`: one run of a network condition, its capture and its
@@ -156,6 +189,9 @@ pub fn run(a: &Args) -> Outcome {
     if let Some(name) = &a.condition {
         if let Some(c) = NetworkCondition::named(name) {
             return network(a, c);
+        }
+        if let Some(s) = moving::MovingScenario::named(name) {
+            return moving(a, &s);
         }
         return field(a, name);
     }

@@ -2,6 +2,7 @@
 //! station and format, the RSSI an anchors file's anchors report in MT frames, or both.
 
 use crate::inputs::files::{Source, stream};
+use crate::inputs::stations::Network;
 use crate::outputs::files::Outputs;
 use crate::outputs::terminal::{Out, Outcome, note};
 use crate::outputs::tracks;
@@ -51,9 +52,13 @@ pub struct Args {
     /// Acceleration sd of the moving emitter, m/s^2 (default 1 outdoors, 0.5 indoors).
     #[arg(long)]
     pub accel_sd: Option<f32>,
-    /// Every bearing's noise, degrees (default: each record's own).
+    /// Every bearing's noise, degrees (default: the stations file's, else each record's own).
     #[arg(long)]
     pub sigma: Option<f32>,
+    /// A stations file (TOML, as `locate --stations`): each station's noise and offset prior
+    /// (docs/src/networks.md).
+    #[arg(long, value_name = "FILE")]
+    pub stations: Option<PathBuf>,
     /// Channel width for grouping bearings by frequency, MHz.
     #[arg(long, default_value_t = 0.025)]
     pub channel_width: f32,
@@ -104,6 +109,7 @@ impl Args {
                 .transpose()?,
             width_mhz: positive("channel-width", self.channel_width)?,
             seed: self.seed,
+            network: self.stations.as_deref().map(Network::load).transpose()?,
         })
     }
 }
@@ -135,6 +141,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
     let options = a.options()?;
     let mut inputs: Vec<&std::path::Path> = a.captures.iter().map(PathBuf::as_path).collect();
     inputs.extend(a.anchors.as_deref());
+    inputs.extend(a.stations.as_deref());
     let outputs = Outputs::new(inputs, false);
     for p in [&a.geojson, &a.kml, &a.csv, &a.svg].into_iter().flatten() {
         outputs.check(p, true)?;

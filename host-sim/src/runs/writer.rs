@@ -5,7 +5,8 @@
 //! through this one writer, so a framing rule lives here only.
 
 use foxhunt_bridge::agrelo::Agrelo;
-use foxhunt_bridge::kraken::{KrakenCsv, KrakenXml};
+use foxhunt_bridge::geo::LocalFrame;
+use foxhunt_bridge::kraken::{KrakenCsv, KrakenXml, Station};
 use foxhunt_bridge::mt::AfIncomingMsg;
 use foxhunt_bridge::nmea::{
     Date, Hdt, LatLon, Line, Pfoxb, UtcTime, gga_body, pfoxb_body, rmc_body, write_sentence,
@@ -13,6 +14,35 @@ use foxhunt_bridge::nmea::{
 
 /// Why a record could not be written: a field that does not fit its record's buffer.
 pub const TOO_LONG: &str = "record longer than its buffer";
+
+/// One station's bearing as its KrakenSDR logs it ([`CaptureWriter::station_bearing`]).
+#[derive(Debug, Clone, Copy)]
+pub struct StationBearing<'a> {
+    /// The station's id (its STATION_ID).
+    pub id: &'a str,
+    /// Whether it stands still (speed 0 in the record).
+    pub fixed: bool,
+    /// Where it stood, local metres.
+    pub at: [f32; 2],
+    /// The true azimuth of the bearing, degrees clockwise from north.
+    pub azimuth_deg: f32,
+    /// The array's heading: 0 for a fixed array facing north, a vehicle's course.
+    pub heading_deg: f32,
+    /// The channel, MHz.
+    pub freq_mhz: Option<f32>,
+    /// The record's epoch, ms since 1970.
+    pub epoch_ms: u64,
+}
+
+/// The course from `a` to `b` (local metres), degrees clockwise from north, to the 0.1 degree
+/// a unit's GPS heading carries.
+pub fn course_deg(a: [f32; 2], b: [f32; 2]) -> f32 {
+    let c = (b[0] - a[0])
+        .atan2(b[1] - a[1])
+        .to_degrees()
+        .rem_euclid(360.0);
+    (c * 10.0).round() / 10.0 % 360.0
+}
 
 /// The bytes of a capture, written in order.
 #[derive(Debug, Default, Clone)]
@@ -98,6 +128,31 @@ impl CaptureWriter {
     /// A KrakenSDR XML record on one line.
     pub fn kraken_xml(&mut self, x: &KrakenXml) -> Result<(), String> {
         self.text_record(|t| x.emit(t), "\n")
+    }
+
+    /// A station's bearing as a KrakenSDR XML record: its position in `frame`, its heading,
+    /// and the bearing relative to the heading as the unit's DOA (counter-clockwise).
+    pub fn station_bearing(
+        &mut self,
+        frame: &LocalFrame,
+        b: &StationBearing<'_>,
+    ) -> Result<(), String> {
+        let position = frame
+            .to_geodetic([f64::from(b.at[0]), f64::from(b.at[1])])
+            .map_err(|_| format!("station {} is out of range", b.id))?;
+        let relative = (b.azimuth_deg - b.heading_deg).rem_euclid(360.0);
+        self.kraken_xml(&KrakenXml {
+            station: Station::new(b.id),
+            time_ms: Some(b.epoch_ms),
+            gps_time_ms: Some(b.epoch_ms),
+            freq_mhz: b.freq_mhz.map(f64::from),
+            position: Some(position),
+            heading_deg: Some(b.heading_deg),
+            speed_mps: Some(if b.fixed { 0.0 } else { 10.0 }),
+            doa_deg: (360.0 - relative).rem_euclid(360.0),
+            pwr: Some(60.0),
+            conf: Some(80.0),
+        })
     }
 
     /// A ZigBee coordinator's AF_INCOMING_MSG frame (UNPI: start byte, length, command, data,

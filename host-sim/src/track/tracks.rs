@@ -2,6 +2,8 @@
 //! with the moving-emitter tracker ([`crate::track::moving`]), every update's point placed in
 //! latitude and longitude when the capture (or the anchors file's origin) gives a frame.
 
+use crate::estimate::stations::{StationSetup, station_setup};
+use crate::inputs::stations::Network;
 use crate::track::capture::Measured;
 use crate::track::indoor::AnchorsFile;
 use crate::track::moving::{Settings, TrackPoint, track};
@@ -13,7 +15,7 @@ use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::track::{Layout, Motion};
 
 /// What the user chose of the tracker.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Options {
     /// The estimator.
     pub method: Method,
@@ -29,6 +31,9 @@ pub struct Options {
     pub width_mhz: f32,
     /// Seed.
     pub seed: u64,
+    /// The stations file: each station's noise and offset prior (none: `sigma` or each
+    /// record's own noise, and `offset_sd` for every station).
+    pub network: Option<Network>,
 }
 
 /// One channel's track.
@@ -61,7 +66,12 @@ impl Tracks {
 
 /// The settings of one channel: an offset for each of its DF sources, RSSI terms as the
 /// anchors file says, the room and a start region for RSSI alone.
-fn settings(c: &Channel, anchors: Option<&AnchorsFile>, o: &Options) -> Settings {
+fn settings(
+    c: &Channel,
+    anchors: Option<&AnchorsFile>,
+    o: &Options,
+    setup: &StationSetup,
+) -> Settings {
     let indoor = anchors.filter(|_| c.sources.is_empty());
     let mut motion = match indoor {
         Some(f) => Motion {
@@ -81,13 +91,11 @@ fn settings(c: &Channel, anchors: Option<&AnchorsFile>, o: &Options) -> Settings
     s.method = o.method;
     s.particles = o.particles;
     s.seed = o.seed;
-    s.offsets = vec![
-        BiasPrior {
-            mean: 0.0,
-            sd: o.offset_sd,
-        };
-        c.sources.len()
-    ];
+    s.offsets = c
+        .sources
+        .iter()
+        .map(|k| setup.priors.of(usize::from(*k)))
+        .collect();
     if let Some(f) = anchors.filter(|_| c.rssi) {
         s.power_sd = f.power_sd_db;
         s.exponent_sd = f.exponent_sd;
@@ -133,7 +141,18 @@ fn start_region(f: &AnchorsFile) -> ([f32; 2], f32) {
 
 /// Track every channel of `m`.
 pub fn tracks(m: &Measured, anchors: Option<&AnchorsFile>, o: &Options) -> Result<Tracks, String> {
-    let found = channels(m, anchors, o.width_mhz, o.sigma)?;
+    let fallback = BiasPrior {
+        mean: 0.0,
+        sd: o.offset_sd,
+    };
+    let ids = m.decoded.stations.iter().map(|s| s.id.as_str());
+    let setup = station_setup(ids, o.network.as_ref(), fallback, false);
+    // `--sigma` over the stations file's noise over each record's own.
+    let noise: Vec<Option<f32>> = match o.sigma {
+        Some(s) => vec![Some(s); m.decoded.stations.len()],
+        None => setup.noise.clone(),
+    };
+    let found = channels(m, anchors, o.width_mhz, &noise)?;
     if found.is_empty() {
         return Err(if anchors.is_some() {
             "no bearing and no RSSI reading of a listed anchor in the capture: nothing to track"
@@ -144,7 +163,7 @@ pub fn tracks(m: &Measured, anchors: Option<&AnchorsFile>, o: &Options) -> Resul
     }
     let mut out = Vec::with_capacity(found.len());
     for c in &found {
-        let run = track(&c.updates, &settings(c, anchors, o)).map_err(|e| {
+        let run = track(&c.updates, &settings(c, anchors, o, &setup)).map_err(|e| {
             let what = c
                 .freq_mhz
                 .map_or(String::new(), |f| format!(" on {f:.3} MHz"));

@@ -66,13 +66,13 @@ pub fn anchor_positions(
         .collect()
 }
 
-/// The measurements of `m` as updates, one list per channel. `sigma`: every bearing's noise
-/// (radians) instead of its own.
+/// The measurements of `m` as updates, one list per channel. `noise`: by station index, the
+/// noise (radians) of that station's bearings instead of their own.
 pub fn channels(
     m: &Measured,
     anchors: Option<&AnchorsFile>,
     width_mhz: f32,
-    sigma: Option<f32>,
+    noise: &[Option<f32>],
 ) -> Result<Vec<Channel>, String> {
     let obs = &m.decoded.observations;
     let n = obs.len();
@@ -88,9 +88,9 @@ pub fn channels(
             .filter(|(_, k)| usize::from(**k) == c)
             .map(|(o, _)| *o)
             .collect();
-        if let Some(s) = sigma {
-            for o in mine.iter_mut() {
-                o.bearing.sigma = s;
+        for o in mine.iter_mut() {
+            if let Some(Some(s)) = noise.get(usize::from(o.station)) {
+                o.bearing.sigma = *s;
             }
         }
         mine.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));

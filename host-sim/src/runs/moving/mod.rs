@@ -1,8 +1,9 @@
 //! The moving-emitter scenarios (docs/src/tracking.md): a drone crossing a city, turning,
 //! stopping and going, hovering, seen by fixed stations, by vehicles or both, through bearings,
 //! RSSI or both. Each scenario simulates
-//! its runs' updates and truth ([`simulate`]), and the bench measures every tracking method on
-//! them against the posterior Cramér-Rao bound ([`bench`]).
+//! its runs' updates and truth ([`MovingScenario::simulate`]), the bench measures every
+//! tracking method on them against the posterior Cramér-Rao bound ([`bench`]), and
+//! `foxhunt simulate --condition move-*` writes a run as its stations log it ([`capture`]).
 //!
 //! The city (chosen): an 8 km square with a fixed station at each corner. Paths at 12 m/s:
 //! `straight` east along y = 2500 m for 10 minutes (the crossing of docs/src/tracking.md);
@@ -15,6 +16,9 @@
 //! those priors.
 
 pub mod bench;
+mod capture;
+
+pub use capture::{FREQ_MHZ, MovingCapture, capture};
 
 use crate::track::moving::{K, Settings, Update};
 use foxhunt_core::fix::bias::BiasPrior;

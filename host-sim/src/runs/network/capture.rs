@@ -4,15 +4,14 @@
 
 use super::{NetworkCondition, simulate};
 use crate::runs::field::Truth;
-use crate::runs::writer::CaptureWriter;
+use crate::runs::writer::{CaptureWriter, StationBearing, course_deg};
 use foxhunt_bridge::geo::LocalFrame;
-use foxhunt_bridge::kraken::{KrakenXml, Station};
 use foxhunt_bridge::nmea::LatLon;
 use foxhunt_core::model::bearing::theta_to_azimuth;
 use std::fmt::Write;
 
 /// 2026-06-01 10:00:00 UTC, ms since 1970: the first record's epoch.
-const START_MS: u64 = 1_780_308_000_000;
+pub const START_MS: u64 = 1_780_308_000_000;
 
 /// The capture's bytes, its stations file (TOML) and the emitters, the local frame's origin at
 /// `origin` (the emitter sits there).
@@ -34,35 +33,23 @@ pub fn capture(
         let st = &n.drive.stations[s];
         let track = &n.tracks[s];
         // A fixed array's zero faces north; a car's heading is its course.
-        let k = o.time_s as usize;
-        let heading = if st.fixed || track.len() < 2 {
-            0.0
-        } else {
-            let (a, b) = (
-                track[k.min(track.len() - 2)],
-                track[k.min(track.len() - 2) + 1],
-            );
-            (b[0] - a[0])
-                .atan2(b[1] - a[1])
-                .to_degrees()
-                .rem_euclid(360.0)
+        let k = (o.time_s as usize).min(track.len().saturating_sub(2));
+        let heading_deg = match (st.fixed, track.get(k), track.get(k + 1)) {
+            (false, Some(a), Some(b)) => course_deg(*a, *b),
+            _ => 0.0,
         };
-        let heading = (heading * 10.0).round() / 10.0 % 360.0;
-        let azimuth = theta_to_azimuth(o.bearing.theta).to_degrees();
-        let relative = (azimuth - heading).rem_euclid(360.0);
-        let epoch = START_MS + (f64::from(o.time_s) * 1000.0).round() as u64;
-        w.kraken_xml(&KrakenXml {
-            station: Station::new(&st.id),
-            time_ms: Some(epoch),
-            gps_time_ms: Some(epoch),
-            freq_mhz: o.freq_mhz.map(f64::from),
-            position: Some(geo(o.bearing.vehicle)?),
-            heading_deg: Some(heading),
-            speed_mps: Some(if st.fixed { 0.0 } else { 10.0 }),
-            doa_deg: (360.0 - relative).rem_euclid(360.0),
-            pwr: Some(60.0),
-            conf: Some(80.0),
-        })?;
+        w.station_bearing(
+            &frame,
+            &StationBearing {
+                id: &st.id,
+                fixed: st.fixed,
+                at: o.bearing.vehicle,
+                azimuth_deg: theta_to_azimuth(o.bearing.theta).to_degrees(),
+                heading_deg,
+                freq_mhz: o.freq_mhz,
+                epoch_ms: START_MS + (f64::from(o.time_s) * 1000.0).round() as u64,
+            },
+        )?;
     }
     let mut toml = String::new();
     for st in &n.drive.stations {

@@ -22,7 +22,7 @@ mod capture;
 pub mod peer;
 
 pub use bench::{bench, measure_network};
-pub use capture::capture;
+pub use capture::{START_MS, capture};
 
 use crate::estimate::stations::LocalReference;
 use crate::runs::field::{FieldDrive, StationTruth, Truth};
