@@ -10,8 +10,8 @@
 
 use foxhunt_bridge::Frame;
 use foxhunt_bridge::bridge::{
-    BearingKind, BearingMeasurement, BridgeConfig, BridgeCounters, Event, Receiver, StationKey, StationState,
-    VehicleFix,
+    BearingKind, BearingMeasurement, BridgeConfig, BridgeCounters, Event, Receiver, StationKey,
+    StationState, VehicleFix,
 };
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;

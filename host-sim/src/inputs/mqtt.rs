@@ -12,14 +12,14 @@
 //! reconnect, brings a bearing twice. A bearing is its (channel, station, time): the second
 //! is dropped ([`Seen`]) before the bridge sees it.
 
-use foxhunt_bridge::kraken::Station;
 use foxhunt_bridge::kraken::KrakenXml;
+use foxhunt_bridge::kraken::Station;
 use foxhunt_bridge::nmea::LatLon;
 use rumqttc::{Client, Connection, Event, MqttOptions, Packet, QoS};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, HashSet, VecDeque};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 /// The broker's default port.
@@ -48,7 +48,8 @@ pub struct MqttUrl {
 impl MqttUrl {
     /// Parse; nonsense refused on one line naming it.
     pub fn parse(text: &str) -> Result<Self, String> {
-        let bad = |why: &str| format!("--mqtt wants mqtt://HOST[:PORT]/PREFIX ({why}), not `{text}`");
+        let bad =
+            |why: &str| format!("--mqtt wants mqtt://HOST[:PORT]/PREFIX ({why}), not `{text}`");
         let Some(rest) = text.strip_prefix("mqtt://") else {
             return Err(bad(if text.starts_with("mqtts://") {
                 "TLS is not supported: run the broker's plain listener on a trusted network"
@@ -125,7 +126,9 @@ pub fn channel_name(freq_mhz: Option<f64>) -> String {
 pub fn check_station(id: &str) -> Result<(), String> {
     let ok = !id.is_empty()
         && id.len() <= foxhunt_bridge::kraken::STATION_LEN
-        && id.bytes().all(|b| (0x21..0x7f).contains(&b) && !b"/+#".contains(&b));
+        && id
+            .bytes()
+            .all(|b| (0x21..0x7f).contains(&b) && !b"/+#".contains(&b));
     if ok {
         Ok(())
     } else {
@@ -195,7 +198,10 @@ impl BearingMessage {
     /// Read a message's payload: JSON of this schema, checked.
     pub fn from_payload(payload: &[u8]) -> Result<Self, String> {
         if payload.len() > MAX_MESSAGE {
-            return Err(format!("a message of {} bytes is no bearing", payload.len()));
+            return Err(format!(
+                "a message of {} bytes is no bearing",
+                payload.len()
+            ));
         }
         let m: Self = serde_json::from_slice(payload).map_err(|e| format!("not a bearing: {e}"))?;
         m.check()?;
@@ -263,7 +269,24 @@ pub struct Counts {
     pub fixes_sent: AtomicU64,
     /// Fixes the broker acknowledged.
     pub fixes_acked: AtomicU64,
+    /// The session is being closed: a lost connection is no news.
+    pub closing: AtomicBool,
 }
+
+/// Whether the fusing side took a batch of bearings.
+#[derive(Debug)]
+pub enum Handed {
+    /// Taken.
+    Yes,
+    /// Busy: the batch back, to grow and try again.
+    Busy(Vec<KrakenXml>),
+    /// Gone: stop reading.
+    Closed,
+}
+
+/// Bearings held while the fusing side is busy before the reader waits for it (and the
+/// broker queues the rest): some minutes of a large network.
+const BATCH_WAITS: usize = 200_000;
 
 /// The fusing side's link: bearings in, fixes out, on one persistent session.
 pub struct Subscription {
@@ -319,16 +342,19 @@ impl std::fmt::Debug for Subscription {
 impl Subscription {
     /// Connect as `client_id` (an error now is the command's), subscribe to every bearing
     /// under the prefix (unless the broker kept the subscription), and start the thread that
-    /// hands each new bearing's record to `take` (false: stop) and acknowledges it after.
+    /// hands the new bearings' records to `take` in batches (its flag: it may block until
+    /// the fusing side has room).
     pub fn start(
         url: &MqttUrl,
         client_id: &str,
-        mut take: impl FnMut(KrakenXml) -> bool + Send + 'static,
+        mut take: impl FnMut(Vec<KrakenXml>, bool) -> Handed + Send + 'static,
         note: fn(&str),
     ) -> Result<Self, String> {
         let mut options = url.options(client_id);
-        // Acknowledged once handed on, not on arrival: a crash in between leaves the bearing
-        // with the broker.
+        // Acknowledged once checked and held here (not before: a message that is no bearing
+        // is still acknowledged, after its note). Holding the acknowledgements until the fix
+        // had used them would stall the broker's few messages in flight behind each solve,
+        // and overflow its queue for this worker.
         options.set_manual_acks(true);
         let (client, mut conn) = Client::new(options, 64);
         let filter = url.bearings_filter();
@@ -345,24 +371,38 @@ impl Subscription {
             .spawn(move || {
                 let mut seen = Seen::default();
                 let mut down = false;
+                // New bearings not yet handed on (the fusing side was busy).
+                let mut batch: Vec<KrakenXml> = Vec::new();
                 // Acknowledgements the client's queue had no room for yet.
                 let mut unacked: VecDeque<rumqttc::Publish> = VecDeque::new();
                 loop {
+                    if !batch.is_empty() {
+                        // Never block here while the batch is small: the connection must
+                        // keep reading, or the broker's queue for this worker overflows.
+                        let wait = batch.len() >= BATCH_WAITS;
+                        match take(std::mem::take(&mut batch), wait) {
+                            Handed::Yes => {}
+                            Handed::Busy(back) => batch = back,
+                            Handed::Closed => return,
+                        }
+                    }
                     while let Some(p) = unacked.front() {
                         if cl.try_ack(p).is_err() {
                             break;
                         }
                         unacked.pop_front();
                     }
-                    match conn.recv() {
-                        Err(_) => return,
-                        Ok(Ok(Event::Incoming(Packet::Publish(p)))) => {
+                    let event = match conn.recv_timeout(Duration::from_millis(50)) {
+                        Err(rumqttc::RecvTimeoutError::Timeout) => continue,
+                        Err(rumqttc::RecvTimeoutError::Disconnected) => return,
+                        Ok(e) => e,
+                    };
+                    match event {
+                        Ok(Event::Incoming(Packet::Publish(p))) => {
                             match BearingMessage::from_payload(&p.payload) {
                                 Ok(m) if seen.first_time(&m) => {
                                     c.bearings.fetch_add(1, Ordering::Relaxed);
-                                    if !take(m.record()) {
-                                        return;
-                                    }
+                                    batch.push(m.record());
                                 }
                                 Ok(_) => {
                                     c.duplicates.fetch_add(1, Ordering::Relaxed);
@@ -373,11 +413,9 @@ impl Subscription {
                                     }
                                 }
                             }
-                            if !unacked.is_empty() || cl.try_ack(&p).is_err() {
-                                unacked.push_back(p);
-                            }
+                            unacked.push_back(p);
                         }
-                        Ok(Ok(Event::Incoming(Packet::ConnAck(ack)))) => {
+                        Ok(Event::Incoming(Packet::ConnAck(ack))) => {
                             if down {
                                 note(&format!("MQTT broker at {address}: connected again"));
                                 down = false;
@@ -387,20 +425,23 @@ impl Subscription {
                                 let _ = cl.try_subscribe(filter.clone(), QoS::AtLeastOnce);
                             }
                         }
-                        Ok(Ok(Event::Incoming(Packet::SubAck(_)))) => {
+                        Ok(Event::Incoming(Packet::SubAck(_))) => {
                             note(&format!("mqtt: subscribed to {filter} at {address}"));
                         }
-                        Ok(Ok(Event::Incoming(Packet::PubAck(_)))) => {
+                        Ok(Event::Incoming(Packet::PubAck(_))) => {
                             c.fixes_acked.fetch_add(1, Ordering::Relaxed);
                         }
-                        Ok(Ok(_)) => {}
-                        Ok(Err(e)) => {
+                        Ok(_) => {}
+                        Err(e) => {
+                            if c.closing.load(Ordering::Relaxed) {
+                                return;
+                            }
                             if !down {
-                                note(&format!(
-                                    "MQTT broker at {address}: {e}; reconnecting"
-                                ));
+                                note(&format!("MQTT broker at {address}: {e}; reconnecting"));
                                 down = true;
                             }
+                            // What was received but not acknowledged is redelivered.
+                            unacked.clear();
                             std::thread::sleep(RETRY);
                         }
                     }
@@ -463,6 +504,7 @@ impl Subscription {
             std::thread::sleep(Duration::from_millis(20));
             all = done();
         }
+        c.closing.store(true, Ordering::Relaxed);
         let _ = self.client.try_disconnect();
         all
     }
@@ -475,11 +517,23 @@ mod tests {
     #[test]
     fn urls() {
         let u = MqttUrl::parse("mqtt://127.0.0.1:18830/net/a").expect("url");
-        assert_eq!((u.host.as_str(), u.port, u.prefix.as_str()), ("127.0.0.1", 18830, "net/a"));
-        assert_eq!(u.bearing_topic("145.500", "mast-1"), "net/a/bearings/145.500/mast-1");
+        assert_eq!(
+            (u.host.as_str(), u.port, u.prefix.as_str()),
+            ("127.0.0.1", 18830, "net/a")
+        );
+        assert_eq!(
+            u.bearing_topic("145.500", "mast-1"),
+            "net/a/bearings/145.500/mast-1"
+        );
         let d = MqttUrl::parse("mqtt://broker").expect("url");
         assert_eq!((d.port, d.prefix.as_str()), (1883, "foxhunt"));
-        for bad in ["http://x", "mqtt://:1", "mqtt://h:0/p", "mqtt://h/a/#", "mqtts://h"] {
+        for bad in [
+            "http://x",
+            "mqtt://:1",
+            "mqtt://h:0/p",
+            "mqtt://h/a/#",
+            "mqtts://h",
+        ] {
             assert!(MqttUrl::parse(bad).is_err(), "{bad}");
         }
     }
@@ -514,12 +568,30 @@ mod tests {
         assert!(BearingMessage::from_payload(b"{").is_err());
         assert!(BearingMessage::from_payload(&vec![b' '; MAX_MESSAGE + 1]).is_err());
         for m in [
-            BearingMessage { lat: 91.0, ..message() },
-            BearingMessage { bearing_deg: 360.0, ..message() },
-            BearingMessage { sigma_deg: 0.0, ..message() },
-            BearingMessage { station: "a/b".into(), ..message() },
-            BearingMessage { station: "seventeen-bytes-x".into(), ..message() },
-            BearingMessage { quality: f32::NAN, ..message() },
+            BearingMessage {
+                lat: 91.0,
+                ..message()
+            },
+            BearingMessage {
+                bearing_deg: 360.0,
+                ..message()
+            },
+            BearingMessage {
+                sigma_deg: 0.0,
+                ..message()
+            },
+            BearingMessage {
+                station: "a/b".into(),
+                ..message()
+            },
+            BearingMessage {
+                station: "seventeen-bytes-x".into(),
+                ..message()
+            },
+            BearingMessage {
+                quality: f32::NAN,
+                ..message()
+            },
         ] {
             let json = serde_json::to_vec(&m).expect("json");
             assert!(BearingMessage::from_payload(&json).is_err(), "{m:?}");
@@ -532,7 +604,13 @@ mod tests {
         let m = message();
         assert!(seen.first_time(&m));
         assert!(!seen.first_time(&m));
-        assert!(seen.first_time(&BearingMessage { freq_mhz: Some(433.9), ..m.clone() }));
-        assert!(seen.first_time(&BearingMessage { time_ms: m.time_ms + 1, ..m }));
+        assert!(seen.first_time(&BearingMessage {
+            freq_mhz: Some(433.9),
+            ..m.clone()
+        }));
+        assert!(seen.first_time(&BearingMessage {
+            time_ms: m.time_ms + 1,
+            ..m
+        }));
     }
 }

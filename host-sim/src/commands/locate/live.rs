@@ -22,7 +22,7 @@ use crate::guidance::guide::Guide;
 use crate::inputs::capture::{Decoded, Decoder};
 use crate::inputs::gpsd::{GpsdAddress, Report, Watch};
 use crate::inputs::kraken_http::KrakenUrl;
-use crate::inputs::mqtt::{MqttUrl, Subscription, channel_name};
+use crate::inputs::mqtt::{Handed, MqttUrl, Subscription, channel_name};
 use crate::locate::locate_guided;
 use crate::outputs::terminal::{Out, Stop, note};
 use foxhunt_bridge::BridgeConfig;
@@ -80,8 +80,8 @@ enum Chunk {
     From(u8, Vec<u8>),
     /// Sentence bodies from gpsd.
     Sentences(Vec<String>),
-    /// A bearing from the broker, as the record the bridge places.
-    Record(KrakenXml),
+    /// Bearings from the broker, as the records the bridge places.
+    Records(Vec<KrakenXml>),
     End,
     Failed(String),
 }
@@ -177,7 +177,17 @@ pub fn reader(source: &LiveSource, gpsd_at: Option<&GpsdAddress>) -> Result<Live
             let sub = Subscription::start(
                 url,
                 client_id,
-                move |r| tx.send(Chunk::Record(r)).is_ok(),
+                move |v, wait| match wait {
+                    true => match tx.send(Chunk::Records(v)) {
+                        Ok(()) => Handed::Yes,
+                        Err(_) => Handed::Closed,
+                    },
+                    false => match tx.try_send(Chunk::Records(v)) {
+                        Ok(()) => Handed::Yes,
+                        Err(mpsc::TrySendError::Full(Chunk::Records(v))) => Handed::Busy(v),
+                        Err(_) => Handed::Closed,
+                    },
+                },
                 note,
             )?;
             return Ok(line(rx, Some(sub)));
@@ -227,9 +237,11 @@ impl LiveLine {
                     dec.switch_input(i);
                     dec.feed(&b);
                 }
-                Ok(Chunk::Record(r)) => {
+                Ok(Chunk::Records(v)) => {
                     self.last_byte = Instant::now();
-                    dec.push_frame(&Frame::KrakenXml(r));
+                    for r in v {
+                        dec.push_frame(&Frame::KrakenXml(r));
+                    }
                 }
                 Ok(Chunk::Sentences(v)) => {
                     for s in &v {

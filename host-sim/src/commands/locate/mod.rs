@@ -145,7 +145,12 @@ pub struct Args {
     pub mqtt: Option<String>,
     /// With --mqtt: the client id of the broker session, kept while this worker is away so
     /// that the bearings sent meanwhile are delivered when it comes back (one id per worker).
-    #[arg(long, value_name = "ID", default_value = "foxhunt-locate", requires = "mqtt")]
+    #[arg(
+        long,
+        value_name = "ID",
+        default_value = "foxhunt-locate",
+        requires = "mqtt"
+    )]
     pub mqtt_client_id: String,
 }
 
@@ -201,8 +206,7 @@ fn input(a: &Args) -> Result<Input, Stop> {
         .transpose()
         .map_err(Stop::Usage)?;
     if let Some(url) = &a.mqtt {
-        if !a.captures.is_empty() || a.baud.is_some() || !a.kraken.is_empty() || gpsd.is_some()
-        {
+        if !a.captures.is_empty() || a.baud.is_some() || !a.kraken.is_empty() || gpsd.is_some() {
             return Err(Stop::usage(
                 "--mqtt reads every station's bearings from the broker: give no CAPTURE, \
                  --baud, --kraken or --gpsd",
