@@ -42,7 +42,7 @@ enum Command {
     ///   foxhunt locate --kraken http://192.168.1.20:8081     # a KrakenSDR on the network
     ///   foxhunt locate /dev/ttyUSB0 --baud 4800 --roads area.osm.pbf --target-cep50-m 50
     #[command(verbatim_doc_comment, allow_negative_numbers = true)]
-    Locate(commands::locate::Args),
+    Locate(Box<commands::locate::Args>),
     /// Track an emitter that moves: bearings of any station and format, RSSI of known anchors.
     ///
     /// Every channel of the captures is tracked with a particle filter (a still and a moving

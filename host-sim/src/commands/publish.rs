@@ -357,8 +357,11 @@ pub fn run(a: &Args) -> Outcome {
     dec.keep_measurements();
     let fed: Result<(), String> = match input {
         Input::Files(sources) => (|| {
-            for s in &sources {
-                dec.begin_input(&s.name())?;
+            for (s, path) in sources.iter().zip(&a.sources) {
+                // As `locate` names its inputs: a unit whose records name no station is
+                // FILE:KIND with several files.
+                let name = path.file_name().unwrap_or(path.as_os_str());
+                dec.begin_input(&name.to_string_lossy())?;
                 let mut failed = Ok(());
                 stream(std::slice::from_ref(s), |b| {
                     if failed.is_ok() {
@@ -424,4 +427,42 @@ pub fn run(a: &Args) -> Outcome {
         )));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_true_azimuth_is_carried_back_from_the_frame() {
+        let origin = LatLon {
+            lat: 47.0,
+            lon: 8.0,
+        };
+        let frame = LocalFrame::new(origin, 0.0).expect("frame");
+        for (de, dn) in [(0.0, 0.0), (20_000.0, 5_000.0), (-15_000.0, -30_000.0)] {
+            let at = frame.to_geodetic([de, dn]).expect("point");
+            for k in 0..72 {
+                let truth = f64::from(k) * 5.0 + 0.123;
+                let local = frame.azimuth_to_local(at, truth).expect("local");
+                let back = true_azimuth(&frame, at, local).expect("true");
+                let d = (back - truth + 540.0).rem_euclid(360.0) - 180.0;
+                assert!(d.abs() < 1e-9, "{de},{dn} {truth}: {back}");
+            }
+        }
+    }
+
+    #[test]
+    fn dates() {
+        assert_eq!(parse_date("2026-06-01"), Ok(1_780_272_000_000));
+        for bad in ["2026-13-01", "2026-02-30", "26-1", "2026-01-01-01", "x"] {
+            assert!(parse_date(bad).is_err(), "{bad}");
+        }
+        assert_eq!(
+            rmc_day("GPRMC,100000.00,A,4700.000,N,00800.000,E,0.0,0.0,010626,,,A"),
+            Some(1_780_272_000_000)
+        );
+        assert_eq!(rmc_day("GPGGA,100000.00,4700.000,N"), None);
+        assert_eq!(rmc_day("GPRMC,1,A,,,,,,,01x626"), None);
+    }
 }

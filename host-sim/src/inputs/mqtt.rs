@@ -613,4 +613,24 @@ mod tests {
             ..m
         }));
     }
+
+    proptest::proptest! {
+        /// Any payload: a bearing or one line saying why not, never a panic.
+        #[test]
+        fn any_payload_is_a_bearing_or_an_error(bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..600)) {
+            let _ = BearingMessage::from_payload(&bytes);
+        }
+
+        /// A bearing's record gives the bridge back its true bearing.
+        #[test]
+        fn a_record_keeps_the_bearing(bearing in 0.0f64..360.0, lat in -80.0f64..80.0, lon in -180.0f64..180.0) {
+            let m = BearingMessage { bearing_deg: bearing, lat, lon, ..message() };
+            proptest::prop_assert!(m.check().is_ok());
+            let r = m.record();
+            let t = f64::from(r.true_deg().expect("true"));
+            let d = (t - bearing + 540.0).rem_euclid(360.0) - 180.0;
+            // f32 DOA: 360 has 3e-5 degrees between neighbours.
+            proptest::prop_assert!(d.abs() < 1e-4, "{} {}", t, bearing);
+        }
+    }
 }
