@@ -360,3 +360,84 @@ fn a_broker_restarted_mid_stream_loses_no_bearing_and_counts_none_twice() {
     );
     assert_same_fix(&live, &file);
 }
+
+#[test]
+fn a_station_that_sends_its_capture_twice_counts_once() {
+    let broker = Broker::start("twice");
+    let files = station_files(&broker.dir);
+    let url = broker.url("net");
+    let worker = Worker::start(&url, "twice-worker", 3);
+    // mast-1 sends its capture, then again under another session (a station that restarted
+    // and resent its log); the others once.
+    for f in files.iter().chain(std::iter::once(&files[0])) {
+        let mut c = Command::new(FOXHUNT);
+        c.arg("publish").arg(f).args(["--mqtt", &url]);
+        let out = c.output().expect("publish");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let (live, err) = worker.finish();
+    assert!(
+        err.iter()
+            .any(|l| l.contains("mqtt: bearings 1800, duplicates 600")),
+        "{err:?}"
+    );
+    assert_same_fix(&live, &recorded(&files));
+}
+
+#[test]
+fn an_unreachable_broker_is_one_line_and_status_1() {
+    // A port nothing listens on: bound, then closed.
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .expect("a free port")
+        .port();
+    let url = format!("mqtt://127.0.0.1:{port}/net");
+    let dir = std::env::temp_dir().join(format!("foxhunt-mqtt-none-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let file = &station_files(&dir)[0];
+    for args in [
+        vec!["locate".to_string(), "--mqtt".into(), url.clone()],
+        vec![
+            "publish".to_string(),
+            file.display().to_string(),
+            "--mqtt".into(),
+            url.clone(),
+        ],
+    ] {
+        let out = Command::new(FOXHUNT).args(&args).output().expect("run");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(
+            err.lines()
+                .any(|l| l.starts_with("foxhunt: cannot reach the MQTT broker at 127.0.0.1:")),
+            "{err}"
+        );
+    }
+    // Usage errors: exit 2 before any connection.
+    for args in [
+        vec!["locate", "--mqtt", "http://x"],
+        vec!["locate", "x.xml", "--mqtt", "mqtt://127.0.0.1/net"],
+        vec!["publish", "--mqtt", "mqtt://127.0.0.1/net"],
+        vec![
+            "publish",
+            "x.xml",
+            "--station",
+            "a/b",
+            "--mqtt",
+            "mqtt://127.0.0.1/net",
+        ],
+    ] {
+        let out = Command::new(FOXHUNT).args(&args).output().expect("run");
+        assert_eq!(
+            out.status.code(),
+            Some(2),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
