@@ -341,7 +341,7 @@ impl std::fmt::Debug for Subscription {
 
 impl Subscription {
     /// Connect as `client_id` (an error now is the command's), subscribe to every bearing
-    /// under the prefix (unless the broker kept the subscription), and start the thread that
+    /// under the prefix, and start the thread that
     /// hands the new bearings' records to `take` in batches (its flag: it may block until
     /// the fusing side has room).
     pub fn start(
@@ -358,12 +358,12 @@ impl Subscription {
         options.set_manual_acks(true);
         let (client, mut conn) = Client::new(options, 64);
         let filter = url.bearings_filter();
-        let present = first_connect(&mut conn, url)?;
-        if !present {
-            client
-                .try_subscribe(filter.clone(), QoS::AtLeastOnce)
-                .map_err(|e| e.to_string())?;
-        }
+        first_connect(&mut conn, url)?;
+        // Also on a session the broker kept: the same client id may have subscribed under
+        // another prefix, and subscribing again to the same filter changes nothing.
+        client
+            .try_subscribe(filter.clone(), QoS::AtLeastOnce)
+            .map_err(|e| e.to_string())?;
         let counts = Arc::new(Counts::default());
         let (c, cl, address) = (counts.clone(), client.clone(), url.address());
         std::thread::Builder::new()
