@@ -153,9 +153,10 @@ fn rssi_of_anchors_without_an_origin_is_in_metres_only() {
 }
 
 #[test]
-fn csv_and_geojson_of_a_drive() {
+fn csv_geojson_and_kml_of_a_drive() {
     let dir = scratch("files");
     let g = dir.join("t.geojson");
+    let k = dir.join("t.kml");
     let c = dir.join("t.csv");
     let out = foxhunt(&[
         "track",
@@ -164,6 +165,8 @@ fn csv_and_geojson_of_a_drive() {
         g.to_str().expect("path"),
         "--csv",
         c.to_str().expect("path"),
+        "--kml",
+        k.to_str().expect("path"),
     ]);
     assert!(
         out.status.success(),
@@ -200,6 +203,27 @@ fn csv_and_geojson_of_a_drive() {
     {
         let ring = f["geometry"]["coordinates"][0].as_array().expect("ring");
         assert_eq!(ring.first(), ring.last(), "an open ring");
+    }
+    // The KML holds the same: one track line, a point and an ellipse per CSV row, at the
+    // rows' positions.
+    let kml = std::fs::read_to_string(&k).expect("kml");
+    assert_eq!(kml.matches("<LineString>").count(), 1);
+    assert_eq!(kml.matches("<Polygon>").count(), rows.len());
+    let points: Vec<&str> = kml
+        .split("<Point><coordinates>")
+        .skip(1)
+        .map(|p| &p[..p.find('<').expect("end of coordinates")])
+        .collect();
+    assert_eq!(points.len(), rows.len());
+    for (p, r) in points.iter().zip(&rows) {
+        let f: Vec<f64> = p.split(',').map(|x| x.parse().expect("number")).collect();
+        let c: Vec<&str> = r.split(',').collect();
+        let (lat, lon): (f64, f64) = (c[2].parse().expect("lat"), c[3].parse().expect("lon"));
+        // The CSV's six decimals against the KML's eight.
+        assert!(
+            (f[0] - lon).abs() < 1e-6 && (f[1] - lat).abs() < 1e-6,
+            "{p} against {r}"
+        );
     }
 }
 

@@ -3,8 +3,10 @@
 //!
 //! A repeated sentence, a capture appended to itself or a replay of part of a drive carries no
 //! new information, yet a fix that counts it twice shrinks its ellipse by sqrt(2). A bearing
-//! is [`Verdict::Repeated`] when it repeats an earlier one exactly (same station, time,
-//! channel, vehicle position and angle), or, for a station that stamps its own bearings
+//! is [`Verdict::Repeated`] when it repeats an earlier one exactly (same time, channel,
+//! vehicle position and angle, whatever station it is filed under: one log given twice as two
+//! inputs files its unnamed unit under two names, and no two real stations report the same
+//! angle to the bit from the same spot at the same time), or, for a station that stamps its own bearings
 //! ([`Observation::stamped`]), when the same station already sent a bearing at that time on
 //! that channel: the same record arriving by two paths (a KrakenSDR's CSV log and its XML, a
 //! poll and a log), whose angles and positions differ only in their rounding. A new bearing
@@ -52,10 +54,11 @@ fn stamp(o: &Observation) -> (u16, u32, i32) {
     (o.station, o.time_s.to_bits(), channel_key(o.freq_mhz))
 }
 
-/// The identity of an observation: two are the same evidence when all of these agree.
-fn key(o: &Observation) -> ((u16, u32, i32), u32, u32, u32) {
+/// The identity of an observation: two are the same evidence when all of these agree (the
+/// station not among them: see the module's words).
+fn key(o: &Observation) -> ((u32, i32), u32, u32, u32) {
     (
-        stamp(o),
+        (o.time_s.to_bits(), channel_key(o.freq_mhz)),
         o.bearing.theta.to_bits(),
         o.bearing.vehicle[0].to_bits(),
         o.bearing.vehicle[1].to_bits(),
@@ -242,5 +245,33 @@ mod tests {
         );
         assert!(v[10..20].iter().all(|v| *v == Verdict::Repeated as u8));
         assert!(v[20..].iter().all(|v| *v == Verdict::Fresh as u8));
+    }
+
+    #[test]
+    fn one_log_filed_under_two_stations_counts_once() {
+        // The same capture given twice: its unnamed unit is a station per input. A second unit
+        // on the vehicle at the same times (same spot, its own angles) is other evidence.
+        let mut both = [obs(0); 30];
+        for k in 0..10 {
+            both[k] = obs(k);
+            let mut again = obs(k);
+            again.station = 1;
+            both[10 + k] = again;
+            let mut other = obs(k);
+            other.station = 2;
+            other.bearing.theta += 0.02;
+            both[20 + k] = other;
+        }
+        let mut order = [0u32; 30];
+        let mut v = [0u8; 30];
+        let c = sort_out(30, |i| both.get(i).copied(), &mut order, &mut v).unwrap();
+        assert_eq!(c.repeated, 10);
+        assert!(v[10..20].iter().all(|v| *v == Verdict::Repeated as u8));
+        assert!(
+            v[..10]
+                .iter()
+                .chain(&v[20..])
+                .all(|v| *v == Verdict::Fresh as u8)
+        );
     }
 }

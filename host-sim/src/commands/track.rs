@@ -28,6 +28,9 @@ pub struct Args {
     /// anchors file with an origin).
     #[arg(long)]
     pub geojson: Option<PathBuf>,
+    /// Write the same as KML.
+    #[arg(long)]
+    pub kml: Option<PathBuf>,
     /// Write the CSV to a file too.
     #[arg(long)]
     pub csv: Option<PathBuf>,
@@ -133,7 +136,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
     let mut inputs: Vec<&std::path::Path> = a.captures.iter().map(PathBuf::as_path).collect();
     inputs.extend(a.anchors.as_deref());
     let outputs = Outputs::new(inputs, false);
-    for p in [&a.geojson, &a.csv, &a.svg].into_iter().flatten() {
+    for p in [&a.geojson, &a.kml, &a.csv, &a.svg].into_iter().flatten() {
         outputs.check(p, true)?;
     }
     let file = a.anchors.as_deref().map(AnchorsFile::load).transpose()?;
@@ -182,6 +185,13 @@ fn write_files(
         )?;
         let text = serde_json::to_string(&g).map_err(|e| e.to_string())?;
         outputs.write(p, text.as_bytes(), true)?;
+    }
+    if let Some(p) = &a.kml {
+        let k = tracks::kml(t).ok_or(
+            "--kml needs the track on the earth: a capture with GPS positions, or an anchors \
+             file with an `origin`",
+        )?;
+        outputs.write(p, k.as_bytes(), true)?;
     }
     if let Some(p) = &a.csv {
         outputs.write(p, tracks::csv(t).as_bytes(), true)?;

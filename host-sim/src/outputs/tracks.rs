@@ -1,12 +1,13 @@
 //! A moving emitter's tracks as `foxhunt track` writes them: JSON (one object, docs/src/
-//! formats/json.md#track), CSV (one line per point) and GeoJSON (the track line and every
-//! point with its 95 % ellipse).
+//! formats/json.md#track), CSV (one line per point), and GeoJSON and KML (the track line and
+//! every point with its 95 % ellipse).
 
 use crate::locate::report::EllipseReport;
 use crate::outputs::json::Short;
 use crate::outputs::maps::{ellipse_ring, polygon_geometry, split_antimeridian};
 use crate::track::moving::TrackPoint;
 use crate::track::tracks::Tracks;
+use foxhunt_bridge::nmea::LatLon;
 use serde_json::{Map, Value, json};
 use std::fmt::Write;
 
@@ -152,4 +153,65 @@ pub fn geojson(t: &Tracks) -> Option<Value> {
         }
     }
     Some(json!({"type": "FeatureCollection", "features": features}))
+}
+
+/// KML of the tracks (Google Earth and most GIS tools): per channel a folder with the track
+/// line and every point (its time from the track's start, velocity and probability of moving)
+/// with its 95 % ellipse. `None` when the tracks are not placed on the earth.
+pub fn kml(t: &Tracks) -> Option<String> {
+    t.frame.as_ref()?;
+    let coords = |g: LatLon| format!("{:.8},{:.8},0", g.lon, g.lat);
+    let mut out = String::from(
+        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<kml xmlns=\"http://www.opengis.net/kml/2.2\">\n<Document>\n<name>foxhunt track</name>\n",
+    );
+    for c in &t.tracks {
+        let name = c
+            .freq_mhz
+            .map_or_else(|| "track".to_string(), |f| format!("track {f:.3} MHz"));
+        let _ = writeln!(out, "<Folder><name>{name}</name>");
+        let line: Vec<String> = c
+            .points
+            .iter()
+            .filter_map(|p| t.geodetic(p.position).map(coords))
+            .collect();
+        if line.len() > 1 {
+            let _ = writeln!(
+                out,
+                "<Placemark><name>{name}</name><LineString><coordinates>{}</coordinates></LineString></Placemark>",
+                line.join(" ")
+            );
+        }
+        for p in &c.points {
+            let Some(at) = t.geodetic(p.position) else {
+                continue;
+            };
+            let ring: Vec<String> = p
+                .ellipse()
+                .map(|e| ellipse_ring(p.position, &e))
+                .unwrap_or_default()
+                .into_iter()
+                .filter_map(|q| t.geodetic(q).map(coords))
+                .collect();
+            let polygon = if ring.len() > 3 {
+                format!(
+                    "<Polygon><outerBoundaryIs><LinearRing><coordinates>{}</coordinates></LinearRing></outerBoundaryIs></Polygon>",
+                    ring.join(" ")
+                )
+            } else {
+                String::new()
+            };
+            let _ = writeln!(
+                out,
+                "<Placemark><name>t {:.1} s</name><description>velocity {:.2} m/s east, {:.2} m/s north; P(moving) {:.2}</description><MultiGeometry><Point><coordinates>{}</coordinates></Point>{polygon}</MultiGeometry></Placemark>",
+                p.t_s,
+                p.velocity[0],
+                p.velocity[1],
+                p.p_moving,
+                coords(at)
+            );
+        }
+        out.push_str("</Folder>\n");
+    }
+    out.push_str("</Document>\n</kml>\n");
+    Some(out)
 }

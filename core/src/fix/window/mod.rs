@@ -50,7 +50,9 @@
 )]
 
 mod answer;
+mod pass;
 mod settings;
+mod start;
 #[cfg(test)]
 #[allow(clippy::unwrap_used)]
 mod tests;
@@ -59,10 +61,10 @@ pub use answer::{Status, Update, WindowCounters};
 pub use settings::{Noise, WindowConfig, WindowError};
 
 use crate::Bearing;
-use crate::fastmath::{atan2, sincos};
+use crate::fastmath::sincos;
 use crate::fix::consistency::ellipse_scale;
 use crate::fix::init::CLOUD_MAX_RANGE_M;
-use crate::likelihood::{Likelihood, Tukey};
+use crate::likelihood::Tukey;
 use crate::linalg::{eigen2, inverse2, solve2};
 use crate::model::bearing::wrap;
 use core::f32::consts::PI;
@@ -97,13 +99,6 @@ pub const CONFIDENCE: f32 = 0.95;
 
 /// One degree, radians.
 const DEG: f32 = PI / 180.0;
-/// Vehicle positions within this of each other count as one position, metres.
-const STATIONARY_M: f32 = 1.0;
-/// Bearings within this of each other (radians) count as parallel.
-const PARALLEL_RAD: f32 = 0.1 * DEG;
-/// The sine of the shallowest crossing a pair may make.
-const MIN_CROSSING_SIN: f32 = 0.017_452_4;
-
 /// A bearing in the window.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Entry {
@@ -152,30 +147,6 @@ impl Default for WindowFix {
     fn default() -> Self {
         Self::new(WindowConfig::default())
     }
-}
-
-/// Sums of one pass over the window at a position.
-#[derive(Debug, Clone, Copy, Default)]
-struct Pass {
-    /// IRLS normal matrix and right-hand side.
-    h: [[f32; 2]; 2],
-    g: [f32; 2],
-    /// Tukey cost.
-    cost: f32,
-    /// Gaussian information of the inliers.
-    info: [[f32; 2]; 2],
-    /// Inliers (|u| < c), their sum of squared normalised residuals, their sum of cos(r).
-    inliers: u32,
-    chi2: f32,
-    front: f32,
-}
-
-/// `m + k n` for 2 x 2 matrices.
-fn add(m: [[f32; 2]; 2], n: [[f32; 2]; 2], k: f32) -> [[f32; 2]; 2] {
-    [
-        [m[0][0] + k * n[0][0], m[0][1] + k * n[0][1]],
-        [m[1][0] + k * n[1][0], m[1][1] + k * n[1][1]],
-    ]
 }
 
 /// (-pi, pi] for a difference of two angles each in [-pi, pi].
@@ -307,135 +278,6 @@ impl WindowFix {
             c[1] += e.vehicle[1] / n;
         }
         c
-    }
-
-    /// No position can come of the window: every vehicle position in one place, or every
-    /// bearing parallel.
-    fn degenerate(&self) -> bool {
-        let Some(first) = self.entry(0).copied() else {
-            return true;
-        };
-        let mut moved = false;
-        let mut turned = false;
-        for e in self.entries() {
-            let (dx, dy) = (
-                e.vehicle[0] - first.vehicle[0],
-                e.vehicle[1] - first.vehicle[1],
-            );
-            moved |= dx * dx + dy * dy > STATIONARY_M * STATIONARY_M;
-            turned |= libm::fabsf(fold(e.theta - first.theta)) > PARALLEL_RAD;
-        }
-        !(moved && turned)
-    }
-
-    /// One pass over the window at `p` (centred coordinates) with noise scale `sigma`.
-    fn pass(&self, origin: [f32; 2], p: [f32; 2], sigma: f32) -> Pass {
-        let mut s = Pass::default();
-        for e in self.entries() {
-            let dx = p[0] - (e.vehicle[0] - origin[0]);
-            let dy = p[1] - (e.vehicle[1] - origin[1]);
-            let d2 = dx * dx + dy * dy;
-            // A branch, not `max`: the Cortex-M4F build calls `fmaxf` for that.
-            let d2 = if d2 < 1e-6 { 1e-6 } else { d2 };
-            let r = fold(e.theta - atan2(dy, dx));
-            let sd = sigma * e.rel;
-            let u = r / sd;
-            s.cost -= TUKEY.ln(r, sd);
-            let inv_var = 1.0 / (sd * sd);
-            let w = inv_var * TUKEY.irls_weight(r, sd);
-            let inlier = u * u < TUKEY.c * TUKEY.c;
-            let (jx, jy) = (-dy / d2, dx / d2);
-            let outer = [[jx * jx, jx * jy], [jx * jy, jy * jy]];
-            s.h = add(s.h, outer, w);
-            if inlier {
-                s.info = add(s.info, outer, inv_var);
-            }
-            s.g[0] += w * jx * r;
-            s.g[1] += w * jy * r;
-            if inlier {
-                s.inliers += 1;
-                s.chi2 += u * u;
-                s.front += sin_cos(r).1;
-            }
-        }
-        s
-    }
-
-    /// Bearings that pass within three sigmas (or half a degree) of `p`, and their summed
-    /// absolute residuals.
-    fn support(&self, origin: [f32; 2], p: [f32; 2], sigma: f32) -> (u32, f32) {
-        let mut n = 0;
-        let mut spread = 0.0;
-        for e in self.entries() {
-            let dx = p[0] - (e.vehicle[0] - origin[0]);
-            let dy = p[1] - (e.vehicle[1] - origin[1]);
-            let r = libm::fabsf(fold(e.theta - atan2(dy, dx)));
-            if r <= (3.0 * sigma * e.rel).max(0.5 * DEG) {
-                n += 1;
-                spread += r;
-            }
-        }
-        (n, spread)
-    }
-
-    /// Where the bearings of entries `i` and `j` cross (centred), if in front of both within
-    /// range.
-    fn crossing(&self, origin: [f32; 2], i: usize, j: usize) -> Option<[f32; 2]> {
-        let (a, b) = (self.entry(i)?, self.entry(j)?);
-        let (sa, ca) = sin_cos(a.theta);
-        let (sb, cb) = sin_cos(b.theta);
-        let cross = ca * sb - sa * cb;
-        if libm::fabsf(cross) < MIN_CROSSING_SIN {
-            return None;
-        }
-        let dp = [b.vehicle[0] - a.vehicle[0], b.vehicle[1] - a.vehicle[1]];
-        let s = (dp[0] * sb - dp[1] * cb) / cross;
-        let t = (dp[0] * sa - dp[1] * ca) / cross;
-        if !(s > 0.0 && t > 0.0) {
-            return None;
-        }
-        let p = [
-            a.vehicle[0] - origin[0] + s * ca,
-            a.vehicle[1] - origin[1] + s * sa,
-        ];
-        let far = p[0] * p[0] + p[1] * p[1] > MAX_RANGE_M * MAX_RANGE_M;
-        (p[0].is_finite() && p[1].is_finite() && !far).then_some(p)
-    }
-
-    /// The pair search: the crossing most window bearings agree with.
-    fn search<R: Rng + ?Sized>(
-        &mut self,
-        origin: [f32; 2],
-        sigma: f32,
-        rng: &mut R,
-    ) -> Option<[f32; 2]> {
-        self.counters.searches += 1;
-        let n = self.len as u32;
-        let mut best: Option<(u32, f32, [f32; 2])> = None;
-        let mut scored = 0;
-        for _ in 0..PAIR_ATTEMPTS {
-            if scored >= HYPOTHESES {
-                break;
-            }
-            let i = (rng.next_u32() % n) as usize;
-            let j = (rng.next_u32() % n) as usize;
-            if i == j {
-                continue;
-            }
-            let Some(p) = self.crossing(origin, i, j) else {
-                continue;
-            };
-            scored += 1;
-            let (count, spread) = self.support(origin, p, sigma);
-            let better = match best {
-                None => true,
-                Some((c, s, _)) => count > c || (count == c && spread < s),
-            };
-            if better {
-                best = Some((count, spread, p));
-            }
-        }
-        best.filter(|b| b.0 >= 3).map(|b| b.2)
     }
 
     /// The ellipse factors 2 F(2, dof) at 0.95 and 0.5, cached.

@@ -24,6 +24,7 @@ use crate::inputs::gpsd::{GpsdAddress, Report, Watch};
 use crate::inputs::kraken_http::KrakenUrl;
 use crate::inputs::mqtt::{Handed, MqttUrl, Subscription, channel_name};
 use crate::locate::locate_guided;
+use crate::outputs::cot::{self, CotSender, CotUrl};
 use crate::outputs::terminal::{Out, Stop, note};
 use foxhunt_bridge::BridgeConfig;
 use foxhunt_bridge::Frame;
@@ -71,6 +72,8 @@ pub struct LiveOptions {
     pub json: bool,
     /// Keep the vehicle track (for maps at the end).
     pub keep_track: bool,
+    /// Send every fix to TAK.
+    pub cot: Option<CotUrl>,
 }
 
 /// A read's outcome, sent from the reader thread.
@@ -290,6 +293,7 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
         }
     }
     o.locate.survey(&mut dec);
+    let mut tak = o.cot.clone().map(CotSender::new);
     let mut reported = (0usize, 0u32);
     let mut ended = false;
     // The last update's outcome; `None` until one is printed.
@@ -308,6 +312,14 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
             reported = n;
             dec.snapshot();
             let located = locate_guided(&dec.decoded, &o.locate, guide);
+            // TAK missing an update is no reason to stop following the emitter: the next
+            // update sends the whole picture again.
+            if let (Some(tak), Ok(l)) = (tak.as_mut(), &located)
+                && let Err(e) =
+                    tak.send(&cot::events(l, &dec.decoded, std::time::SystemTime::now()))
+            {
+                note(&format!("{e}; this update not sent"));
+            }
             let text = match (&located, o.json) {
                 (Ok(l), true) => serde_json::to_string(&l.report).map_err(|e| e.to_string())?,
                 (Ok(l), false) => l.report.update_line(),

@@ -14,6 +14,7 @@ use crate::inputs::mqtt::MqttUrl;
 use crate::inputs::stations::{Network, parse_reference};
 use crate::locate::report::Located;
 use crate::locate::{locate, locate_guided};
+use crate::outputs::cot::{self, CotSender, CotUrl};
 use crate::outputs::files::Outputs;
 use crate::outputs::maps;
 use crate::outputs::terminal::{Out, Outcome, Stop, note};
@@ -152,6 +153,13 @@ pub struct Args {
         requires = "mqtt"
     )]
     pub mqtt_client_id: String,
+    /// Send each fix to TAK (ATAK, WinTAK, iTAK, a TAK server) as Cursor-on-Target events:
+    /// `udp://HOST:PORT` (a LAN's multicast is udp://239.2.3.1:6969) or `tcp://HOST:PORT`;
+    /// live: every update. Each emitter with its 95 % ellipse, each station with its latest
+    /// line of bearing (docs/src/networks.md).
+    #[arg(long, value_name = "URL", conflicts_with = "calibrate",
+          value_parser = |s: &str| CotUrl::parse(s))]
+    pub cot: Option<CotUrl>,
 }
 
 /// The network `--stations` and `--reference` describe, if any.
@@ -416,6 +424,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
                 locate: options.clone(),
                 json: a.json,
                 keep_track,
+                cot: a.cot.clone(),
             };
             let end = live::run(&o, &mut guide, out)?;
             // The live updates were the output; a final fix goes only to the maps.
@@ -457,6 +466,12 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
     let result = match located {
         Ok(l) => {
             write_maps(&l, &decoded, &paths, &outputs)?;
+            if let Some(url) = &a.cot {
+                let events = cot::events(&l, &decoded, std::time::SystemTime::now());
+                CotSender::new(url.clone())
+                    .send(&events)
+                    .map_err(Stop::Error)?;
+            }
             if a.json {
                 let text = serde_json::to_string(&l.report).map_err(|e| e.to_string())?;
                 out.line(&text)?;

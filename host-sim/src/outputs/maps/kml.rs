@@ -1,6 +1,6 @@
 //! KML of a fix, for Google Earth and most GIS tools.
 
-use super::{ellipse_ring, lonlat, rays, sources};
+use super::{ellipse_ring, lonlat, rays, sources, xml_text};
 use crate::inputs::capture::Decoded;
 use crate::locate::report::Located;
 use std::fmt::Write;
@@ -82,21 +82,5 @@ pub fn kml(l: &Located, d: &Decoded) -> String {
         );
     }
     out.push_str("</Folder>\n</Document>\n</kml>\n");
-    out
-}
-
-/// `text` with XML's special characters escaped (a station id is the records' text).
-fn xml_text(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&apos;"),
-            c => out.push(c),
-        }
-    }
     out
 }

@@ -68,7 +68,7 @@ pub(super) fn rays(l: &Located, d: &Decoded) -> Vec<([f32; 2], [f32; 2])> {
 }
 
 /// [longitude, latitude] of local metres.
-pub(super) fn lonlat(frame: &LocalFrame, p: [f32; 2]) -> [f64; 2] {
+pub fn lonlat(frame: &LocalFrame, p: [f32; 2]) -> [f64; 2] {
     let g = geodetic(frame, p);
     [g.lon, g.lat]
 }
@@ -80,4 +80,31 @@ pub(super) fn sources(l: &Located) -> impl Iterator<Item = (&SourceReport, &Draw
         .iter()
         .chain(l.report.other_sources.iter())
         .zip(l.drawn.iter())
+}
+
+/// Each station's latest bearing, by its index in the decoded stations (`None`: none yet).
+pub fn latest_bearings(d: &Decoded) -> Vec<Option<foxhunt_core::Bearing>> {
+    let mut latest = vec![None; d.stations.len()];
+    for o in &d.observations {
+        if let Some(slot) = latest.get_mut(usize::from(o.station)) {
+            *slot = Some(o.bearing);
+        }
+    }
+    latest
+}
+
+/// `text` with XML's special characters escaped (a station id is the records' text): KML and CoT.
+pub fn xml_text(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&apos;"),
+            c => out.push(c),
+        }
+    }
+    out
 }

@@ -234,12 +234,7 @@ fn map_stations(
     );
     let offsets = run.map_or(&[][..], |r| &r.offsets[..]);
     let reports = station_reports(d, None, &setup, offsets, &[], &[]);
-    let mut latest: Vec<Option<foxhunt_core::Bearing>> = vec![None; d.stations.len()];
-    for o in &d.observations {
-        if let Some(slot) = latest.get_mut(usize::from(o.station)) {
-            *slot = Some(o.bearing);
-        }
-    }
+    let latest = crate::outputs::maps::latest_bearings(d);
     reports
         .into_iter()
         .filter_map(|r| {
