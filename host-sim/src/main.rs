@@ -42,7 +42,7 @@ enum Command {
     ///   foxhunt locate --kraken http://192.168.1.20:8081     # a KrakenSDR on the network
     ///   foxhunt locate /dev/ttyUSB0 --baud 4800 --roads area.osm.pbf --target-cep50-m 50
     #[command(verbatim_doc_comment, allow_negative_numbers = true)]
-    Locate(commands::locate::Args),
+    Locate(Box<commands::locate::Args>),
     /// Track an emitter that moves: bearings of any station and format, RSSI of known anchors.
     ///
     /// Every channel of the captures is tracked with a particle filter (a still and a moving
@@ -121,6 +121,23 @@ enum Command {
     ///   cat /dev/ttyUSB0 | foxhunt serve - --roads area.osm.pbf
     #[command(verbatim_doc_comment, allow_negative_numbers = true)]
     Serve(commands::serve::Args),
+    /// Send a DF station's bearings to an MQTT broker, for `foxhunt locate --mqtt` to fuse.
+    ///
+    /// Reads any source `locate` reads (capture files, - for standard input, a serial device
+    /// with --baud, --kraken URL) through the same decoder and sends each bearing as one JSON
+    /// message (station, time_ms UTC, lat, lon, bearing_deg true, sigma_deg, freq_mhz,
+    /// quality, kind) to PREFIX/bearings/CHANNEL/STATION at QoS 1 on a persistent session.
+    /// While the broker is away the bearings wait (--buffer), and what it had not acknowledged
+    /// is sent again when it is back. --pace replays a recorded capture in (scaled) real time.
+    /// Exit status: 0 when the broker acknowledged every bearing, 1 when it could not be
+    /// reached or some were not acknowledged within --linger, 2 on a usage error.
+    ///
+    /// Examples:
+    ///   foxhunt publish north.xml --mqtt mqtt://broker:1883/net
+    ///   foxhunt publish drive.nmea --station car-1 --pace 1 --mqtt mqtt://127.0.0.1/net
+    ///   foxhunt publish --kraken http://192.168.1.20:8081 --mqtt mqtt://broker/net
+    #[command(verbatim_doc_comment, allow_negative_numbers = true)]
+    Publish(commands::publish::Args),
 }
 
 fn main() -> ExitCode {
@@ -134,6 +151,7 @@ fn main() -> ExitCode {
         Command::Bench(a) => commands::bench::run(a, &mut out),
         Command::Perf(a) => commands::perf::run(a, &mut out),
         Command::Serve(a) => commands::serve::run(a),
+        Command::Publish(a) => commands::publish::run(a),
     }
     .and_then(|()| out.flush());
     // What went wrong decides the status (`Stop::status`: 1 no result, 2 usage; clap's own

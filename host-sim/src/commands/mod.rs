@@ -5,6 +5,7 @@ pub mod bench;
 pub mod frames;
 pub mod locate;
 pub mod perf;
+pub mod publish;
 pub mod serve;
 pub mod simulate;
 pub mod track;

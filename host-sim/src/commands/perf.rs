@@ -29,10 +29,44 @@ pub struct Args {
     /// 200 MB): time and peak memory.
     #[arg(long)]
     pub scale: bool,
+    /// Instead: a network's load through the running broker at `mqtt://HOST[:PORT]/PREFIX`
+    /// (--stations x --channels bearings every 1/--rate-hz s for --seconds, fused by a
+    /// `locate --mqtt` worker): bearing-to-fix latency and the worker's peak memory.
+    #[arg(long, value_name = "URL")]
+    pub mqtt: Option<String>,
+    /// With --mqtt: stations sending.
+    #[arg(long, default_value_t = 3, requires = "mqtt",
+          value_parser = super::values::count_at_least(1, "stations"))]
+    pub stations: usize,
+    /// With --mqtt: channels (one emitter each) every station hears.
+    #[arg(long, default_value_t = 1, requires = "mqtt",
+          value_parser = super::values::count_at_least(1, "channels"))]
+    pub channels: usize,
+    /// With --mqtt: bearings a second per station and channel.
+    #[arg(long, default_value_t = 1.0, requires = "mqtt",
+          value_parser = super::values::f64_where(|r| r > 0.0 && r <= 1000.0, "a rate in (0, 1000] Hz"))]
+    pub rate_hz: f64,
+    /// With --mqtt: seconds of sending.
+    #[arg(long, default_value_t = 30.0, requires = "mqtt",
+          value_parser = super::values::f64_where(|s| s > 0.0 && s <= 3600.0, "seconds in (0, 3600]"))]
+    pub seconds: f64,
 }
 
 /// Run `foxhunt perf`.
 pub fn run(a: &Args, out: &mut Out) -> Outcome {
+    if let Some(url) = &a.mqtt {
+        let load = crate::runs::mqtt_load::Load {
+            url: crate::inputs::mqtt::MqttUrl::parse(url).map_err(Stop::Usage)?,
+            stations: a.stations,
+            channels: a.channels,
+            rate_hz: a.rate_hz,
+            seconds: a.seconds,
+        };
+        let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+        let f = crate::runs::mqtt_load::run(&load, &exe)?;
+        out.line(&crate::runs::mqtt_load::table(&load, &f))?;
+        return Ok(());
+    }
     if a.no_numpy && a.no_growth && !a.scale {
         return Err(Stop::usage(
             "--no-numpy and --no-growth leave nothing to time: drop one, or add --scale",

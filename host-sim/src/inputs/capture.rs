@@ -10,8 +10,8 @@
 
 use foxhunt_bridge::Frame;
 use foxhunt_bridge::bridge::{
-    BearingKind, BridgeConfig, BridgeCounters, Event, Receiver, StationKey, StationState,
-    VehicleFix,
+    BearingKind, BearingMeasurement, BridgeConfig, BridgeCounters, Event, Receiver, StationKey,
+    StationState, VehicleFix,
 };
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;
@@ -92,6 +92,10 @@ pub struct Decoded {
     pub unit: crate::inputs::unit::UnitLog,
     /// The stations, by the observations' station index.
     pub stations: Vec<StationInfo>,
+    /// The bridge's bearings as it handed them on (quality, record kind, time on its clock),
+    /// kept only when asked for ([`Decoder::keep_measurements`]) and drained by the caller:
+    /// what `foxhunt publish` sends.
+    pub measurements: Vec<BearingMeasurement>,
 }
 
 /// Whether a frame carries a GPS position, a bearing, or something else.
@@ -119,6 +123,8 @@ pub struct Decoder {
     inputs: Vec<String>,
     /// The input the bytes come from now.
     current: u8,
+    /// Keep each bearing's measurement too.
+    keep_measurements: bool,
 }
 
 impl Decoder {
@@ -130,7 +136,14 @@ impl Decoder {
             keep_track,
             inputs: Vec::new(),
             current: 0,
+            keep_measurements: false,
         }
+    }
+
+    /// Keep every bearing's measurement in [`Decoded::measurements`] as well, for a caller
+    /// that drains them as they come.
+    pub fn keep_measurements(&mut self) {
+        self.keep_measurements = true;
     }
 
     /// The bytes from now on come from input `name` (a capture file): a unit whose records
@@ -214,15 +227,17 @@ impl Decoder {
 
     /// Feed bytes as they arrive.
     pub fn feed(&mut self, bytes: &[u8]) {
+        let keep = self.keeps();
         let (demux, bridge) = (&mut self.rx.demux, &mut self.rx.bridge);
-        let (d, keep) = (&mut self.decoded, self.keep_track);
+        let d = &mut self.decoded;
         demux.feed(bytes, &mut |f| push(bridge, &f, d, keep));
     }
 
     /// The line went quiet: settle frames waiting on look-ahead.
     pub fn idle(&mut self) {
         self.rx.demux.idle();
-        let (d, keep) = (&mut self.decoded, self.keep_track);
+        let keep = self.keeps();
+        let d = &mut self.decoded;
         while let Some(f) = self.rx.demux.next_frame() {
             push(&mut self.rx.bridge, &f, d, keep);
         }
@@ -232,8 +247,9 @@ impl Decoder {
     /// End of the stream: frames still buffered are delivered and bearings waiting for a
     /// later fix are placed with the fixes there are. Idempotent.
     pub fn end(&mut self) {
+        let keep = self.keeps();
         let (demux, bridge) = (&mut self.rx.demux, &mut self.rx.bridge);
-        let (d, keep) = (&mut self.decoded, self.keep_track);
+        let d = &mut self.decoded;
         demux.finish_into(&mut |f| push(bridge, &f, d, keep));
         bridge.finish(&mut |e| absorb(d, e, keep));
         self.snapshot();
@@ -248,8 +264,23 @@ impl Decoder {
     /// Take one NMEA sentence body (no `$`, checksum or line end) as if it had come on the
     /// line: how gpsd's positions and headings reach the bridge, between the line's bytes.
     pub fn push_sentence(&mut self, body: &str) {
-        let (d, keep) = (&mut self.decoded, self.keep_track);
-        push(&mut self.rx.bridge, &Frame::Nmea(body), d, keep);
+        self.push_frame(&Frame::Nmea(body));
+    }
+
+    /// Take one frame already decoded (a record rebuilt from a broker's message) as if its
+    /// bytes had come on the line.
+    pub fn push_frame(&mut self, frame: &Frame<'_>) {
+        let keep = self.keeps();
+        let d = &mut self.decoded;
+        push(&mut self.rx.bridge, frame, d, keep);
+    }
+
+    /// What to keep besides the observations.
+    fn keeps(&self) -> Keep {
+        Keep {
+            track: self.keep_track,
+            measurements: self.keep_measurements,
+        }
     }
 
     /// Bring the frame, counters and stations up to date (before a fix is computed
@@ -280,9 +311,19 @@ impl Decoder {
     }
 }
 
-fn absorb(d: &mut Decoded, e: Event, keep_track: bool) {
+/// What a decoder keeps besides the observations.
+#[derive(Debug, Clone, Copy)]
+struct Keep {
+    track: bool,
+    measurements: bool,
+}
+
+fn absorb(d: &mut Decoded, e: Event, keep: Keep) {
     match e {
         Event::Bearing(b) => {
+            if keep.measurements {
+                d.measurements.push(b);
+            }
             let t0 = *d.first_ms.get_or_insert(b.time_ms);
             d.observations.push(Observation {
                 bearing: b.bearing,
@@ -295,7 +336,7 @@ fn absorb(d: &mut Decoded, e: Event, keep_track: bool) {
         }
         Event::Fix(f) => {
             d.fixes += 1;
-            if keep_track {
+            if keep.track {
                 d.track.push(f);
             }
         }
@@ -308,7 +349,7 @@ fn push(
     bridge: &mut foxhunt_bridge::Bridge<0, HOST_STATIONS>,
     f: &Frame<'_>,
     d: &mut Decoded,
-    keep_track: bool,
+    keep: Keep,
 ) {
     if let Frame::Nmea(text) = f
         && d.unit.push(text)
@@ -316,7 +357,7 @@ fn push(
         return;
     }
     let before = *bridge.counters();
-    bridge.push(f, &mut |e| absorb(d, e, keep_track));
+    bridge.push(f, &mut |e| absorb(d, e, keep));
     let after = bridge.counters();
     let malformed =
         (after.bad_field - before.bad_field) + (after.bad_position - before.bad_position);

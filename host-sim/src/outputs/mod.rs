@@ -7,6 +7,7 @@ pub mod files;
 pub mod frames;
 pub mod json;
 pub mod maps;
+pub mod mqtt;
 pub mod serve;
 pub mod tables;
 pub mod terminal;

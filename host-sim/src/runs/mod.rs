@@ -6,6 +6,7 @@ pub mod field;
 pub mod guidance;
 pub mod montecarlo;
 pub mod moving;
+pub mod mqtt_load;
 pub mod network;
 pub mod perf;
 pub mod run;

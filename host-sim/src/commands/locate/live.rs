@@ -22,10 +22,13 @@ use crate::guidance::guide::Guide;
 use crate::inputs::capture::{Decoded, Decoder};
 use crate::inputs::gpsd::{GpsdAddress, Report, Watch};
 use crate::inputs::kraken_http::KrakenUrl;
+use crate::inputs::mqtt::{Handed, MqttUrl, Subscription, channel_name};
 use crate::locate::locate_guided;
 use crate::outputs::cot::{self, CotSender, CotUrl};
 use crate::outputs::terminal::{Out, Stop, note};
 use foxhunt_bridge::BridgeConfig;
+use foxhunt_bridge::Frame;
+use foxhunt_bridge::kraken::KrakenXml;
 use std::io::{ErrorKind, Read};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
@@ -44,6 +47,14 @@ pub enum LiveSource {
     Stdin,
     /// KrakenSDRs' web servers, all polled at once; each URL is an input of its own.
     Kraken(Vec<KrakenUrl>),
+    /// Every station's bearings through an MQTT broker, on a persistent session of this
+    /// client id.
+    Mqtt {
+        /// The broker and the topics' prefix.
+        url: MqttUrl,
+        /// The session's client id.
+        client_id: String,
+    },
 }
 
 /// How to read a live line.
@@ -72,12 +83,16 @@ enum Chunk {
     From(u8, Vec<u8>),
     /// Sentence bodies from gpsd.
     Sentences(Vec<String>),
+    /// Bearings from the broker, as the records the bridge places.
+    Records(Vec<KrakenXml>),
     End,
     Failed(String),
 }
 
 /// How long a read waits before the line counts as idle.
 const IDLE: Duration = Duration::from_millis(100);
+/// At the end, how long the broker has to acknowledge the last fixes.
+const FIX_WAIT: Duration = Duration::from_secs(5);
 
 /// Start the thread that polls KrakenSDR `input`: each poll's new records are a chunk.
 fn kraken(input: u8, url: &KrakenUrl, tx: mpsc::SyncSender<Chunk>) -> Result<(), String> {
@@ -126,12 +141,22 @@ fn gpsd(addr: &GpsdAddress, tx: mpsc::SyncSender<Chunk>) -> Result<(), String> {
         .map_err(|e| format!("cannot start the gpsd reader: {e}"))
 }
 
+/// A live line being read: its chunks as the reader threads hand them over.
+pub struct LiveLine {
+    rx: mpsc::Receiver<Chunk>,
+    last_byte: Instant,
+    /// The broker's session, when the bearings come through one.
+    pub mqtt: Option<Subscription>,
+}
+
 /// Start the threads that read the line (and gpsd).
-fn reader(
-    source: &LiveSource,
-    gpsd_at: Option<&GpsdAddress>,
-) -> Result<mpsc::Receiver<Chunk>, String> {
+pub fn reader(source: &LiveSource, gpsd_at: Option<&GpsdAddress>) -> Result<LiveLine, String> {
     let (tx, rx) = mpsc::sync_channel::<Chunk>(16);
+    let line = |rx, mqtt| LiveLine {
+        rx,
+        last_byte: Instant::now(),
+        mqtt,
+    };
     if let Some(addr) = gpsd_at {
         gpsd(addr, tx.clone())?;
     }
@@ -149,7 +174,26 @@ fn reader(
                 let i = u8::try_from(i).map_err(|_| "at most 256 --kraken URLs".to_string())?;
                 kraken(i, url, tx.clone())?;
             }
-            return Ok(rx);
+            return Ok(line(rx, None));
+        }
+        LiveSource::Mqtt { url, client_id } => {
+            let sub = Subscription::start(
+                url,
+                client_id,
+                move |v, wait| match wait {
+                    true => match tx.send(Chunk::Records(v)) {
+                        Ok(()) => Handed::Yes,
+                        Err(_) => Handed::Closed,
+                    },
+                    false => match tx.try_send(Chunk::Records(v)) {
+                        Ok(()) => Handed::Yes,
+                        Err(mpsc::TrySendError::Full(Chunk::Records(v))) => Handed::Busy(v),
+                        Err(_) => Handed::Closed,
+                    },
+                },
+                note,
+            )?;
+            return Ok(line(rx, Some(sub)));
         }
     };
     std::thread::Builder::new()
@@ -177,7 +221,50 @@ fn reader(
             }
         })
         .map_err(|e| format!("cannot start the reader: {e}"))?;
-    Ok(rx)
+    Ok(line(rx, None))
+}
+
+impl LiveLine {
+    /// Block for the first chunk (or the idle timeout), then feed `dec` all that is waiting;
+    /// whether the line ended (closed, or quiet for `quiet_exit`).
+    pub fn take(&mut self, dec: &mut Decoder, quiet_exit: Option<Duration>) -> Result<bool, Stop> {
+        let mut next = self.rx.recv_timeout(IDLE);
+        loop {
+            match next {
+                Ok(Chunk::Bytes(b)) => {
+                    self.last_byte = Instant::now();
+                    dec.feed(&b);
+                }
+                Ok(Chunk::From(i, b)) => {
+                    self.last_byte = Instant::now();
+                    dec.switch_input(i);
+                    dec.feed(&b);
+                }
+                Ok(Chunk::Records(v)) => {
+                    self.last_byte = Instant::now();
+                    for r in v {
+                        dec.push_frame(&Frame::KrakenXml(r));
+                    }
+                }
+                Ok(Chunk::Sentences(v)) => {
+                    for s in &v {
+                        dec.push_sentence(s);
+                    }
+                }
+                Ok(Chunk::End) | Err(mpsc::RecvTimeoutError::Disconnected) => return Ok(true),
+                Ok(Chunk::Failed(e)) => return Err(Stop::Error(e)),
+                Err(mpsc::RecvTimeoutError::Timeout) => {
+                    dec.idle();
+                    return Ok(quiet_exit.is_some_and(|q| self.last_byte.elapsed() >= q));
+                }
+            }
+            next = match self.rx.try_recv() {
+                Ok(c) => Ok(c),
+                Err(mpsc::TryRecvError::Empty) => return Ok(false),
+                Err(mpsc::TryRecvError::Disconnected) => Err(mpsc::RecvTimeoutError::Disconnected),
+            };
+        }
+    }
 }
 
 /// How a live line ended.
@@ -194,7 +281,7 @@ pub struct LiveEnd {
 /// (why there is no fix). What was decoded, and whether the last update had a fix.
 pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd, Stop> {
     o.locate.check()?;
-    let rx = reader(&o.source, o.gpsd.as_ref())?;
+    let mut line = reader(&o.source, o.gpsd.as_ref())?;
     let mut dec = Decoder::new(BridgeConfig::default(), o.keep_track);
     // Several KrakenSDRs: each URL an input, so a unit without a STATION_ID is a station of
     // its own.
@@ -207,47 +294,12 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
     }
     o.locate.survey(&mut dec);
     let mut tak = o.cot.clone().map(CotSender::new);
-    let mut last_byte = Instant::now();
     let mut reported = (0usize, 0u32);
     let mut ended = false;
     // The last update's outcome; `None` until one is printed.
     let mut last: Option<Option<String>> = None;
     while !ended {
-        // Block for the first chunk (or the idle timeout), then take all that is waiting.
-        let mut next = rx.recv_timeout(IDLE);
-        loop {
-            match next {
-                Ok(Chunk::Bytes(b)) => {
-                    last_byte = Instant::now();
-                    dec.feed(&b);
-                }
-                Ok(Chunk::From(i, b)) => {
-                    last_byte = Instant::now();
-                    dec.switch_input(i);
-                    dec.feed(&b);
-                }
-                Ok(Chunk::Sentences(v)) => {
-                    for s in &v {
-                        dec.push_sentence(s);
-                    }
-                }
-                Ok(Chunk::End) | Err(mpsc::RecvTimeoutError::Disconnected) => {
-                    ended = true;
-                    break;
-                }
-                Ok(Chunk::Failed(e)) => return Err(Stop::Error(e)),
-                Err(mpsc::RecvTimeoutError::Timeout) => {
-                    dec.idle();
-                    ended = o.quiet_exit.is_some_and(|q| last_byte.elapsed() >= q);
-                    break;
-                }
-            }
-            next = match rx.try_recv() {
-                Ok(c) => Ok(c),
-                Err(mpsc::TryRecvError::Empty) => break,
-                Err(mpsc::TryRecvError::Disconnected) => Err(mpsc::RecvTimeoutError::Disconnected),
-            };
-        }
+        ended = line.take(&mut dec, o.quiet_exit)?;
         if ended {
             // Bearings still waiting for a later fix are placed with the fixes there are.
             dec.end();
@@ -268,16 +320,36 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
             {
                 note(&format!("{e}; this update not sent"));
             }
-            let line = match (&located, o.json) {
+            let text = match (&located, o.json) {
                 (Ok(l), true) => serde_json::to_string(&l.report).map_err(|e| e.to_string())?,
                 (Ok(l), false) => l.report.update_line(),
                 (Err(e), true) => serde_json::to_string(e).map_err(|e| e.to_string())?,
                 (Err(e), false) => e.line(),
             };
+            if let (Some(sub), Ok(l)) = (&line.mqtt, &located) {
+                for e in &l.report.emitters {
+                    let json = serde_json::to_string(e).map_err(|e| e.to_string())?;
+                    sub.publish_fix(&channel_name(e.freq_mhz.map(f64::from)), json);
+                }
+            }
             last = Some(located.err().map(|e| e.error));
-            out.line(&line)?;
+            out.line(&text)?;
             out.flush()?;
         }
+    }
+    if let Some(sub) = &line.mqtt {
+        if !sub.close(FIX_WAIT) {
+            note("the MQTT broker did not acknowledge every fix before the end");
+        }
+        let c = &sub.counts;
+        let n = |a: &std::sync::atomic::AtomicU64| a.load(std::sync::atomic::Ordering::Relaxed);
+        note(&format!(
+            "mqtt: bearings {}, duplicates {}, refused {}, fixes {}",
+            n(&c.bearings),
+            n(&c.duplicates),
+            n(&c.refused),
+            n(&c.fixes_acked)
+        ));
     }
     Ok(LiveEnd {
         decoded: dec.finish(),

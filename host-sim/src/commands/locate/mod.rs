@@ -10,6 +10,7 @@ use crate::inputs::capture::{Decoded, Decoder};
 use crate::inputs::files::{InputKind, Source, stream};
 use crate::inputs::gpsd::GpsdAddress;
 use crate::inputs::kraken_http::KrakenUrl;
+use crate::inputs::mqtt::MqttUrl;
 use crate::inputs::stations::{Network, parse_reference};
 use crate::locate::report::Located;
 use crate::locate::{locate, locate_guided};
@@ -135,6 +136,23 @@ pub struct Args {
     /// calibrate every station that hears it.
     #[arg(long, value_name = "LAT,LON@MHZ", allow_hyphen_values = true)]
     pub reference: Vec<String>,
+    /// Live: every station's bearings from an MQTT broker, `mqtt://HOST[:PORT]/PREFIX`
+    /// (`foxhunt publish` sends them to PREFIX/bearings/CHANNEL/STATION); no CAPTURE. Each
+    /// update's fix goes back as one retained message per channel, PREFIX/fixes/CHANNEL (an
+    /// emitter of --json's schema). A bearing arriving twice (same channel, station and time)
+    /// counts once. End it with --quiet-exit. A broker that cannot be reached at the start:
+    /// one line, exit status 1; one lost later is reconnected to.
+    #[arg(long, value_name = "URL")]
+    pub mqtt: Option<String>,
+    /// With --mqtt: the client id of the broker session, kept while this worker is away so
+    /// that the bearings sent meanwhile are delivered when it comes back (one id per worker).
+    #[arg(
+        long,
+        value_name = "ID",
+        default_value = "foxhunt-locate",
+        requires = "mqtt"
+    )]
+    pub mqtt_client_id: String,
     /// Send each fix to TAK (ATAK, WinTAK, iTAK, a TAK server) as Cursor-on-Target events:
     /// `udp://HOST:PORT` (a LAN's multicast is udp://239.2.3.1:6969) or `tcp://HOST:PORT`;
     /// live: every update. Each emitter with its 95 % ellipse, each station with its latest
@@ -184,6 +202,8 @@ enum Input {
     Gpsd(LiveSource, GpsdAddress),
     /// KrakenSDRs' web pages (and perhaps gpsd).
     Kraken(Vec<KrakenUrl>, Option<GpsdAddress>),
+    /// An MQTT broker's bearings.
+    Mqtt(MqttUrl),
 }
 
 fn input(a: &Args) -> Result<Input, Stop> {
@@ -193,6 +213,15 @@ fn input(a: &Args) -> Result<Input, Stop> {
         .map(GpsdAddress::parse)
         .transpose()
         .map_err(Stop::Usage)?;
+    if let Some(url) = &a.mqtt {
+        if !a.captures.is_empty() || a.baud.is_some() || !a.kraken.is_empty() || gpsd.is_some() {
+            return Err(Stop::usage(
+                "--mqtt reads every station's bearings from the broker: give no CAPTURE, \
+                 --baud, --kraken or --gpsd",
+            ));
+        }
+        return Ok(Input::Mqtt(MqttUrl::parse(url).map_err(Stop::Usage)?));
+    }
     if !a.kraken.is_empty() {
         if !a.captures.is_empty() || a.baud.is_some() {
             return Err(Stop::usage(
@@ -298,7 +327,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
         None if a.method == Method::FaPf => FA_PF_PARTICLES,
         None => PARTICLES,
     };
-    if calibrating && a.captures.is_empty() && a.kraken.is_empty() {
+    if calibrating && a.captures.is_empty() && a.kraken.is_empty() && a.mqtt.is_none() {
         return Err(Stop::usage(
             "--calibrate measures the offset on a drive past the transmitter: give that \
              drive's CAPTURE",
@@ -324,7 +353,10 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
         .filter(|s| s.is_finite())
         .map(Duration::from_secs_f64);
     let input = input(a)?;
-    let live = matches!(input, Input::Live(_) | Input::Gpsd(..) | Input::Kraken(..));
+    let live = matches!(
+        input,
+        Input::Live(_) | Input::Gpsd(..) | Input::Kraken(..) | Input::Mqtt(_)
+    );
     if calibrating && live {
         return Err(Stop::usage(
             "--calibrate reads a recorded drive, not a live line",
@@ -371,10 +403,17 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
             }
             dec.finish()
         }
-        Input::Live(_) | Input::Gpsd(..) | Input::Kraken(..) => {
+        Input::Live(_) | Input::Gpsd(..) | Input::Kraken(..) | Input::Mqtt(_) => {
             let (source, gpsd) = match input {
                 Input::Gpsd(source, g) => (source, Some(g)),
                 Input::Kraken(url, g) => (LiveSource::Kraken(url), g),
+                Input::Mqtt(url) => (
+                    LiveSource::Mqtt {
+                        url,
+                        client_id: a.mqtt_client_id.clone(),
+                    },
+                    None,
+                ),
                 Input::Live(source) => (source, None),
                 Input::Sample | Input::Files(_) => (LiveSource::Stdin, None),
             };

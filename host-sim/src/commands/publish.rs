@@ -1,0 +1,468 @@
+//! `foxhunt publish`: a station's bearings sent to an MQTT broker, one JSON message each
+//! (docs/src/networks.md, "Through an MQTT broker"), for `foxhunt locate --mqtt` to fuse.
+//!
+//! The bearings come from any source `locate` reads (capture files, standard input, a serial
+//! device, KrakenSDRs' web pages) through the same decoder and bridge, so what is sent is
+//! what `locate` would have used: true bearings at the station's position, on UTC.
+
+use super::locate::live::{LiveSource, reader};
+use super::values;
+use crate::inputs::capture::{Decoder, kind_name};
+use crate::inputs::files::{InputKind, Source, stream};
+use crate::inputs::kraken_http::KrakenUrl;
+use crate::inputs::mqtt::{BearingMessage, MqttUrl, check_station};
+use crate::outputs::mqtt::{Backlog, Link, Message};
+use crate::outputs::terminal::{Outcome, Stop, note};
+use foxhunt_bridge::BridgeConfig;
+use foxhunt_bridge::bridge::BearingMeasurement;
+use foxhunt_bridge::geo::LocalFrame;
+use foxhunt_bridge::nmea::LatLon;
+use std::path::PathBuf;
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+const DAY_MS: i64 = 86_400_000;
+
+/// Options of `foxhunt publish`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Capture files (read in order, each an input of its own), `-` for standard input, or a
+    /// serial device with --baud.
+    pub sources: Vec<PathBuf>,
+    /// The broker and the topics' prefix: `mqtt://HOST[:PORT]/PREFIX`. Each bearing goes to
+    /// PREFIX/bearings/CHANNEL/STATION at QoS 1 (CHANNEL: its frequency in MHz to the kHz,
+    /// `145.500`, or `none`).
+    #[arg(long, value_name = "URL")]
+    pub mqtt: String,
+    /// The station id of bearings whose records name none ($PFOXB, Agrelo, a KrakenSDR
+    /// without a STATION_ID): 1 to 16 characters (default: the record kind, or
+    /// FILE:KIND with several files).
+    #[arg(long, value_name = "ID")]
+    pub station: Option<String>,
+    /// The client id of the broker session, kept while this publisher is away so that what
+    /// the broker had not acknowledged is sent again when it comes back (default:
+    /// foxhunt-publish-STATION with --station, else one per process).
+    #[arg(long, value_name = "ID")]
+    pub client_id: Option<String>,
+    /// Read the one SOURCE as a serial device at this baud rate.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub baud: Option<u32>,
+    /// Poll a KrakenSDR's web page (repeatable) instead of a SOURCE.
+    #[arg(long, value_name = "URL")]
+    pub kraken: Vec<String>,
+    /// Recorded captures: send each bearing at its own time, this many times faster than
+    /// real time (1: as it happened); default: as fast as the broker takes them.
+    #[arg(long, value_name = "X",
+          value_parser = values::f64_where(|x| x > 0.0 && x.is_finite(), "a speed-up > 0"))]
+    pub pace: Option<f64>,
+    /// The UTC date of the capture's first bearing, YYYY-MM-DD, for records that carry only
+    /// a time of day (NMEA without RMC); default: the capture's own (a KrakenSDR record's
+    /// epoch, an RMC date), else today's.
+    #[arg(long, value_name = "DATE")]
+    pub date: Option<String>,
+    /// Bearings kept while the broker is away: a recorded capture waits when they are
+    /// reached, a live line drops the oldest (counted).
+    #[arg(long, value_name = "N", default_value_t = 100_000,
+          value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
+    pub buffer: u64,
+    /// After the last bearing, seconds to wait for the broker to acknowledge them all
+    /// (`inf`: until it does).
+    #[arg(long, value_name = "S", default_value_t = 60.0,
+          value_parser = values::f64_where(|s| s >= 0.0, "a number of seconds >= 0, or inf"))]
+    pub linger: f64,
+    /// Live: stop after this many seconds without a byte.
+    #[arg(long, value_name = "S",
+          value_parser = values::f64_where(|s| s >= 0.0, "a number of seconds >= 0, or inf"))]
+    pub quiet_exit: Option<f64>,
+}
+
+/// Where the bearings come from.
+enum Input {
+    Files(Vec<Source>),
+    Live(LiveSource),
+}
+
+fn input(a: &Args) -> Result<Input, Stop> {
+    if !a.kraken.is_empty() {
+        if !a.sources.is_empty() || a.baud.is_some() {
+            return Err(Stop::usage(
+                "--kraken reads the unit's web page: give no SOURCE and no --baud",
+            ));
+        }
+        let urls = a
+            .kraken
+            .iter()
+            .map(|u| KrakenUrl::parse(u))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(Stop::Usage)?;
+        return Ok(Input::Live(LiveSource::Kraken(urls)));
+    }
+    match (a.baud, a.sources.as_slice()) {
+        (_, []) => Err(Stop::usage(
+            "give the bearings' SOURCE: capture files, - for standard input, a serial device \
+             with --baud, or --kraken URL",
+        )),
+        (Some(baud), [path]) => Ok(Input::Live(LiveSource::Serial {
+            path: path.to_string_lossy().into_owned(),
+            baud,
+        })),
+        (Some(_), _) => Err(Stop::usage(
+            "--baud reads one serial device: give exactly one path",
+        )),
+        (None, [one]) if one.as_os_str() == "-" => Ok(Input::Live(LiveSource::Stdin)),
+        (None, many) if many.iter().any(|p| p.as_os_str() == "-") => Err(Stop::usage(
+            "standard input (-) is read live: give it alone",
+        )),
+        (None, many) => {
+            let sources: Vec<Source> = many.iter().map(|p| Source::from_path(p)).collect();
+            for s in &sources {
+                if s.kind()? == InputKind::Serial {
+                    return Err(Stop::usage(format!(
+                        "{} is a serial device: give --baud (4800 for NMEA 0183)",
+                        s.name()
+                    )));
+                }
+                s.check_capture()?;
+            }
+            Ok(Input::Files(sources))
+        }
+    }
+}
+
+/// Midnight UTC of `YYYY-MM-DD`, ms since 1970.
+fn parse_date(text: &str) -> Result<i64, String> {
+    let bad = || format!("--date wants YYYY-MM-DD, not `{text}`");
+    let mut parts = text.split('-');
+    let (Some(y), Some(m), Some(d), None) =
+        (parts.next(), parts.next(), parts.next(), parts.next())
+    else {
+        return Err(bad());
+    };
+    let year: i32 = y.parse().map_err(|_| bad())?;
+    let month: u8 = m.parse().map_err(|_| bad())?;
+    let day: u8 = d.parse().map_err(|_| bad())?;
+    let month = time::Month::try_from(month).map_err(|_| bad())?;
+    time::Date::from_calendar_date(year, month, day)
+        .map(|d| d.midnight().assume_utc().unix_timestamp() * 1000)
+        .map_err(|_| bad())
+}
+
+/// Midnight UTC of the day a capture's first dated record names: a KrakenSDR record's epoch,
+/// else an RMC sentence's date (`ddmmyy`). Reads the first megabyte at most.
+fn capture_day(sources: &[Source]) -> Option<i64> {
+    use foxhunt_bridge::Frame;
+    let mut rx = foxhunt_bridge::bridge::Receiver::<0, 1>::new(BridgeConfig::default(), []);
+    let mut day = None;
+    let mut read = 0usize;
+    let _ = stream(&sources[..1], |b| {
+        if day.is_some() || read > 1 << 20 {
+            return;
+        }
+        read += b.len();
+        rx.demux.feed(b, &mut |f| {
+            if day.is_some() {
+                return;
+            }
+            let epoch = match &f {
+                Frame::KrakenXml(r) => r.time_ms.map(|t| t as i64),
+                Frame::KrakenCsv(k) => Some(k.record.epoch_ms as i64),
+                Frame::Nmea(text) => rmc_day(text),
+                _ => None,
+            };
+            day = epoch.filter(|t| *t > 0).map(|t| t - t.rem_euclid(DAY_MS));
+        });
+    });
+    day
+}
+
+/// Midnight UTC of an RMC sentence's date.
+fn rmc_day(body: &str) -> Option<i64> {
+    let fields: Vec<&str> = body.split(',').collect();
+    if !fields.first()?.ends_with("RMC") {
+        return None;
+    }
+    let d = fields.get(9)?;
+    if d.len() != 6 || !d.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    let n = |i: usize| d[i..i + 2].parse::<u8>().ok();
+    let year = 2000 + i32::from(n(4)?);
+    let month = time::Month::try_from(n(2)?).ok()?;
+    let date = time::Date::from_calendar_date(year, month, n(0)?).ok()?;
+    Some(date.midnight().assume_utc().unix_timestamp() * 1000)
+}
+
+/// Now, ms since 1970.
+fn now_ms() -> i64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0, |d| d.as_millis() as i64)
+}
+
+/// The true azimuth at `at` (degrees clockwise from north there) whose direction in `frame`
+/// is `local_deg`: the inverse of [`LocalFrame::azimuth_to_local`], by a few fixed-point
+/// steps (the two differ by the meridians' convergence, a fraction of a degree).
+fn true_azimuth(frame: &LocalFrame, at: LatLon, local_deg: f64) -> Option<f64> {
+    let wrap = |a: f64| a.rem_euclid(360.0);
+    let mut a = local_deg;
+    for _ in 0..4 {
+        let l = frame.azimuth_to_local(at, a).ok()?;
+        let d = (l - local_deg + 540.0).rem_euclid(360.0) - 180.0;
+        a = wrap(a - d);
+    }
+    Some(if a >= 360.0 { 0.0 } else { a })
+}
+
+/// Turns the bridge's bearings into messages.
+struct Messages<'a> {
+    url: &'a MqttUrl,
+    station: Option<&'a str>,
+    /// Midnight UTC of the bridge clock's day 0.
+    day0_ms: i64,
+}
+
+impl Messages<'_> {
+    fn message(&self, dec: &Decoder, m: &BearingMeasurement) -> Result<Message, String> {
+        let d = &dec.decoded;
+        let frame = d
+            .frame
+            .ok_or_else(|| "a bearing before the local frame".to_string())?;
+        let info = d
+            .stations
+            .get(usize::from(m.station))
+            .ok_or_else(|| "a bearing of an unknown station".to_string())?;
+        let station = match (info.named, self.station) {
+            (false, Some(s)) => s.to_string(),
+            _ => info.id.clone(),
+        };
+        check_station(&station)?;
+        let v = m.bearing.vehicle;
+        let at = frame
+            .to_geodetic([f64::from(v[0]), f64::from(v[1])])
+            .map_err(|_| "a bearing's position outside the frame".to_string())?;
+        // The core's angle is mathematical (from east, anticlockwise); north-clockwise here.
+        let local_deg = (90.0 - f64::from(m.bearing.theta).to_degrees()).rem_euclid(360.0);
+        let bearing_deg = true_azimuth(&frame, at, local_deg)
+            .ok_or_else(|| "a bearing that cannot be carried to true north".to_string())?;
+        let msg = BearingMessage {
+            station,
+            time_ms: self.day0_ms + m.time_ms,
+            lat: at.lat,
+            lon: at.lon,
+            bearing_deg,
+            sigma_deg: f64::from(m.bearing.sigma).to_degrees(),
+            freq_mhz: (m.freq_mhz > 0.0).then_some(m.freq_mhz),
+            quality: m.quality,
+            kind: kind_name(m.kind).to_string(),
+        };
+        msg.check()?;
+        Ok(Message {
+            topic: self.url.bearing_topic(&msg.channel(), &msg.station),
+            payload: serde_json::to_vec(&msg).map_err(|e| e.to_string())?,
+        })
+    }
+}
+
+/// Real-time replay: each bearing waits until its time, scaled.
+struct Pace {
+    speed: f64,
+    start: Option<(i64, Instant)>,
+}
+
+impl Pace {
+    fn wait(&mut self, time_ms: i64) {
+        let (t0, w0) = *self.start.get_or_insert((time_ms, Instant::now()));
+        let due = (time_ms - t0).max(0) as f64 / 1000.0 / self.speed;
+        let elapsed = w0.elapsed().as_secs_f64();
+        if due > elapsed {
+            std::thread::sleep(Duration::from_secs_f64(due - elapsed));
+        }
+    }
+}
+
+/// Send the bearings decoded so far; the first error stops the run.
+fn drain(
+    dec: &mut Decoder,
+    messages: &Messages<'_>,
+    link: &Link,
+    pace: &mut Option<Pace>,
+) -> Result<(), String> {
+    if dec.decoded.measurements.is_empty() {
+        return Ok(());
+    }
+    dec.snapshot();
+    for m in std::mem::take(&mut dec.decoded.measurements) {
+        if let Some(p) = pace {
+            p.wait(m.time_ms);
+        }
+        link.send(messages.message(dec, &m)?)?;
+    }
+    Ok(())
+}
+
+/// Run `foxhunt publish`.
+pub fn run(a: &Args) -> Outcome {
+    let url = MqttUrl::parse(&a.mqtt).map_err(Stop::Usage)?;
+    if let Some(s) = &a.station {
+        check_station(s).map_err(Stop::Usage)?;
+    }
+    let day = a
+        .date
+        .as_deref()
+        .map(parse_date)
+        .transpose()
+        .map_err(Stop::Usage)?;
+    let input = input(a)?;
+    let live = matches!(input, Input::Live(_));
+    if a.pace.is_some() && live {
+        return Err(Stop::usage(
+            "--pace replays a recorded capture; a live line keeps its own pace",
+        ));
+    }
+    if a.quiet_exit.is_some() && !live {
+        return Err(Stop::usage(
+            "--quiet-exit applies to a live line (--baud, -, --kraken)",
+        ));
+    }
+    let day0_ms = match (&input, day) {
+        (_, Some(d)) => d,
+        (Input::Files(s), None) => capture_day(s).unwrap_or_else(|| {
+            note("no date in the capture: its times are counted from today (give --date)");
+            now_ms() - now_ms().rem_euclid(DAY_MS)
+        }),
+        // A live line's times of day are today's, or yesterday's just after midnight: the
+        // day that puts the first bearing nearest now (taken below, at the first bearing).
+        (Input::Live(_), None) => now_ms() - now_ms().rem_euclid(DAY_MS),
+    };
+    let client_id = a.client_id.clone().unwrap_or_else(|| match &a.station {
+        Some(s) => format!("foxhunt-publish-{s}"),
+        None => format!("foxhunt-publish-{}-{}", std::process::id(), now_ms()),
+    });
+    let backlog = Backlog {
+        capacity: usize::try_from(a.buffer).unwrap_or(usize::MAX),
+        drop_oldest: live,
+        linger: if a.linger.is_finite() {
+            Duration::from_secs_f64(a.linger)
+        } else {
+            Duration::MAX
+        },
+    };
+    let link = Link::start(&url, &client_id, backlog)?;
+    let mut messages = Messages {
+        url: &url,
+        station: a.station.as_deref(),
+        day0_ms,
+    };
+    let mut pace = a.pace.map(|speed| Pace { speed, start: None });
+    let mut dec = Decoder::new(BridgeConfig::default(), false);
+    dec.keep_measurements();
+    let fed: Result<(), String> = match input {
+        Input::Files(sources) => (|| {
+            for (s, path) in sources.iter().zip(&a.sources) {
+                // As `locate` names its inputs: a unit whose records name no station is
+                // FILE:KIND with several files.
+                let name = path.file_name().unwrap_or(path.as_os_str());
+                dec.begin_input(&name.to_string_lossy())?;
+                let mut failed = Ok(());
+                stream(std::slice::from_ref(s), |b| {
+                    if failed.is_ok() {
+                        dec.feed(b);
+                        failed = drain(&mut dec, &messages, &link, &mut pace);
+                    }
+                })?;
+                failed?;
+            }
+            dec.end();
+            drain(&mut dec, &messages, &link, &mut pace)
+        })(),
+        Input::Live(source) => (|| {
+            let quiet = a
+                .quiet_exit
+                .filter(|s| s.is_finite())
+                .map(Duration::from_secs_f64);
+            if let LiveSource::Kraken(urls) = &source
+                && urls.len() > 1
+            {
+                for u in urls {
+                    dec.begin_input(u.base.trim_start_matches("http://"))?;
+                }
+            }
+            let mut line = reader(&source, None)?;
+            let mut dated = a.date.is_some();
+            loop {
+                let ended = line
+                    .take(&mut dec, quiet)
+                    .map_err(|s| s.message().unwrap_or("stopped").to_string())?;
+                if ended {
+                    dec.end();
+                }
+                if !dated && let Some(m) = dec.decoded.measurements.first() {
+                    // The day that puts the first bearing nearest now.
+                    let now = now_ms();
+                    messages.day0_ms = [-DAY_MS, 0, DAY_MS]
+                        .map(|k| day0_ms + k)
+                        .into_iter()
+                        .min_by_key(|d| (d + m.time_ms - now).abs())
+                        .unwrap_or(day0_ms);
+                    dated = true;
+                }
+                drain(&mut dec, &messages, &link, &mut None)?;
+                if ended {
+                    return Ok(());
+                }
+            }
+        })(),
+    };
+    let sent = link.finish();
+    note(&format!(
+        "mqtt: bearings {}, acknowledged {}, resent {}, dropped {}, outages {}",
+        sent.messages, sent.acked, sent.resent, sent.dropped, sent.outages
+    ));
+    fed?;
+    if sent.acked < sent.messages {
+        return Err(Stop::Error(format!(
+            "{} of {} bearings not acknowledged by the broker at {}",
+            sent.messages - sent.acked,
+            sent.messages,
+            url.address()
+        )));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_true_azimuth_is_carried_back_from_the_frame() {
+        let origin = LatLon {
+            lat: 47.0,
+            lon: 8.0,
+        };
+        let frame = LocalFrame::new(origin, 0.0).expect("frame");
+        for (de, dn) in [(0.0, 0.0), (20_000.0, 5_000.0), (-15_000.0, -30_000.0)] {
+            let at = frame.to_geodetic([de, dn]).expect("point");
+            for k in 0..72 {
+                let truth = f64::from(k) * 5.0 + 0.123;
+                let local = frame.azimuth_to_local(at, truth).expect("local");
+                let back = true_azimuth(&frame, at, local).expect("true");
+                let d = (back - truth + 540.0).rem_euclid(360.0) - 180.0;
+                assert!(d.abs() < 1e-9, "{de},{dn} {truth}: {back}");
+            }
+        }
+    }
+
+    #[test]
+    fn dates() {
+        assert_eq!(parse_date("2026-06-01"), Ok(1_780_272_000_000));
+        for bad in ["2026-13-01", "2026-02-30", "26-1", "2026-01-01-01", "x"] {
+            assert!(parse_date(bad).is_err(), "{bad}");
+        }
+        assert_eq!(
+            rmc_day("GPRMC,100000.00,A,4700.000,N,00800.000,E,0.0,0.0,010626,,,A"),
+            Some(1_780_272_000_000)
+        );
+        assert_eq!(rmc_day("GPGGA,100000.00,4700.000,N"), None);
+        assert_eq!(rmc_day("GPRMC,1,A,,,,,,,01x626"), None);
+    }
+}

@@ -1,0 +1,636 @@
+//! Bearings through an MQTT broker (docs/src/networks.md, "Through an MQTT broker"): the
+//! broker's address, the topics, the message a station sends per bearing, and the fusing
+//! side's subscription.
+//!
+//! A message is one bearing as the station's bridge placed it: true, at the station's
+//! position, on the station's UTC clock. The fusing side turns it back into the record the
+//! bridge reads best, a KrakenSDR XML record (station id, time, position, heading 0 and the
+//! bearing as its DOA), so a bearing from the broker takes the very path a recorded one
+//! takes: the station table, the stations file's survey, the clock's checks, the fix.
+//!
+//! QoS 1 delivers at least once: a broker's redelivery, or a station resending after a
+//! reconnect, brings a bearing twice. A bearing is its (channel, station, time): the second
+//! is dropped ([`Seen`]) before the bridge sees it.
+
+use foxhunt_bridge::kraken::KrakenXml;
+use foxhunt_bridge::kraken::Station;
+use foxhunt_bridge::nmea::LatLon;
+use rumqttc::{Client, Connection, Event, MqttOptions, Packet, QoS};
+use serde::{Deserialize, Serialize};
+use std::collections::{BTreeMap, HashSet, VecDeque};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// The broker's default port.
+pub const PORT: u16 = 1883;
+/// Longest message taken (a bearing's JSON is about 200 bytes): more is not a bearing.
+pub const MAX_MESSAGE: usize = 4096;
+/// Bearings remembered for the duplicate check: hours of a large network's traffic (about
+/// 60 bytes each), so a redelivery long after the first copy is still caught.
+const REMEMBERED: usize = 1 << 20;
+/// Between reconnection attempts.
+pub const RETRY: Duration = Duration::from_millis(250);
+/// How long the first connection may take before the broker counts as unreachable.
+pub const CONNECT_WAIT: Duration = Duration::from_secs(5);
+
+/// `mqtt://HOST[:PORT]/PREFIX`: where the broker is and the topics' first levels.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MqttUrl {
+    /// Host name or address.
+    pub host: String,
+    /// TCP port (1883 by default).
+    pub port: u16,
+    /// The topics' prefix, without a trailing slash (`foxhunt` by default).
+    pub prefix: String,
+}
+
+impl MqttUrl {
+    /// Parse; nonsense refused on one line naming it.
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let bad =
+            |why: &str| format!("--mqtt wants mqtt://HOST[:PORT]/PREFIX ({why}), not `{text}`");
+        let Some(rest) = text.strip_prefix("mqtt://") else {
+            return Err(bad(if text.starts_with("mqtts://") {
+                "TLS is not supported: run the broker's plain listener on a trusted network"
+            } else {
+                "an mqtt:// URL"
+            }));
+        };
+        let (authority, path) = rest.split_once('/').unwrap_or((rest, ""));
+        let (host, port) = match authority.rsplit_once(':') {
+            Some((h, p)) => match p.parse::<u16>() {
+                Ok(n) if n > 0 => (h, n),
+                _ => return Err(bad("a port from 1 to 65535")),
+            },
+            None => (authority, PORT),
+        };
+        if host.is_empty() || host.chars().any(|c| c.is_whitespace() || c == '@') {
+            return Err(bad("a host"));
+        }
+        let prefix = path.trim_end_matches('/');
+        let prefix = if prefix.is_empty() { "foxhunt" } else { prefix };
+        if prefix.contains(['+', '#']) || prefix.starts_with('$') {
+            return Err(bad("a prefix without the wildcards + and # or a leading $"));
+        }
+        Ok(Self {
+            host: host.to_string(),
+            port,
+            prefix: prefix.to_string(),
+        })
+    }
+
+    /// `HOST:PORT`, for messages.
+    pub fn address(&self) -> String {
+        format!("{}:{}", self.host, self.port)
+    }
+
+    /// The topic of a bearing: `PREFIX/bearings/CHANNEL/STATION`.
+    pub fn bearing_topic(&self, channel: &str, station: &str) -> String {
+        format!("{}/bearings/{channel}/{station}", self.prefix)
+    }
+
+    /// Every bearing: `PREFIX/bearings/#`.
+    pub fn bearings_filter(&self) -> String {
+        format!("{}/bearings/#", self.prefix)
+    }
+
+    /// A channel's fix: `PREFIX/fixes/CHANNEL`.
+    pub fn fix_topic(&self, channel: &str) -> String {
+        format!("{}/fixes/{channel}", self.prefix)
+    }
+
+    /// The broker's options for client `id`: a persistent session (the broker keeps the
+    /// subscription and the QoS 1 messages while the client is away).
+    pub fn options(&self, id: &str) -> MqttOptions {
+        let mut o = MqttOptions::new(id, &self.host, self.port);
+        o.set_clean_session(false)
+            .set_keep_alive(Duration::from_secs(15))
+            .set_max_packet_size(1 << 20, 1 << 20);
+        o
+    }
+}
+
+/// The channel a frequency belongs to in topics: MHz to the kHz (`145.500`), `none` for a
+/// bearing without one. A fusing worker groups bearings with its own `--channel-width-mhz`;
+/// the topic's channel is what a shard subscribes to.
+pub fn channel_name(freq_mhz: Option<f64>) -> String {
+    match freq_mhz {
+        Some(f) if f > 0.0 && f.is_finite() => format!("{f:.3}"),
+        _ => "none".into(),
+    }
+}
+
+/// A station id fit for a topic level and a KrakenSDR record: 1 to 16 printable ASCII
+/// bytes, none of `/ + #`.
+pub fn check_station(id: &str) -> Result<(), String> {
+    let ok = !id.is_empty()
+        && id.len() <= foxhunt_bridge::kraken::STATION_LEN
+        && id
+            .bytes()
+            .all(|b| (0x21..0x7f).contains(&b) && !b"/+#".contains(&b));
+    if ok {
+        Ok(())
+    } else {
+        Err(format!(
+            "station id `{id}` must be 1 to 16 printable ASCII characters without spaces, / + \
+             or # (name it with --station)"
+        ))
+    }
+}
+
+/// One bearing on the wire (JSON): what a station's bridge handed on.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BearingMessage {
+    /// The station's id (its STATION_ID, or the name `publish --station` gave it).
+    pub station: String,
+    /// When it was taken, ms since 1970 UTC.
+    pub time_ms: i64,
+    /// The station's latitude there, degrees.
+    pub lat: f64,
+    /// Its longitude, degrees.
+    pub lon: f64,
+    /// The true bearing, degrees clockwise from north at the station, [0, 360).
+    pub bearing_deg: f64,
+    /// The bearing's noise as the station's bridge set it, degrees.
+    pub sigma_deg: f64,
+    /// The frequency, MHz (absent when the record has none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub freq_mhz: Option<f64>,
+    /// DF quality, 0-100.
+    pub quality: f32,
+    /// The record kind it came in: pfoxb, agrelo, kraken-csv, kraken-xml.
+    pub kind: String,
+}
+
+impl BearingMessage {
+    /// The topic's channel.
+    pub fn channel(&self) -> String {
+        channel_name(self.freq_mhz)
+    }
+
+    /// The message checked: every field in range (one line naming the first that is not).
+    pub fn check(&self) -> Result<(), String> {
+        check_station(&self.station)?;
+        let bad = |what: &str| Err(format!("bearing from `{}`: {what}", self.station));
+        if !(-90.0..=90.0).contains(&self.lat) || !(-180.0..=180.0).contains(&self.lon) {
+            return bad("position out of range");
+        }
+        if !(0.0..360.0).contains(&self.bearing_deg) {
+            return bad("bearing_deg outside [0, 360)");
+        }
+        if !(self.sigma_deg > 0.0 && self.sigma_deg < 90.0) {
+            return bad("sigma_deg outside (0, 90)");
+        }
+        if self.freq_mhz.is_some_and(|f| !(f > 0.0 && f < 1e6)) {
+            return bad("freq_mhz out of range");
+        }
+        if !(0.0..=100.0).contains(&self.quality) {
+            return bad("quality outside 0-100");
+        }
+        if self.time_ms < 0 {
+            return bad("time_ms before 1970");
+        }
+        Ok(())
+    }
+
+    /// Read a message's payload: JSON of this schema, checked.
+    pub fn from_payload(payload: &[u8]) -> Result<Self, String> {
+        if payload.len() > MAX_MESSAGE {
+            return Err(format!(
+                "a message of {} bytes is no bearing",
+                payload.len()
+            ));
+        }
+        let m: Self = serde_json::from_slice(payload).map_err(|e| format!("not a bearing: {e}"))?;
+        m.check()?;
+        Ok(m)
+    }
+
+    /// The KrakenSDR XML record the bridge places as this bearing: the station's position,
+    /// heading 0 (the bearing is already true) and DOA = 360 - bearing (the record's
+    /// anticlockwise convention). Its CONF is the quality, raised to the bridge's KrakenSDR
+    /// gate: the station's own bridge already judged the quality by its record kind's rule.
+    pub fn record(&self) -> KrakenXml {
+        let gate = foxhunt_bridge::BridgeConfig::default().kraken_min_conf;
+        KrakenXml {
+            station: Station::new(&self.station),
+            time_ms: Some(self.time_ms as u64),
+            gps_time_ms: None,
+            freq_mhz: self.freq_mhz,
+            position: Some(LatLon {
+                lat: self.lat,
+                lon: self.lon,
+            }),
+            heading_deg: Some(0.0),
+            speed_mps: None,
+            doa_deg: (360.0 - self.bearing_deg) as f32,
+            pwr: None,
+            conf: Some(self.quality.max(gate)),
+        }
+    }
+}
+
+/// The bearings already taken, by (channel, station, time), the oldest forgotten first.
+#[derive(Debug, Default)]
+pub struct Seen {
+    order: VecDeque<(String, String, i64)>,
+    set: HashSet<(String, String, i64)>,
+}
+
+impl Seen {
+    /// Whether `m` is new; remember it.
+    pub fn first_time(&mut self, m: &BearingMessage) -> bool {
+        let key = (m.channel(), m.station.clone(), m.time_ms);
+        if !self.set.insert(key.clone()) {
+            return false;
+        }
+        self.order.push_back(key);
+        if self.order.len() > REMEMBERED
+            && let Some(old) = self.order.pop_front()
+        {
+            self.set.remove(&old);
+        }
+        true
+    }
+}
+
+/// What the fusing side's subscription counted.
+#[derive(Debug, Default)]
+pub struct Counts {
+    /// Bearings handed on.
+    pub bearings: AtomicU64,
+    /// Copies dropped as already seen.
+    pub duplicates: AtomicU64,
+    /// Messages that were no bearing (each noted once on stderr, the first few).
+    pub refused: AtomicU64,
+    /// Fixes handed to the client.
+    pub fixes_sent: AtomicU64,
+    /// Fixes the broker acknowledged.
+    pub fixes_acked: AtomicU64,
+    /// The session is being closed: a lost connection is no news.
+    pub closing: AtomicBool,
+}
+
+/// Whether the fusing side took a batch of bearings.
+#[derive(Debug)]
+pub enum Handed {
+    /// Taken.
+    Yes,
+    /// Busy: the batch back, to grow and try again.
+    Busy(Vec<KrakenXml>),
+    /// Gone: stop reading.
+    Closed,
+}
+
+/// Bearings held while the fusing side is busy before the reader waits for it (and the
+/// broker queues the rest): some minutes of a large network.
+const BATCH_WAITS: usize = 200_000;
+
+/// The fusing side's link: bearings in, fixes out, on one persistent session.
+pub struct Subscription {
+    client: Client,
+    url: MqttUrl,
+    /// Its counters.
+    pub counts: Arc<Counts>,
+    /// Each channel's latest fix not yet handed to the client (its queue was full): only
+    /// the latest matters, the broker retains one per channel.
+    waiting: Mutex<BTreeMap<String, String>>,
+}
+
+/// Wait for the first connection: a broker that cannot be reached is the command's error.
+pub fn first_connect(conn: &mut Connection, url: &MqttUrl) -> Result<bool, String> {
+    let start = Instant::now();
+    loop {
+        match conn.recv_timeout(CONNECT_WAIT) {
+            Ok(Ok(Event::Incoming(Packet::ConnAck(ack)))) => return Ok(ack.session_present),
+            Ok(Ok(_)) => {}
+            Ok(Err(e)) => {
+                return Err(format!(
+                    "cannot reach the MQTT broker at {}: {e}",
+                    url.address()
+                ));
+            }
+            Err(_) => {
+                return Err(format!(
+                    "cannot reach the MQTT broker at {}: no answer in {} s",
+                    url.address(),
+                    CONNECT_WAIT.as_secs()
+                ));
+            }
+        }
+        if start.elapsed() > CONNECT_WAIT {
+            return Err(format!(
+                "cannot reach the MQTT broker at {}: no answer in {} s",
+                url.address(),
+                CONNECT_WAIT.as_secs()
+            ));
+        }
+    }
+}
+
+impl std::fmt::Debug for Subscription {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Subscription")
+            .field("url", &self.url)
+            .field("counts", &self.counts)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Subscription {
+    /// Connect as `client_id` (an error now is the command's), subscribe to every bearing
+    /// under the prefix, and start the thread that
+    /// hands the new bearings' records to `take` in batches (its flag: it may block until
+    /// the fusing side has room).
+    pub fn start(
+        url: &MqttUrl,
+        client_id: &str,
+        mut take: impl FnMut(Vec<KrakenXml>, bool) -> Handed + Send + 'static,
+        note: fn(&str),
+    ) -> Result<Self, String> {
+        let mut options = url.options(client_id);
+        // Acknowledged once checked and held here (not before: a message that is no bearing
+        // is still acknowledged, after its note). Holding the acknowledgements until the fix
+        // had used them would stall the broker's few messages in flight behind each solve,
+        // and overflow its queue for this worker.
+        options.set_manual_acks(true);
+        let (client, mut conn) = Client::new(options, 64);
+        let filter = url.bearings_filter();
+        first_connect(&mut conn, url)?;
+        // Also on a session the broker kept: the same client id may have subscribed under
+        // another prefix, and subscribing again to the same filter changes nothing.
+        client
+            .try_subscribe(filter.clone(), QoS::AtLeastOnce)
+            .map_err(|e| e.to_string())?;
+        let counts = Arc::new(Counts::default());
+        let (c, cl, address) = (counts.clone(), client.clone(), url.address());
+        std::thread::Builder::new()
+            .name("foxhunt-mqtt".into())
+            .spawn(move || {
+                let mut seen = Seen::default();
+                let mut down = false;
+                // New bearings not yet handed on (the fusing side was busy).
+                let mut batch: Vec<KrakenXml> = Vec::new();
+                // Acknowledgements the client's queue had no room for yet.
+                let mut unacked: VecDeque<rumqttc::Publish> = VecDeque::new();
+                loop {
+                    if !batch.is_empty() {
+                        // Never block here while the batch is small: the connection must
+                        // keep reading, or the broker's queue for this worker overflows.
+                        let wait = batch.len() >= BATCH_WAITS;
+                        match take(std::mem::take(&mut batch), wait) {
+                            Handed::Yes => {}
+                            Handed::Busy(back) => batch = back,
+                            Handed::Closed => return,
+                        }
+                    }
+                    while let Some(p) = unacked.front() {
+                        if cl.try_ack(p).is_err() {
+                            break;
+                        }
+                        unacked.pop_front();
+                    }
+                    let event = match conn.recv_timeout(Duration::from_millis(50)) {
+                        Err(rumqttc::RecvTimeoutError::Timeout) => continue,
+                        Err(rumqttc::RecvTimeoutError::Disconnected) => return,
+                        Ok(e) => e,
+                    };
+                    match event {
+                        Ok(Event::Incoming(Packet::Publish(p))) => {
+                            match BearingMessage::from_payload(&p.payload) {
+                                Ok(m) if seen.first_time(&m) => {
+                                    c.bearings.fetch_add(1, Ordering::Relaxed);
+                                    batch.push(m.record());
+                                }
+                                Ok(_) => {
+                                    c.duplicates.fetch_add(1, Ordering::Relaxed);
+                                }
+                                Err(e) => {
+                                    if c.refused.fetch_add(1, Ordering::Relaxed) < 5 {
+                                        note(&format!("{}: {e}; skipped", p.topic));
+                                    }
+                                }
+                            }
+                            unacked.push_back(p);
+                        }
+                        Ok(Event::Incoming(Packet::ConnAck(ack))) => {
+                            if down {
+                                note(&format!("MQTT broker at {address}: connected again"));
+                                down = false;
+                            }
+                            // A broker that lost the session lost the subscription too.
+                            if !ack.session_present {
+                                let _ = cl.try_subscribe(filter.clone(), QoS::AtLeastOnce);
+                            }
+                        }
+                        Ok(Event::Incoming(Packet::SubAck(_))) => {
+                            note(&format!("mqtt: subscribed to {filter} at {address}"));
+                        }
+                        Ok(Event::Incoming(Packet::PubAck(_))) => {
+                            c.fixes_acked.fetch_add(1, Ordering::Relaxed);
+                        }
+                        Ok(_) => {}
+                        Err(e) => {
+                            if c.closing.load(Ordering::Relaxed) {
+                                return;
+                            }
+                            if !down {
+                                note(&format!("MQTT broker at {address}: {e}; reconnecting"));
+                                down = true;
+                            }
+                            // What was received but not acknowledged is redelivered.
+                            unacked.clear();
+                            std::thread::sleep(RETRY);
+                        }
+                    }
+                }
+            })
+            .map_err(|e| format!("cannot start the MQTT reader: {e}"))?;
+        Ok(Self {
+            client,
+            url: url.clone(),
+            counts,
+            waiting: Mutex::new(BTreeMap::new()),
+        })
+    }
+
+    /// Publish a channel's fix (JSON), retained at QoS 1: a worker or map that subscribes
+    /// later gets the latest at once. Never blocks (the reader thread may be waiting on the
+    /// caller): a fix the client has no room for waits, replaced by a newer one.
+    pub fn publish_fix(&self, channel: &str, json: String) {
+        let Ok(mut waiting) = self.waiting.lock() else {
+            return;
+        };
+        waiting.insert(channel.to_string(), json);
+        self.flush(&mut waiting);
+    }
+
+    /// Hand the waiting fixes to the client while it has room.
+    fn flush(&self, waiting: &mut BTreeMap<String, String>) {
+        while let Some((channel, json)) = waiting.pop_first() {
+            let topic = self.url.fix_topic(&channel);
+            if self
+                .client
+                .try_publish(topic, QoS::AtLeastOnce, true, json.clone())
+                .is_err()
+            {
+                waiting.insert(channel, json);
+                return;
+            }
+            self.counts.fixes_sent.fetch_add(1, Ordering::Relaxed);
+        }
+    }
+
+    /// Wait up to `wait` for every fix to be handed on and acknowledged by the broker, then
+    /// disconnect; whether all were.
+    pub fn close(&self, wait: Duration) -> bool {
+        let start = Instant::now();
+        let c = &self.counts;
+        let done = || {
+            let empty = self
+                .waiting
+                .lock()
+                .map(|mut w| {
+                    self.flush(&mut w);
+                    w.is_empty()
+                })
+                .unwrap_or(true);
+            empty && c.fixes_acked.load(Ordering::Relaxed) >= c.fixes_sent.load(Ordering::Relaxed)
+        };
+        let mut all = done();
+        while !all && start.elapsed() < wait {
+            std::thread::sleep(Duration::from_millis(20));
+            all = done();
+        }
+        c.closing.store(true, Ordering::Relaxed);
+        let _ = self.client.try_disconnect();
+        all
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn urls() {
+        let u = MqttUrl::parse("mqtt://127.0.0.1:18830/net/a").expect("url");
+        assert_eq!(
+            (u.host.as_str(), u.port, u.prefix.as_str()),
+            ("127.0.0.1", 18830, "net/a")
+        );
+        assert_eq!(
+            u.bearing_topic("145.500", "mast-1"),
+            "net/a/bearings/145.500/mast-1"
+        );
+        let d = MqttUrl::parse("mqtt://broker").expect("url");
+        assert_eq!((d.port, d.prefix.as_str()), (1883, "foxhunt"));
+        for bad in [
+            "http://x",
+            "mqtt://:1",
+            "mqtt://h:0/p",
+            "mqtt://h/a/#",
+            "mqtts://h",
+        ] {
+            assert!(MqttUrl::parse(bad).is_err(), "{bad}");
+        }
+    }
+
+    fn message() -> BearingMessage {
+        BearingMessage {
+            station: "mast-1".into(),
+            time_ms: 1_700_000_000_000,
+            lat: 47.05,
+            lon: 8.01,
+            bearing_deg: 123.456,
+            sigma_deg: 1.0,
+            freq_mhz: Some(145.5),
+            quality: 80.0,
+            kind: "kraken-xml".into(),
+        }
+    }
+
+    #[test]
+    fn a_message_round_trips_and_its_record_is_the_bearing() {
+        let m = message();
+        let json = serde_json::to_vec(&m).expect("json");
+        let back = BearingMessage::from_payload(&json).expect("parse");
+        assert_eq!(back, m);
+        let r = back.record();
+        assert!((f64::from(r.true_deg().expect("true")) - 123.456).abs() < 1e-4);
+        assert_eq!(m.channel(), "145.500");
+    }
+
+    #[test]
+    fn bad_messages_are_refused() {
+        assert!(BearingMessage::from_payload(b"{").is_err());
+        assert!(BearingMessage::from_payload(&vec![b' '; MAX_MESSAGE + 1]).is_err());
+        for m in [
+            BearingMessage {
+                lat: 91.0,
+                ..message()
+            },
+            BearingMessage {
+                bearing_deg: 360.0,
+                ..message()
+            },
+            BearingMessage {
+                sigma_deg: 0.0,
+                ..message()
+            },
+            BearingMessage {
+                station: "a/b".into(),
+                ..message()
+            },
+            BearingMessage {
+                station: "seventeen-bytes-x".into(),
+                ..message()
+            },
+            BearingMessage {
+                quality: f32::NAN,
+                ..message()
+            },
+        ] {
+            let json = serde_json::to_vec(&m).expect("json");
+            assert!(BearingMessage::from_payload(&json).is_err(), "{m:?}");
+        }
+    }
+
+    #[test]
+    fn a_bearing_counts_once_per_channel_station_and_time() {
+        let mut seen = Seen::default();
+        let m = message();
+        assert!(seen.first_time(&m));
+        assert!(!seen.first_time(&m));
+        assert!(seen.first_time(&BearingMessage {
+            freq_mhz: Some(433.9),
+            ..m.clone()
+        }));
+        assert!(seen.first_time(&BearingMessage {
+            time_ms: m.time_ms + 1,
+            ..m
+        }));
+    }
+
+    proptest::proptest! {
+        /// Any payload: a bearing or one line saying why not, never a panic.
+        #[test]
+        fn any_payload_is_a_bearing_or_an_error(bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..600)) {
+            let _ = BearingMessage::from_payload(&bytes);
+        }
+
+        /// A bearing's record gives the bridge back its true bearing.
+        #[test]
+        fn a_record_keeps_the_bearing(bearing in 0.0f64..360.0, lat in -80.0f64..80.0, lon in -180.0f64..180.0) {
+            let m = BearingMessage { bearing_deg: bearing, lat, lon, ..message() };
+            proptest::prop_assert!(m.check().is_ok());
+            let r = m.record();
+            let t = f64::from(r.true_deg().expect("true"));
+            let d = (t - bearing + 540.0).rem_euclid(360.0) - 180.0;
+            // f32 DOA: 360 has 3e-5 degrees between neighbours.
+            proptest::prop_assert!(d.abs() < 1e-4, "{} {}", t, bearing);
+        }
+    }
+}
