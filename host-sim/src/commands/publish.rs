@@ -6,9 +6,10 @@
 //! what `locate` would have used: true bearings at the station's position, on UTC.
 
 use super::locate::live::{LiveSource, reader};
+use super::locate::{Given, given};
 use super::values;
 use crate::inputs::capture::{Decoder, kind_name};
-use crate::inputs::files::{InputKind, Source, stream};
+use crate::inputs::files::{Source, stream};
 use crate::inputs::kraken_http::KrakenUrl;
 use crate::inputs::mqtt::{BearingMessage, MqttUrl, check_station};
 use crate::outputs::mqtt::{Backlog, Link, Message};
@@ -96,35 +97,13 @@ fn input(a: &Args) -> Result<Input, Stop> {
             .map_err(Stop::Usage)?;
         return Ok(Input::Live(LiveSource::Kraken(urls)));
     }
-    match (a.baud, a.sources.as_slice()) {
-        (_, []) => Err(Stop::usage(
+    match given(a.baud, &a.sources)? {
+        Given::Nothing => Err(Stop::usage(
             "give the bearings' SOURCE: capture files, - for standard input, a serial device \
              with --baud, or --kraken URL",
         )),
-        (Some(baud), [path]) => Ok(Input::Live(LiveSource::Serial {
-            path: path.to_string_lossy().into_owned(),
-            baud,
-        })),
-        (Some(_), _) => Err(Stop::usage(
-            "--baud reads one serial device: give exactly one path",
-        )),
-        (None, [one]) if one.as_os_str() == "-" => Ok(Input::Live(LiveSource::Stdin)),
-        (None, many) if many.iter().any(|p| p.as_os_str() == "-") => Err(Stop::usage(
-            "standard input (-) is read live: give it alone",
-        )),
-        (None, many) => {
-            let sources: Vec<Source> = many.iter().map(|p| Source::from_path(p)).collect();
-            for s in &sources {
-                if s.kind()? == InputKind::Serial {
-                    return Err(Stop::usage(format!(
-                        "{} is a serial device: give --baud (4800 for NMEA 0183)",
-                        s.name()
-                    )));
-                }
-                s.check_capture()?;
-            }
-            Ok(Input::Files(sources))
-        }
+        Given::Files(sources) => Ok(Input::Files(sources)),
+        Given::Live(source) => Ok(Input::Live(source)),
     }
 }
 

@@ -10,7 +10,6 @@
 //! not handed on again, so no bearing counts twice. The records then go through the same
 //! demultiplexer and bridge as a serial line's bytes.
 
-use std::collections::{HashSet, VecDeque};
 use std::hash::{DefaultHasher, Hash, Hasher};
 use std::time::Duration;
 
@@ -89,30 +88,14 @@ pub struct Poll {
     pub empty: bool,
 }
 
-/// The records already handed on (their hashes, the oldest forgotten first).
-#[derive(Debug, Default)]
-pub struct Seen {
-    order: VecDeque<u64>,
-    set: HashSet<u64>,
-}
+/// The records already handed on (their hashes).
+pub type Seen = crate::inputs::seen::Seen<u64, REMEMBERED>;
 
-impl Seen {
-    /// Whether `record` is new; remember it.
-    fn first_time(&mut self, record: &str) -> bool {
-        let mut h = DefaultHasher::new();
-        record.hash(&mut h);
-        let key = h.finish();
-        if !self.set.insert(key) {
-            return false;
-        }
-        self.order.push_back(key);
-        if self.order.len() > REMEMBERED
-            && let Some(old) = self.order.pop_front()
-        {
-            self.set.remove(&old);
-        }
-        true
-    }
+/// A record's key in [`Seen`].
+fn record_key(record: &str) -> u64 {
+    let mut h = DefaultHasher::new();
+    record.hash(&mut h);
+    h.finish()
 }
 
 /// The new whole records of one reply.
@@ -122,7 +105,7 @@ pub fn new_records(page: &str, seen: &mut Seen) -> Poll {
         ..Poll::default()
     };
     let mut take = |record: &str, poll: &mut Poll| {
-        if seen.first_time(record) {
+        if seen.first_time(record_key(record)) {
             poll.new += 1;
             poll.records.extend_from_slice(record.as_bytes());
             poll.records.push(b'\n');

@@ -10,5 +10,6 @@ pub mod kraken_http;
 pub mod mqtt;
 pub mod osm_pbf;
 pub mod roads;
+pub mod seen;
 pub mod stations;
 pub mod unit;

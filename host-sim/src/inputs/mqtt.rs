@@ -17,7 +17,7 @@ use foxhunt_bridge::kraken::Station;
 use foxhunt_bridge::nmea::LatLon;
 use rumqttc::{Client, Connection, Event, MqttOptions, Packet, QoS};
 use serde::{Deserialize, Serialize};
-use std::collections::{BTreeMap, HashSet, VecDeque};
+use std::collections::{BTreeMap, VecDeque};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -232,28 +232,12 @@ impl BearingMessage {
     }
 }
 
-/// The bearings already taken, by (channel, station, time), the oldest forgotten first.
-#[derive(Debug, Default)]
-pub struct Seen {
-    order: VecDeque<(String, String, i64)>,
-    set: HashSet<(String, String, i64)>,
-}
+/// The bearings already taken, by (channel, station, time).
+pub type Seen = crate::inputs::seen::Seen<(String, String, i64), REMEMBERED>;
 
-impl Seen {
-    /// Whether `m` is new; remember it.
-    pub fn first_time(&mut self, m: &BearingMessage) -> bool {
-        let key = (m.channel(), m.station.clone(), m.time_ms);
-        if !self.set.insert(key.clone()) {
-            return false;
-        }
-        self.order.push_back(key);
-        if self.order.len() > REMEMBERED
-            && let Some(old) = self.order.pop_front()
-        {
-            self.set.remove(&old);
-        }
-        true
-    }
+/// A bearing's key in [`Seen`]: a station and a time identify it on its channel.
+pub fn bearing_key(m: &BearingMessage) -> (String, String, i64) {
+    (m.channel(), m.station.clone(), m.time_ms)
 }
 
 /// What the fusing side's subscription counted.
@@ -400,7 +384,7 @@ impl Subscription {
                     match event {
                         Ok(Event::Incoming(Packet::Publish(p))) => {
                             match BearingMessage::from_payload(&p.payload) {
-                                Ok(m) if seen.first_time(&m) => {
+                                Ok(m) if seen.first_time(bearing_key(&m)) => {
                                     c.bearings.fetch_add(1, Ordering::Relaxed);
                                     batch.push(m.record());
                                 }
@@ -602,16 +586,16 @@ mod tests {
     fn a_bearing_counts_once_per_channel_station_and_time() {
         let mut seen = Seen::default();
         let m = message();
-        assert!(seen.first_time(&m));
-        assert!(!seen.first_time(&m));
-        assert!(seen.first_time(&BearingMessage {
+        assert!(seen.first_time(bearing_key(&m)));
+        assert!(!seen.first_time(bearing_key(&m)));
+        assert!(seen.first_time(bearing_key(&BearingMessage {
             freq_mhz: Some(433.9),
             ..m.clone()
-        }));
-        assert!(seen.first_time(&BearingMessage {
+        })));
+        assert!(seen.first_time(bearing_key(&BearingMessage {
             time_ms: m.time_ms + 1,
             ..m
-        }));
+        })));
     }
 
     proptest::proptest! {

@@ -248,8 +248,22 @@ fn input(a: &Args) -> Result<Input, Stop> {
     line_input(a)
 }
 
-fn line_input(a: &Args) -> Result<Input, Stop> {
-    match (a.baud, a.captures.as_slice()) {
+/// What a command's CAPTURE arguments and `--baud` ask to read: nothing (the command's
+/// default), recorded files, or a live line.
+pub(crate) enum Given {
+    /// No CAPTURE.
+    Nothing,
+    /// Recorded captures, checked to be files or pipes.
+    Files(Vec<Source>),
+    /// A serial device, or standard input (`-`).
+    Live(LiveSource),
+}
+
+/// Read `paths` and `baud` as `locate` and `publish` take them: one serial device with
+/// `--baud`, `-` alone for standard input, else capture files (a serial device among them is
+/// a usage error naming `--baud`).
+pub(crate) fn given(baud: Option<u32>, paths: &[PathBuf]) -> Result<Given, Stop> {
+    match (baud, paths) {
         (Some(baud), [path]) => {
             let name = path.display();
             match crate::inputs::files::kind_of(path) {
@@ -264,7 +278,7 @@ fn line_input(a: &Args) -> Result<Input, Stop> {
                          -, as standard input)"
                 ))),
                 // A missing device is the open's error, with its own words.
-                Ok(InputKind::Serial) | Err(_) => Ok(Input::Live(LiveSource::Serial {
+                Ok(InputKind::Serial) | Err(_) => Ok(Given::Live(LiveSource::Serial {
                     path: path.to_string_lossy().into_owned(),
                     baud,
                 })),
@@ -273,8 +287,8 @@ fn line_input(a: &Args) -> Result<Input, Stop> {
         (Some(_), _) => Err(Stop::usage(
             "--baud reads one serial device: give exactly one path",
         )),
-        (None, []) => Ok(Input::Sample),
-        (None, [one]) if one.as_os_str() == "-" => Ok(Input::Live(LiveSource::Stdin)),
+        (None, []) => Ok(Given::Nothing),
+        (None, [one]) if one.as_os_str() == "-" => Ok(Given::Live(LiveSource::Stdin)),
         (None, many) if many.iter().any(|p| p.as_os_str() == "-") => Err(Stop::usage(
             "standard input (-) is read live: give it alone",
         )),
@@ -289,9 +303,17 @@ fn line_input(a: &Args) -> Result<Input, Stop> {
                 }
                 s.check_capture()?;
             }
-            Ok(Input::Files(sources))
+            Ok(Given::Files(sources))
         }
     }
+}
+
+fn line_input(a: &Args) -> Result<Input, Stop> {
+    Ok(match given(a.baud, &a.captures)? {
+        Given::Nothing => Input::Sample,
+        Given::Files(sources) => Input::Files(sources),
+        Given::Live(source) => Input::Live(source),
+    })
 }
 
 /// Peak resident memory of this process, bytes (Linux; 0 where unknown).
