@@ -10,6 +10,10 @@
 //! - the **angle**, when the ellipse is long and thin (its axes' ratio beyond
 //!   [`StopRule::max_axis_ratio`]: the bearings' doubled angles do not cancel): widen the angle;
 //! - the **range**, otherwise: both axes are too long for the target: get closer.
+//!
+//! A fix whose offset contradicted its prior (the fix itself then relaxed the prior:
+//! docs/src/field.md, "Past the prior") is never good enough, however small its ellipse: the
+//! unit is not what its prior said, so it needs checking before any fix of it is trusted.
 
 use super::belief::Belief;
 use crate::error::{Error, check_finite};
@@ -72,6 +76,9 @@ pub struct FixQuality {
     pub consistent: bool,
     /// Effective number of independent bearings.
     pub effective: f32,
+    /// The DF unit's offset contradicted its prior (from
+    /// [`crate::fix::locate::OffsetCheck::relaxed`]).
+    pub offset_beyond_prior: bool,
 }
 
 /// What limits the fix.
@@ -94,12 +101,14 @@ pub struct Missing {
     pub consistency: bool,
     /// Too few independent bearings.
     pub bearings: bool,
+    /// A DF unit whose offset agrees with its prior.
+    pub offset: bool,
 }
 
 impl Missing {
     /// Nothing is missing.
     pub fn none(&self) -> bool {
-        !(self.precision || self.consistency || self.bearings)
+        !(self.precision || self.consistency || self.bearings || self.offset)
     }
 }
 
@@ -135,6 +144,8 @@ pub enum Reason {
     MoreBearings,
     /// The residuals do not fit the noise model: check the DF unit (or a reflection).
     CheckUnit,
+    /// The DF unit's offset is far from its prior: check the antenna, then calibrate.
+    CheckOffset,
 }
 
 impl Reason {
@@ -147,6 +158,7 @@ impl Reason {
             Reason::CalibrationLeg => "calibration-leg",
             Reason::MoreBearings => "more-bearings",
             Reason::CheckUnit => "check-unit",
+            Reason::CheckOffset => "check-offset",
         }
     }
 }
@@ -160,6 +172,10 @@ impl fmt::Display for Reason {
             Reason::CalibrationLeg => "drive a calibration leg (the offset limits the fix)",
             Reason::MoreBearings => "more bearings",
             Reason::CheckUnit => "residuals inconsistent: check the DF unit",
+            Reason::CheckOffset => {
+                "the DF unit's offset is far beyond its prior: check the antenna (mounting, \
+                 array indexing, cables), then calibrate"
+            }
         })
     }
 }
@@ -169,6 +185,8 @@ impl Verdict {
     pub fn reason(&self) -> Reason {
         if self.good_enough {
             Reason::GoodEnough
+        } else if self.missing.offset {
+            Reason::CheckOffset
         } else if self.missing.consistency {
             Reason::CheckUnit
         } else if self.missing.precision {
@@ -214,6 +232,7 @@ pub fn verdict(
         precision: !(cep50_m < rule.target_cep50_m),
         consistency: !quality.consistent,
         bearings: !(quality.effective >= rule.min_effective),
+        offset: quality.offset_beyond_prior,
     };
     let limit = if offset_known_cep50_m < rule.offset_share * cep50_m {
         Limit::Offset
@@ -257,6 +276,7 @@ mod tests {
     const GOOD: FixQuality = FixQuality {
         consistent: true,
         effective: 60.0,
+        offset_beyond_prior: false,
     };
 
     #[test]
@@ -319,6 +339,16 @@ mod tests {
         let v = verdict(e, &bs, cal, few, &rule).unwrap();
         assert!(
             v.missing.bearings && v.reason() == Reason::MoreBearings,
+            "{v:?}"
+        );
+        // A fix past its offset's prior: never good enough, however tight, and the unit first.
+        let beyond = FixQuality {
+            offset_beyond_prior: true,
+            ..GOOD
+        };
+        let v = verdict(e, &bs, cal, beyond, &rule).unwrap();
+        assert!(
+            v.missing.offset && !v.good_enough && v.reason() == Reason::CheckOffset,
             "{v:?}"
         );
         let strict = StopRule {
