@@ -31,13 +31,7 @@ pub(super) fn find_source<R: Rng + ?Sized>(
     rng: &mut R,
 ) -> Result<(Source, usize), NoEmitter> {
     let window = OffsetWindow::from_stations(set, stations);
-    let (mut source, kept) = match attempt(set, scratch, stations, freq, config, window, rng) {
-        Ok(found) => found,
-        Err(why @ (NoEmitter::NoConsensus | NoEmitter::TooNoisy)) if window.half_width > 0.0 => {
-            return round_the_circle(set, scratch, stations, freq, config, rng, why);
-        }
-        Err(why) => return Err(why),
-    };
+    let (mut source, kept) = attempt(set, scratch, stations, freq, config, window, rng)?;
     let main = usize::from(source.bias_station);
     let prior = stations
         .get(main)
@@ -136,75 +130,6 @@ fn past_prior<R: Rng + ?Sized>(
         }
         Err(_) => Err(NoEmitter::OffsetBeyondPrior(beyond)),
     }
-}
-
-/// No source with the offsets inside their priors' window (`why`): is there one with an offset
-/// far outside it (a unit turned 90 degrees agrees with nothing near 0)? The search again
-/// with every free station's prior dropped and the consensus' offsets searched round the whole
-/// circle (its chance test counts the wider search). A source it finds whose main offset lies
-/// within [`CONTRADICTED_Z`] predicted sds of its prior changes nothing (`why` stands); one
-/// beyond is checked as [`past_prior`] checks a relaxed fix: the offset's profile round the
-/// circle must have one clear minimum and the offset must be measured.
-fn round_the_circle<R: Rng + ?Sized>(
-    set: &[Item],
-    scratch: &mut [Item],
-    stations: &mut [StationSlot],
-    freq: ChannelFreq,
-    config: &LocateConfig,
-    rng: &mut R,
-    why: NoEmitter,
-) -> Result<(Source, usize), NoEmitter> {
-    let restore = |stations: &mut [StationSlot]| {
-        for s in stations.iter_mut() {
-            s.reset();
-        }
-    };
-    for s in stations.iter_mut() {
-        let p = s.prior_in_force();
-        if p.is_free() {
-            s.set_prior_in_force(BiasPrior {
-                mean: p.mean,
-                sd: f32::INFINITY,
-            });
-        }
-    }
-    let wide = OffsetWindow {
-        centre: 0.0,
-        half_width: core::f32::consts::PI,
-    };
-    let Ok((mut source, kept)) = attempt(set, scratch, stations, freq, config, wide, rng) else {
-        restore(stations);
-        return Err(why);
-    };
-    let main = usize::from(source.bias_station);
-    let prior = stations
-        .get(main)
-        .map_or(BiasPrior::calibrated(0.0), |s| s.prior());
-    let z = prior.surprise_free(source.bias, source.bias_sd);
-    if !(z.abs() > CONTRADICTED_Z) {
-        restore(stations);
-        return Err(why);
-    }
-    // The others back to their priors: only the main station's is past it.
-    for (i, s) in stations.iter_mut().enumerate() {
-        if i != main {
-            s.set_prior_in_force(s.prior());
-        }
-    }
-    source.offset_check = OffsetCheck {
-        z,
-        ..OffsetCheck::default()
-    };
-    past_prior(
-        set,
-        scratch,
-        stations,
-        freq,
-        config,
-        rng,
-        (&source, kept),
-        prior,
-    )
 }
 
 /// The solver at the noise `source` used (its sigma over its `members`' median).
