@@ -72,6 +72,17 @@ impl BiasPrior {
         if z.is_finite() { z } else { 0.0 }
     }
 
+    /// [`BiasPrior::surprise`] of an offset `estimate` fitted without this prior (its sd `sd`,
+    /// the data's alone): if the prior holds, the estimate's spread about its mean is the
+    /// prior's variance plus the data's.
+    pub fn surprise_unaided(&self, estimate: f32, sd: f32) -> f32 {
+        if !(self.is_free() && self.sd.is_finite()) {
+            return 0.0;
+        }
+        let z = wrap(estimate - self.mean) / libm::sqrtf(self.sd * self.sd + sd * sd);
+        if z.is_finite() { z } else { 0.0 }
+    }
+
     /// 1 / sd^2: the prior's information (0 for no prior).
     pub(super) fn information(&self) -> f32 {
         if self.sd.is_finite() && self.sd > 0.0 {

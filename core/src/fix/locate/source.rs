@@ -31,7 +31,15 @@ pub(super) fn find_source<R: Rng + ?Sized>(
     rng: &mut R,
 ) -> Result<(Source, usize), NoEmitter> {
     let window = OffsetWindow::from_stations(set, stations);
-    let (mut source, kept) = attempt(set, scratch, stations, freq, config, window, rng)?;
+    let (mut source, kept) = match attempt(set, scratch, stations, freq, config, window, rng) {
+        Ok(found) => found,
+        Err(why @ (NoEmitter::NoConsensus | NoEmitter::TooNoisy | NoEmitter::Geometry(_)))
+            if window.half_width > 0.0 =>
+        {
+            return round_the_circle(set, scratch, stations, freq, config, rng, why);
+        }
+        Err(why) => return Err(why),
+    };
     let main = usize::from(source.bias_station);
     let prior = stations
         .get(main)
@@ -131,6 +139,101 @@ fn past_prior<R: Rng + ?Sized>(
         Err(_) => Err(NoEmitter::OffsetBeyondPrior(beyond)),
     }
 }
+
+/// No source with the offsets inside their priors' window (`why`: no consensus, too noisy, or
+/// no fix the geometry allows): is there one with an offset far outside it (a unit turned 90
+/// degrees agrees with nothing near 0, and one turned 180 puts the emitter behind it)? The
+/// search again with every free station's prior dropped and the consensus' offsets searched
+/// round the whole circle ([`CIRCLE_WINDOWS`] windows, the chance test's significance shared
+/// among them; the window whose source keeps most bearings wins). A source whose main offset
+/// lies within [`CONTRADICTED_Z`] predicted sds of its prior changes nothing (`why` stands);
+/// one beyond goes on to [`past_prior`] as a fix with the prior would.
+fn round_the_circle<R: Rng + ?Sized>(
+    set: &[Item],
+    scratch: &mut [Item],
+    stations: &mut [StationSlot],
+    freq: ChannelFreq,
+    config: &LocateConfig,
+    rng: &mut R,
+    why: NoEmitter,
+) -> Result<(Source, usize), NoEmitter> {
+    let restore = |stations: &mut [StationSlot]| {
+        for s in stations.iter_mut() {
+            s.reset();
+        }
+    };
+    for s in stations.iter_mut() {
+        let p = s.prior_in_force();
+        if p.is_free() {
+            s.set_prior_in_force(BiasPrior {
+                mean: p.mean,
+                sd: f32::INFINITY,
+            });
+        }
+    }
+    // RANSAC crosses pairs with the window's centre removed, so a search centred at 0 never
+    // crosses bearings turned 90 degrees: the circle in windows, each window's chance test at
+    // the significance shared out among them (Bonferroni).
+    let shared = LocateConfig {
+        significance: config.significance / CIRCLE_WINDOWS as f32,
+        ..*config
+    };
+    let width = core::f32::consts::PI / CIRCLE_WINDOWS as f32;
+    let window = |k: usize| OffsetWindow {
+        centre: wrap(width * (2 * k + 1) as f32),
+        half_width: width,
+    };
+    let surprise = |stations: &[StationSlot], found: &Source| {
+        let main = usize::from(found.bias_station);
+        let prior = stations
+            .get(main)
+            .map_or(BiasPrior::calibrated(0.0), |s| s.prior());
+        (prior, prior.surprise_unaided(found.bias, found.bias_sd))
+    };
+    let mut best: Option<(usize, u32)> = None;
+    for k in 0..CIRCLE_WINDOWS {
+        if let Ok((found, _)) = attempt(set, scratch, stations, freq, &shared, window(k), rng) {
+            let beyond = surprise(stations, &found).1.abs() > CONTRADICTED_Z;
+            if beyond && best.is_none_or(|(_, used)| found.used > used) {
+                best = Some((k, found.used));
+            }
+        }
+    }
+    let found = best.map(|(k, _)| attempt(set, scratch, stations, freq, &shared, window(k), rng));
+    let Some(Ok((mut source, kept))) = found else {
+        restore(stations);
+        return Err(why);
+    };
+    let (prior, z) = surprise(stations, &source);
+    if !(z.abs() > CONTRADICTED_Z) {
+        restore(stations);
+        return Err(why);
+    }
+    // The others back to their priors: only the main station's is past it.
+    let main = usize::from(source.bias_station);
+    for (i, s) in stations.iter_mut().enumerate() {
+        if i != main {
+            s.set_prior_in_force(s.prior());
+        }
+    }
+    source.offset_check = OffsetCheck {
+        z,
+        ..OffsetCheck::default()
+    };
+    past_prior(
+        set,
+        scratch,
+        stations,
+        freq,
+        config,
+        rng,
+        (&source, kept),
+        prior,
+    )
+}
+
+/// Windows the circle is searched in when nothing agrees inside the prior's (60 degrees each).
+pub const CIRCLE_WINDOWS: usize = 6;
 
 /// The solver at the noise `source` used (its sigma over its `members`' median).
 fn solver_at(source: &Source, members: &[Item], config: &LocateConfig) -> BiasedOptions {
