@@ -113,10 +113,9 @@ impl OffsetCircle {
 /// The profile over the whole circle of the offset of station `station` (its row in
 /// `stations`), started at `from` (a fix of the same sightings): each step's fit starts from
 /// its neighbour's position, walking both ways round from the step nearest the row's fitted
-/// offset, so the position follows the offset continuously. Fixed work: [`CIRCLE_STEPS`] + 1
-/// solves of at most `options.max_iterations` iterations each. The table is left with the fit
-/// it came with: the row's prior in force restored, and the last solve the one from `from`
-/// and the rows' fitted offsets (with `from` that fit's position, the same fit again).
+/// offset, so the position follows the offset continuously. Fixed work: [`CIRCLE_STEPS`]
+/// solves of at most `options.max_iterations` iterations each. The table is left exactly as
+/// it came: every row's fit held aside and put back, the row's prior in force restored.
 pub fn offset_circle<T: Sighting>(
     items: &[T],
     stations: &mut [StationSlot],
@@ -128,7 +127,7 @@ pub fn offset_circle<T: Sighting>(
     let row = stations.get(station).ok_or(Error::OutOfRange)?;
     let (kept, fitted) = (row.in_force, row.bias);
     for s in stations.iter_mut() {
-        s.saved = s.bias;
+        s.hold();
     }
     let step = 2.0 * core::f32::consts::PI / CIRCLE_STEPS as f32;
     let here = wrap(fitted) + core::f32::consts::PI;
@@ -175,11 +174,9 @@ pub fn offset_circle<T: Sighting>(
     if let Some(s) = stations.get_mut(station) {
         s.in_force = kept;
     }
-    let back = Start {
-        position: from,
-        offsets: StartOffsets::Saved,
-    };
-    ml_sources(items, stations, back, &Gaussian, options)?;
+    for s in stations.iter_mut() {
+        s.unhold();
+    }
     let d = circle.deviance;
     let best = (0..CIRCLE_STEPS)
         .min_by(|&a, &b| d[a].total_cmp(&d[b]))
