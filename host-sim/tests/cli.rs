@@ -510,8 +510,14 @@ fn reversed_bearings_are_not_called_a_shallow_crossing() {
     let dir = scratch("mirror");
     let path = scratch_file(&dir, "mirrored.nmea", flipped);
     let out = foxhunt(&["locate", &path]);
-    let (text, err) = (String::from_utf8_lossy(&out.stdout).into_owned(), stderr(&out));
-    assert!(!err.contains("shallow") && !text.contains("shallow"), "{err}{text}");
+    let (text, err) = (
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr(&out),
+    );
+    assert!(
+        !err.contains("shallow") && !text.contains("shallow"),
+        "{err}{text}"
+    );
     // A reversed unit is a 180-degree offset, and the L-shaped drive shows it: the fix with the
     // offset's prior dropped, the offset found near 180 degrees, and the unit to be checked
     // (docs/src/field.md, "Past the prior"), never "good enough".
@@ -524,7 +530,10 @@ fn reversed_bearings_are_not_called_a_shallow_crossing() {
         .expect("an offset");
     assert!(offset.abs() > 170.0, "{text}");
     assert!(text.contains("offset check:"), "{text}");
-    assert!(text.contains("check the antenna") && !text.contains("good enough: stop"), "{text}");
+    assert!(
+        text.contains("check the antenna") && !text.contains("good enough: stop"),
+        "{text}"
+    );
 }
 
 #[test]

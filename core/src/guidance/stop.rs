@@ -144,7 +144,8 @@ pub enum Reason {
     MoreBearings,
     /// The residuals do not fit the noise model: check the DF unit (or a reflection).
     CheckUnit,
-    /// The DF unit's offset is far from its prior: check the antenna, then calibrate.
+    /// The DF unit's offset is in doubt (far from its prior, or another offset fits as well):
+    /// check the antenna, then calibrate.
     CheckOffset,
 }
 
@@ -173,20 +174,19 @@ impl fmt::Display for Reason {
             Reason::MoreBearings => "more bearings",
             Reason::CheckUnit => "residuals inconsistent: check the DF unit",
             Reason::CheckOffset => {
-                "the DF unit's offset is far beyond its prior: check the antenna (mounting, \
-                 array indexing, cables), then calibrate"
+                "the DF unit's offset is in doubt (far from its prior, or another fits as \
+                 well): check the antenna (mounting, array indexing, cables), then calibrate"
             }
         })
     }
 }
 
 impl Verdict {
-    /// The one reason to give the driver: what is missing first, the precision's limit after.
+    /// The one reason to give the driver: what is missing first (consistency, precision with
+    /// its limit, bearings, then the offset).
     pub fn reason(&self) -> Reason {
         if self.good_enough {
             Reason::GoodEnough
-        } else if self.missing.offset {
-            Reason::CheckOffset
         } else if self.missing.consistency {
             Reason::CheckUnit
         } else if self.missing.precision {
@@ -195,8 +195,12 @@ impl Verdict {
                 Limit::Angle => Reason::WidenAngle,
                 Limit::Range => Reason::GetCloser,
             }
-        } else {
+        } else if self.missing.bearings {
             Reason::MoreBearings
+        } else {
+            // Last: early in a drive the offset is often in doubt only because the bearings
+            // have not turned yet, and the move that turns them serves both.
+            Reason::CheckOffset
         }
     }
 }
