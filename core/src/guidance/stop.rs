@@ -1,8 +1,9 @@
 //! When to stop, and otherwise what the fix lacks.
 //!
-//! "Good enough" needs three things at once (docs/src/guidance.md, "The stop rule"): the predicted CEP50 from
+//! "Good enough" needs four things at once (docs/src/guidance.md, "The stop rule"): the predicted CEP50 from
 //! the bias-aware bound at the fix below the target radius; residuals consistent with the noise
-//! model; and enough independent bearings behind the fix. What limits a fix that is not yet good
+//! model; enough independent bearings behind the fix; and a DF unit whose offset is not in
+//! doubt (below). What limits a fix that is not yet good
 //! enough is read off the same bound:
 //! - the **offset**, when the bound with the offset known would already be much smaller (an
 //!   unmodelled offset floors any drive that does not surround the emitter at about r b): drive a
