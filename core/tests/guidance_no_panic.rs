@@ -78,7 +78,7 @@ proptest! {
         if let Ok(h) = Hypotheses::spread(e, &[[1e6, 0.0], [0.0, 1e4]], [v.0, v.1], 0.15) {
             prop_assert!(h.points().iter().flatten().all(|x| x.is_finite()));
         }
-        let q = FixQuality { consistent: true, effective: 20.0 };
+        let q = FixQuality { consistent: true, effective: 20.0, offset_beyond_prior: false };
         if let Ok(x) = verdict(e, &bs, prior, q, &StopRule::default()) {
             prop_assert!(x.cep50_m.is_finite() && x.offset_known_cep50_m.is_finite());
         }

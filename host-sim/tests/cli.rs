@@ -490,7 +490,7 @@ fn bad_captures_give_one_line_errors_that_say_what_is_wrong() {
 }
 
 #[test]
-fn mirrored_bearings_are_not_called_a_shallow_crossing() {
+fn reversed_bearings_are_not_called_a_shallow_crossing() {
     // The bundled drive with every bearing turned by 180 degrees (a reversed DF convention).
     let bytes = std::fs::read(capture("aoa-drive.nmea")).expect("capture");
     let text = String::from_utf8(bytes).expect("ASCII");
@@ -510,10 +510,30 @@ fn mirrored_bearings_are_not_called_a_shallow_crossing() {
     let dir = scratch("mirror");
     let path = scratch_file(&dir, "mirrored.nmea", flipped);
     let out = foxhunt(&["locate", &path]);
-    refused(&out, &[]);
-    let err = stderr(&out);
-    assert!(!err.contains("shallow"), "{err}");
-    assert!(err.contains("behind") || err.contains("reversed"), "{err}");
+    let (text, err) = (
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr(&out),
+    );
+    assert!(
+        !err.contains("shallow") && !text.contains("shallow"),
+        "{err}{text}"
+    );
+    // A reversed unit is a 180-degree offset, and the L-shaped drive shows it: the fix with the
+    // offset's prior dropped, the offset found near 180 degrees, and the unit to be checked
+    // (docs/src/field.md, "Past the prior"), never "good enough".
+    assert_eq!(out.status.code(), Some(0), "{err}{text}");
+    let offset: f32 = text
+        .split("offset ")
+        .nth(1)
+        .and_then(|t| t.split_whitespace().next())
+        .and_then(|v| v.parse().ok())
+        .expect("an offset");
+    assert!(offset.abs() > 170.0, "{text}");
+    assert!(text.contains("offset check:"), "{text}");
+    assert!(
+        text.contains("check the antenna") && !text.contains("good enough: stop"),
+        "{text}"
+    );
 }
 
 #[test]

@@ -69,12 +69,13 @@ fn json(lines: &[String]) -> Vec<serde_json::Value> {
         .collect()
 }
 
-const REASONS: [&str; 6] = [
+const REASONS: [&str; 7] = [
     "widen-angle",
     "get-closer",
     "calibration-leg",
     "more-bearings",
     "check-unit",
+    "check-offset",
     "good-enough",
 ];
 

@@ -1,8 +1,9 @@
 //! When to stop, and otherwise what the fix lacks.
 //!
-//! "Good enough" needs three things at once (docs/src/guidance.md, "The stop rule"): the predicted CEP50 from
+//! "Good enough" needs four things at once (docs/src/guidance.md, "The stop rule"): the predicted CEP50 from
 //! the bias-aware bound at the fix below the target radius; residuals consistent with the noise
-//! model; and enough independent bearings behind the fix. What limits a fix that is not yet good
+//! model; enough independent bearings behind the fix; and a DF unit whose offset is not in
+//! doubt (below). What limits a fix that is not yet good
 //! enough is read off the same bound:
 //! - the **offset**, when the bound with the offset known would already be much smaller (an
 //!   unmodelled offset floors any drive that does not surround the emitter at about r b): drive a
@@ -10,6 +11,10 @@
 //! - the **angle**, when the ellipse is long and thin (its axes' ratio beyond
 //!   [`StopRule::max_axis_ratio`]: the bearings' doubled angles do not cancel): widen the angle;
 //! - the **range**, otherwise: both axes are too long for the target: get closer.
+//!
+//! A fix whose offset contradicted its prior (the fix itself then relaxed the prior:
+//! docs/src/field.md, "Past the prior") is never good enough, however small its ellipse: the
+//! unit is not what its prior said, so it needs checking before any fix of it is trusted.
 
 use super::belief::Belief;
 use crate::error::{Error, check_finite};
@@ -72,6 +77,9 @@ pub struct FixQuality {
     pub consistent: bool,
     /// Effective number of independent bearings.
     pub effective: f32,
+    /// The DF unit's offset contradicted its prior (from
+    /// [`crate::fix::locate::OffsetCheck::relaxed`]).
+    pub offset_beyond_prior: bool,
 }
 
 /// What limits the fix.
@@ -94,12 +102,14 @@ pub struct Missing {
     pub consistency: bool,
     /// Too few independent bearings.
     pub bearings: bool,
+    /// A DF unit whose offset agrees with its prior.
+    pub offset: bool,
 }
 
 impl Missing {
     /// Nothing is missing.
     pub fn none(&self) -> bool {
-        !(self.precision || self.consistency || self.bearings)
+        !(self.precision || self.consistency || self.bearings || self.offset)
     }
 }
 
@@ -135,6 +145,9 @@ pub enum Reason {
     MoreBearings,
     /// The residuals do not fit the noise model: check the DF unit (or a reflection).
     CheckUnit,
+    /// The DF unit's offset is in doubt (far from its prior, or another offset fits as well):
+    /// check the antenna, then calibrate.
+    CheckOffset,
 }
 
 impl Reason {
@@ -147,6 +160,7 @@ impl Reason {
             Reason::CalibrationLeg => "calibration-leg",
             Reason::MoreBearings => "more-bearings",
             Reason::CheckUnit => "check-unit",
+            Reason::CheckOffset => "check-offset",
         }
     }
 }
@@ -160,12 +174,17 @@ impl fmt::Display for Reason {
             Reason::CalibrationLeg => "drive a calibration leg (the offset limits the fix)",
             Reason::MoreBearings => "more bearings",
             Reason::CheckUnit => "residuals inconsistent: check the DF unit",
+            Reason::CheckOffset => {
+                "the DF unit's offset is in doubt (far from its prior, or another fits as \
+                 well): check the antenna (mounting, array indexing, cables), then calibrate"
+            }
         })
     }
 }
 
 impl Verdict {
-    /// The one reason to give the driver: what is missing first, the precision's limit after.
+    /// The one reason to give the driver: what is missing first (consistency, precision with
+    /// its limit, bearings, then the offset).
     pub fn reason(&self) -> Reason {
         if self.good_enough {
             Reason::GoodEnough
@@ -177,8 +196,12 @@ impl Verdict {
                 Limit::Angle => Reason::WidenAngle,
                 Limit::Range => Reason::GetCloser,
             }
-        } else {
+        } else if self.missing.bearings {
             Reason::MoreBearings
+        } else {
+            // Last: early in a drive the offset is often in doubt only because the bearings
+            // have not turned yet, and the move that turns them serves both.
+            Reason::CheckOffset
         }
     }
 }
@@ -214,6 +237,7 @@ pub fn verdict(
         precision: !(cep50_m < rule.target_cep50_m),
         consistency: !quality.consistent,
         bearings: !(quality.effective >= rule.min_effective),
+        offset: quality.offset_beyond_prior,
     };
     let limit = if offset_known_cep50_m < rule.offset_share * cep50_m {
         Limit::Offset
@@ -257,6 +281,7 @@ mod tests {
     const GOOD: FixQuality = FixQuality {
         consistent: true,
         effective: 60.0,
+        offset_beyond_prior: false,
     };
 
     #[test]
@@ -319,6 +344,16 @@ mod tests {
         let v = verdict(e, &bs, cal, few, &rule).unwrap();
         assert!(
             v.missing.bearings && v.reason() == Reason::MoreBearings,
+            "{v:?}"
+        );
+        // A fix past its offset's prior: never good enough, however tight, and the unit first.
+        let beyond = FixQuality {
+            offset_beyond_prior: true,
+            ..GOOD
+        };
+        let v = verdict(e, &bs, cal, beyond, &rule).unwrap();
+        assert!(
+            v.missing.offset && !v.good_enough && v.reason() == Reason::CheckOffset,
             "{v:?}"
         );
         let strict = StopRule {

@@ -324,6 +324,7 @@ fn view(f: &Source) -> FixView {
         covariance: f.covariance,
         consistent: f.consistent,
         effective: f.effective,
+        offset_beyond_prior: f.offset_check.doubtful(),
     }
 }
 

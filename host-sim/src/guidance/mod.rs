@@ -54,6 +54,8 @@ pub struct FixView {
     pub consistent: bool,
     /// Effective number of independent bearings.
     pub effective: f32,
+    /// The DF unit's offset contradicted its prior (the fix relaxed it): never good enough.
+    pub offset_beyond_prior: bool,
 }
 
 /// What guidance is told.
@@ -314,6 +316,7 @@ pub fn stop_verdict(s: &Situation<'_>, o: &GuidanceOptions) -> Result<Option<Ver
         FixQuality {
             consistent: f.consistent,
             effective: f.effective,
+            offset_beyond_prior: f.offset_beyond_prior,
         },
         &o.stop,
     )
@@ -417,8 +420,8 @@ pub fn advise_move(
     }
 }
 
-/// What a verdict says is missing (`precision`, `consistency`, `bearings`; without a fix,
-/// `fix`).
+/// What a verdict says is missing (`precision`, `consistency`, `bearings`, `offset`; without a
+/// fix, `fix`).
 pub fn missing_names(verdict: Option<&Verdict>) -> Vec<&'static str> {
     verdict
         .map(|v| {
@@ -427,6 +430,7 @@ pub fn missing_names(verdict: Option<&Verdict>) -> Vec<&'static str> {
                 (m.precision, "precision"),
                 (m.consistency, "consistency"),
                 (m.bearings, "bearings"),
+                (m.offset, "offset"),
             ]
             .into_iter()
             .filter(|(on, _)| *on)
@@ -448,13 +452,13 @@ pub struct AdviceReport {
     /// The next road turn, if on roads.
     pub turn: Option<Turn>,
     /// Why, machine-readable (`widen-angle`, `get-closer`, `calibration-leg`, `more-bearings`,
-    /// `check-unit`, `good-enough`).
+    /// `check-unit`, `check-offset`, `good-enough`).
     pub reason: &'static str,
     /// Why, in words.
     pub reason_text: String,
     /// The stop rule holds.
     pub good_enough: bool,
-    /// What is missing (`precision`, `consistency`, `bearings`).
+    /// What is missing (`precision`, `consistency`, `bearings`, `offset`).
     pub missing: Vec<&'static str>,
     /// Predicted CEP50 from the bias-aware bound at the fix, metres.
     pub bound_cep50_m: Option<f32>,

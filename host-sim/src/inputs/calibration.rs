@@ -14,7 +14,8 @@ use std::path::Path;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Calibration {
-    /// The unit's offset, degrees: it reports true bearing + this.
+    /// The unit's offset, degrees, counter-clockwise as every offset (docs/src/conventions.md):
+    /// it reports true azimuth - this.
     pub offset_deg: f32,
     /// Its standard deviation, degrees.
     pub offset_sd_deg: f32,
@@ -240,7 +241,7 @@ impl Calibration {
         let mut out = String::new();
         let _ = writeln!(
             out,
-            "offset {:.2} +- {:.2} deg (the unit reports true bearing + this); noise {:.2} deg; {} bearings used, {} left out",
+            "offset {:.2} +- {:.2} deg (counter-clockwise: the unit reports true azimuth - this); noise {:.2} deg; {} bearings used, {} left out",
             self.offset_deg, self.offset_sd_deg, self.noise_deg, self.bearings, self.rejected
         );
         out

@@ -189,5 +189,28 @@ pub(crate) fn no_emitter(why: NoEmitter, n: u32, bearings: &[Bearing], max_sigma
              the fit (at least 5 that cross well)"
         ),
         NoEmitter::Geometry(e) => format!("no consistent emitter: {}", explain(e, bearings)),
+        NoEmitter::OffsetBeyondPrior(b) => offset_beyond(&b),
     }
+}
+
+/// [`NoEmitter::OffsetBeyondPrior`] in words (degrees as the reports give offsets).
+pub(crate) fn offset_beyond(b: &foxhunt_core::fix::locate::OffsetBeyond) -> String {
+    let or = b
+        .second
+        .map(|s| {
+            format!(
+                " or {:.0} deg (the drive cannot tell which)",
+                s.to_degrees()
+            )
+        })
+        .unwrap_or_default();
+    format!(
+        "no consistent emitter: the DF unit's offset is about {:.0} deg{or}, {:.0} sds beyond \
+         its prior ({:.0} +- {:.0} deg): check the antenna (mounting, array indexing, cables), \
+         then calibrate",
+        b.offset.to_degrees(),
+        b.z.abs(),
+        b.prior.mean.to_degrees(),
+        b.prior.sd.to_degrees()
+    )
 }

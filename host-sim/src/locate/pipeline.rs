@@ -7,7 +7,9 @@ use crate::inputs::capture::Decoded;
 use crate::inputs::stations::Reference;
 use crate::locate::Parts;
 use crate::locate::explain::{explain, no_emitter};
-use crate::locate::report::{ChannelSummary, Drawn, EllipseReport, SourceReport, geodetic};
+use crate::locate::report::{
+    ChannelSummary, Drawn, EllipseReport, OffsetCheckReport, SourceReport, geodetic,
+};
 use crate::locate::stations::{StationReport, station_reports};
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_core::fix::locate::Observation;
@@ -38,6 +40,11 @@ fn source_report(s: &Source, frame: &LocalFrame, why: Option<&'static str>) -> S
         consistent: Some(s.consistent),
         time_span_s: Some(s.time_span),
         why,
+        offset_check: s.offset_check.doubtful().then_some(OffsetCheckReport {
+            z: s.offset_check.z,
+            relaxed: s.offset_check.relaxed,
+            ambiguous: s.offset_check.ambiguous,
+        }),
     }
 }
 

@@ -88,6 +88,24 @@ pub struct SourceReport {
     /// Why an other source is not the emitter (other sources only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub why: Option<&'static str>,
+    /// Present only when the DF unit's offset needs checking (docs/src/field.md, "Past the
+    /// prior"): it contradicted its prior and the fix is the one with the offset free, or
+    /// another offset far from the fit's is about as likely.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub offset_check: Option<OffsetCheckReport>,
+}
+
+/// A fix whose offset contradicted its prior (field names are stable).
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct OffsetCheckReport {
+    /// How many of the sds the prior predicts the first fit's offset lay from the prior's
+    /// mean.
+    pub z: f32,
+    /// The prior was relaxed: the fix and its ellipse are the offset-free ones.
+    pub relaxed: bool,
+    /// Another offset, 30 degrees or more from the fit's, is about as likely: the prior alone
+    /// chose this fix.
+    pub ambiguous: bool,
 }
 
 /// One channel and what it came to.

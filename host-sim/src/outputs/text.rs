@@ -76,6 +76,24 @@ impl SourceReport {
             "  {offset}noise {:.2} deg ({how}); {} bearings{effective}{consistent}",
             self.sigma_deg, self.used,
         );
+        if let Some(c) = self.offset_check {
+            let what = if c.relaxed {
+                format!(
+                    "the offset lay {:.1} sds beyond its prior, which was relaxed (this fix and \
+                     its ellipse are the offset-free ones)",
+                    c.z.abs()
+                )
+            } else {
+                "another offset 30 deg or more away fits about as well (the prior alone chose \
+                 this fix)"
+                    .to_string()
+            };
+            let _ = writeln!(
+                out,
+                "  offset check: {what}: check the antenna (mounting, array indexing, cables), \
+                 then calibrate"
+            );
+        }
         if let Some(why) = self.why {
             let _ = writeln!(out, "  {why}");
         }

@@ -37,8 +37,8 @@ mod tests;
 
 pub use bound::{BiasedCrlb, crlb, crlb_stations, information};
 pub use calibration::{Calibration, calibrate};
-pub use prior::BiasPrior;
-pub use profile_likelihood::{ProfilePoint, profile};
+pub use prior::{BiasPrior, CONTRADICTED_Z};
+pub use profile_likelihood::{CIRCLE_STEPS, OffsetCircle, ProfilePoint, offset_circle, profile};
 pub use solve::{BiasedFix, BiasedOptions, Start, StartOffsets, ml, ml_sources, refit};
 pub use stations::StationSlot;
 

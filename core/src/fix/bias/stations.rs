@@ -45,6 +45,9 @@ pub struct StationSlot {
     pub(super) x: f32,
     pub(super) trial: f32,
     pub(super) saved: f32,
+    /// The last fit as it was before a profile round the circle ([`super::offset_circle`]):
+    /// offset, sd, share measured, and the bearings it used.
+    held: ([f32; 3], u32),
     /// Summed weight, mean Jacobian and mean residual of the current accumulation.
     w: f32,
     mean_j: [f32; 2],
@@ -76,6 +79,7 @@ impl StationSlot {
             x: prior.mean,
             trial: prior.mean,
             saved: prior.mean,
+            held: ([prior.mean, prior.sd, 0.0], 0),
             w: 0.0,
             mean_j: [0.0; 2],
             mean_r: 0.0,
@@ -123,6 +127,18 @@ impl StationSlot {
     /// Keep the solver's current offset aside ([`super::StartOffsets::Saved`] starts from it).
     pub(crate) fn keep_current(&mut self) {
         self.saved = self.x;
+    }
+
+    /// Hold the last fit aside, exactly, while other fits use the row.
+    pub(super) fn hold(&mut self) {
+        self.held = ([self.bias, self.sd, self.measured], self.used);
+    }
+
+    /// The fit held aside back, exactly.
+    pub(super) fn unhold(&mut self) {
+        let ([bias, sd, measured], used) = self.held;
+        (self.bias, self.sd, self.measured, self.used) = (bias, sd, measured, used);
+        self.x = bias;
     }
 
     /// Forget the last accumulation.

@@ -328,3 +328,62 @@ fn bad_priors_are_refused() {
     };
     assert_eq!(crlb(&[1.0, 1.0], &bs, neg), Err(Error::OutOfRange));
 }
+
+#[test]
+fn the_surprise_is_the_fits_distance_from_its_prior_in_predicted_sds() {
+    let prior = BiasPrior::default();
+    let tau = DEFAULT_BIAS_SD;
+    // The data measured 3/4 of the offset's variance: the estimate's spread is tau^2 * 3/4.
+    let sd = tau * 0.5;
+    let z = prior.surprise(0.3, sd);
+    assert!((z - 0.3 / (0.75f32.sqrt() * tau)).abs() < 1e-4, "{z}");
+    // A calibrated unit, or no prior, has nothing to contradict.
+    assert_eq!(BiasPrior::calibrated(0.1).surprise(1.0, 0.0), 0.0);
+    let none = BiasPrior {
+        mean: 0.0,
+        sd: f32::INFINITY,
+    };
+    assert_eq!(none.surprise(1.0, 0.1), 0.0);
+    // The difference wraps: 350 degrees from a -10 degree prior is 0.
+    let near = BiasPrior {
+        mean: -10.0 * DEG,
+        sd: tau,
+    };
+    assert!(near.surprise(350.0 * DEG, sd).abs() < 1e-3);
+}
+
+#[test]
+fn the_circle_finds_a_large_offset_and_leaves_the_fit_as_it_was() {
+    // Three quarters of a 600 m circle round an emitter 400 m from its centre: the drive turns,
+    // so a 72 degree offset (an array indexed one element off) shows as one clear minimum.
+    let mut rng = XorShiftRng::seed_from_u64(7);
+    let e = [400.0, 0.0];
+    let bs = arc_drive(e, [0.0, 0.0], 600.0, 4.7, 72.0 * DEG, DEG, &mut rng);
+    let free = BiasPrior {
+        mean: 0.0,
+        sd: f32::INFINITY,
+    };
+    let mut table = [StationSlot::new(free)];
+    let start = Start {
+        position: e,
+        offsets: StartOffsets::Common(72.0 * DEG),
+    };
+    let fix = ml_sources(
+        &bs,
+        &mut table,
+        start,
+        &crate::likelihood::Gaussian,
+        BiasedOptions::default(),
+    )
+    .unwrap();
+    let before = table[0].offset();
+    let c = offset_circle(&bs, &mut table, 0, fix.position, BiasedOptions::default()).unwrap();
+    let best = OffsetCircle::offset(c.best);
+    assert!((wrap(best - 72.0 * DEG)).abs() <= 7.5 * DEG, "{c:?}");
+    assert!(c.second_gap() > 9.0, "{c:?}");
+    assert!(!c.rival(fix.bias, 30.0 * DEG, 9.0), "{c:?}");
+    // The table is the fit's again.
+    let after = table[0].offset();
+    assert!((after.0 - before.0).abs() < 1e-3 && (after.1 - before.1).abs() < 1e-3);
+    assert_eq!(table[0].prior_in_force(), free);
+}

@@ -73,8 +73,8 @@ mod workspace;
 pub use super::observation::Observation;
 pub use config::{LocateConfig, NoiseModel};
 pub use report::{
-    ChannelOutcome, ChannelReport, NoEmitter, OtherReason, OtherSource, Rejected, Report, Source,
-    StationOffset,
+    ChannelOutcome, ChannelReport, NoEmitter, OffsetBeyond, OffsetCheck, OtherReason, OtherSource,
+    Rejected, Report, Source, StationOffset,
 };
 pub use workspace::{Buffers, Item, Workspace};
 

@@ -59,6 +59,8 @@ pub struct Source {
     pub chance: f32,
     /// The residuals agree with the noise model and the noise is plausible.
     pub consistent: bool,
+    /// How the main station's offset sat with its prior.
+    pub offset_check: OffsetCheck,
     /// First and last input index of its bearings.
     pub index_span: [u32; 2],
     /// First and last time of its bearings, seconds.
@@ -73,6 +75,48 @@ impl Source {
     pub fn in_channel(&self, freq_mhz: Option<f32>, width_mhz: f32) -> bool {
         channel::belongs(freq_mhz, self.channel_lowest_mhz, width_mhz)
     }
+}
+
+/// How a fix's offset sat with its prior (docs/src/field.md, "Past the prior").
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct OffsetCheck {
+    /// The main station's offset, as first fitted with its prior, from the prior's mean in
+    /// the sds the prior predicts for it ([`BiasPrior::surprise`]; 0 for a calibrated station).
+    pub z: f32,
+    /// The data contradicted the prior (|z| above [`CONTRADICTED_Z`](crate::fix::bias::CONTRADICTED_Z)) and the fix is the one
+    /// with the offset free, started from the single minimum of its profile round the circle
+    /// ([`crate::fix::bias::offset_circle`]): its ellipse carries the offset's uncertainty, and
+    /// the unit needs checking all the same.
+    pub relaxed: bool,
+    /// The offset's profile round the circle has a minimum 30 degrees or more from the fit's
+    /// offset about as likely as the best (0 against 180 degrees where the drive barely turns):
+    /// the prior alone chose between them, and a swapped cable or an array indexed off would
+    /// give the other.
+    pub ambiguous: bool,
+}
+
+impl OffsetCheck {
+    /// Whether the offset needs checking before the fix is trusted: relaxed or ambiguous.
+    pub fn doubtful(&self) -> bool {
+        self.relaxed || self.ambiguous
+    }
+}
+
+/// An offset the data place far beyond its prior, where no fix is honest enough to report:
+/// the offset's profile round the circle has two minima the data do not tell apart, or the
+/// fit with the offset free finds nothing the checks accept.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OffsetBeyond {
+    /// The station (its row in the station table).
+    pub station: u16,
+    /// Where its offset's profile round the circle is lowest, radians (to 15 degrees).
+    pub offset: f32,
+    /// The other minimum the data cannot rule out, radians, if any.
+    pub second: Option<f32>,
+    /// The prior the data contradicted.
+    pub prior: BiasPrior,
+    /// The first fit's offset from the prior's mean in predicted sds ([`OffsetCheck::z`]).
+    pub z: f32,
 }
 
 /// One station's offset as an emitter's fix estimated it.
@@ -123,7 +167,7 @@ pub struct OtherSource {
 }
 
 /// Why a channel has no consistent emitter.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum NoEmitter {
     /// No point has more bearings agreeing than luck would give.
     NoConsensus,
@@ -133,6 +177,9 @@ pub enum NoEmitter {
     TooFew,
     /// The geometry gives no fix (parallel bearings, a stationary vehicle...).
     Geometry(Error),
+    /// A DF unit's offset lies far beyond its prior and no fix with it free holds up: check
+    /// the antenna (mounting, array indexing, cables) and calibrate.
+    OffsetBeyondPrior(OffsetBeyond),
 }
 
 /// What a channel came to.
@@ -218,6 +265,11 @@ const EMPTY_SOURCE: Source = Source {
     p_value: 0.0,
     chance: 0.0,
     consistent: false,
+    offset_check: OffsetCheck {
+        z: 0.0,
+        relaxed: false,
+        ambiguous: false,
+    },
     index_span: [0; 2],
     time_span: [0.0; 2],
 };

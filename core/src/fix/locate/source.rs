@@ -3,20 +3,25 @@
 //! residuals' correlation in time), the fit at the noise used, and the confidence region
 //! ([`super::region`]).
 
-use super::super::bias::{self, BiasedFix, BiasedOptions, Sighting, StationSlot};
+use super::super::bias::{
+    self, BiasPrior, BiasedFix, BiasedOptions, CONTRADICTED_Z, OffsetCircle, Sighting, StationSlot,
+};
 use super::super::consistency;
 use super::super::noise::median_sigma;
 use super::super::robust::{self, Consensus, OffsetWindow, RefineOptions, RobustFix, TRIM_CUT};
 use super::region::{Region, confidence_region};
-use super::{ChannelFreq, Item, LocateConfig, NoEmitter, NoiseModel, Source};
+use super::{
+    ChannelFreq, Item, LocateConfig, NoEmitter, NoiseModel, OffsetBeyond, OffsetCheck, Source,
+};
 use crate::error::{Error, check_finite};
 use crate::model::bearing::{predicted, wrap};
 use crate::stats;
 use rand_core::Rng;
 
-/// One source from `set`: the consensus, its refinement and its honest statistics. On success
-/// the source's bearings are the first `kept` of `scratch`, and each station's offset in the
-/// fit is in its row of `stations`.
+/// One source from `set`: the consensus, its refinement and its honest statistics, the main
+/// station's offset checked against its prior ([`past_prior`] where the data contradict it).
+/// On success the source's bearings are the first `kept` of `scratch`, and each station's
+/// offset in the fit is in its row of `stations`.
 pub(super) fn find_source<R: Rng + ?Sized>(
     set: &[Item],
     scratch: &mut [Item],
@@ -26,6 +31,248 @@ pub(super) fn find_source<R: Rng + ?Sized>(
     rng: &mut R,
 ) -> Result<(Source, usize), NoEmitter> {
     let window = OffsetWindow::from_stations(set, stations);
+    let (mut source, kept) = match attempt(set, scratch, stations, freq, config, window, rng) {
+        Ok(found) => found,
+        Err(why @ (NoEmitter::NoConsensus | NoEmitter::TooNoisy | NoEmitter::Geometry(_)))
+            if window.half_width > 0.0 =>
+        {
+            return round_the_circle(set, scratch, stations, freq, config, rng, why);
+        }
+        Err(why) => return Err(why),
+    };
+    let main = usize::from(source.bias_station);
+    let prior = stations
+        .get(main)
+        .map_or(BiasPrior::calibrated(0.0), StationSlot::prior_in_force);
+    let z = prior.surprise(source.bias, source.bias_sd);
+    source.offset_check = OffsetCheck {
+        z,
+        ..OffsetCheck::default()
+    };
+    if z.abs() <= CONTRADICTED_Z {
+        if prior.is_free() {
+            let members = scratch.get(..kept).ok_or(NoEmitter::TooFew)?;
+            let circle = bias::offset_circle(
+                members,
+                stations,
+                main,
+                source.position,
+                solver_at(&source, members, config),
+            )
+            .map_err(NoEmitter::Geometry)?;
+            source.offset_check.ambiguous =
+                circle.rival(source.bias, RIVAL_APART, AMBIGUOUS_DEVIANCE);
+        }
+        return Ok((source, kept));
+    }
+    past_prior(
+        set,
+        scratch,
+        stations,
+        freq,
+        config,
+        rng,
+        (&source, kept),
+        prior,
+    )
+}
+
+/// Past the prior: the data put the main station's offset `z` of its predicted sds from the
+/// prior's mean (`first`: that fit and its bearings' count). Its profile round the whole
+/// circle on the first fit's bearings finds where the offset lies without the prior. Two
+/// minima the data do not tell apart (a gap under [`AMBIGUOUS_DEVIANCE`]) are reported, not
+/// picked from; one is the start of the whole search again with the station's prior relaxed
+/// (no prior; the consensus' offsets searched about that minimum), whose ellipse then carries
+/// the offset's uncertainty. A relaxed fit that fails the checks, or leaves the offset
+/// unmeasured (sd above [`OBSERVED_SD`]: the drive did not turn enough to show it), is no fix
+/// but [`NoEmitter::OffsetBeyondPrior`].
+#[allow(clippy::too_many_arguments)]
+fn past_prior<R: Rng + ?Sized>(
+    set: &[Item],
+    scratch: &mut [Item],
+    stations: &mut [StationSlot],
+    freq: ChannelFreq,
+    config: &LocateConfig,
+    rng: &mut R,
+    first: (&Source, usize),
+    prior: BiasPrior,
+) -> Result<(Source, usize), NoEmitter> {
+    let (source, kept) = first;
+    let main = usize::from(source.bias_station);
+    let members = scratch.get(..kept).ok_or(NoEmitter::TooFew)?;
+    let options = solver_at(source, members, config);
+    let circle = bias::offset_circle(members, stations, main, source.position, options)
+        .map_err(NoEmitter::Geometry)?;
+    let offset = OffsetCircle::offset(circle.best);
+    let mut beyond = OffsetBeyond {
+        station: main as u16,
+        offset,
+        second: None,
+        prior,
+        z: source.offset_check.z,
+    };
+    if circle.second_gap() < AMBIGUOUS_DEVIANCE {
+        beyond.second = circle.second.map(OffsetCircle::offset);
+        return Err(NoEmitter::OffsetBeyondPrior(beyond));
+    }
+    let relaxed = BiasPrior {
+        mean: offset,
+        sd: f32::INFINITY,
+    };
+    if let Some(s) = stations.get_mut(main) {
+        s.set_prior_in_force(relaxed);
+    }
+    let window = OffsetWindow::from_prior(relaxed);
+    match attempt(set, scratch, stations, freq, config, window, rng) {
+        Ok((mut again, kept)) if again.bias_sd <= OBSERVED_SD => {
+            again.offset_check = OffsetCheck {
+                z: source.offset_check.z,
+                relaxed: true,
+                ambiguous: false,
+            };
+            Ok((again, kept))
+        }
+        Ok((again, _)) => {
+            beyond.offset = again.bias;
+            Err(NoEmitter::OffsetBeyondPrior(beyond))
+        }
+        Err(_) => Err(NoEmitter::OffsetBeyondPrior(beyond)),
+    }
+}
+
+/// No source with the offsets inside their priors' window (`why`: no consensus, too noisy, or
+/// no fix the geometry allows): is there one with an offset far outside it (a unit turned 90
+/// degrees agrees with nothing near 0, and one turned 180 puts the emitter behind it)? The
+/// search again with every free station's prior dropped and the consensus' offsets searched
+/// round the whole circle ([`CIRCLE_WINDOWS`] windows, the chance test's significance shared
+/// among them; the window whose source keeps most bearings wins). A source whose main offset
+/// lies within [`CONTRADICTED_Z`] predicted sds of its prior changes nothing (`why` stands);
+/// one beyond goes on to [`past_prior`] as a fix with the prior would.
+fn round_the_circle<R: Rng + ?Sized>(
+    set: &[Item],
+    scratch: &mut [Item],
+    stations: &mut [StationSlot],
+    freq: ChannelFreq,
+    config: &LocateConfig,
+    rng: &mut R,
+    why: NoEmitter,
+) -> Result<(Source, usize), NoEmitter> {
+    let restore = |stations: &mut [StationSlot]| {
+        for s in stations.iter_mut() {
+            s.reset();
+        }
+    };
+    for s in stations.iter_mut() {
+        let p = s.prior_in_force();
+        if p.is_free() {
+            s.set_prior_in_force(BiasPrior {
+                mean: p.mean,
+                sd: f32::INFINITY,
+            });
+        }
+    }
+    // RANSAC crosses pairs with the window's centre removed, so a search centred at 0 never
+    // crosses bearings turned 90 degrees: the circle in windows, each window's chance test at
+    // the significance shared out among them (Bonferroni).
+    let shared = LocateConfig {
+        significance: config.significance / CIRCLE_WINDOWS as f32,
+        ..*config
+    };
+    let width = core::f32::consts::PI / CIRCLE_WINDOWS as f32;
+    let window = |k: usize| OffsetWindow {
+        centre: wrap(width * (2 * k + 1) as f32),
+        half_width: width,
+    };
+    let surprise = |stations: &[StationSlot], found: &Source| {
+        let main = usize::from(found.bias_station);
+        let prior = stations
+            .get(main)
+            .map_or(BiasPrior::calibrated(0.0), |s| s.prior());
+        (prior, prior.surprise_unaided(found.bias, found.bias_sd))
+    };
+    let mut best: Option<(usize, u32)> = None;
+    for k in 0..CIRCLE_WINDOWS {
+        if let Ok((found, _)) = attempt(set, scratch, stations, freq, &shared, window(k), rng) {
+            let beyond = surprise(stations, &found).1.abs() > CONTRADICTED_Z;
+            if beyond && best.is_none_or(|(_, used)| found.used > used) {
+                best = Some((k, found.used));
+            }
+        }
+    }
+    let found = best.map(|(k, _)| attempt(set, scratch, stations, freq, &shared, window(k), rng));
+    let Some(Ok((mut source, kept))) = found else {
+        restore(stations);
+        return Err(why);
+    };
+    let (prior, z) = surprise(stations, &source);
+    if !(z.abs() > CONTRADICTED_Z) {
+        restore(stations);
+        return Err(why);
+    }
+    // The others back to their priors: only the main station's is past it.
+    let main = usize::from(source.bias_station);
+    for (i, s) in stations.iter_mut().enumerate() {
+        if i != main {
+            s.set_prior_in_force(s.prior());
+        }
+    }
+    source.offset_check = OffsetCheck {
+        z,
+        ..OffsetCheck::default()
+    };
+    past_prior(
+        set,
+        scratch,
+        stations,
+        freq,
+        config,
+        rng,
+        (&source, kept),
+        prior,
+    )
+}
+
+/// Windows the circle is searched in when nothing agrees inside the prior's (60 degrees each).
+pub const CIRCLE_WINDOWS: usize = 6;
+
+/// The solver at the noise `source` used (its sigma over its `members`' median).
+fn solver_at(source: &Source, members: &[Item], config: &LocateConfig) -> BiasedOptions {
+    let median = median_sigma(members);
+    let scale = if median > 0.0 {
+        source.sigma / median
+    } else {
+        1.0
+    };
+    BiasedOptions {
+        scale,
+        ..config.solver
+    }
+}
+
+/// A minimum of the offset's profile this far (radians: 30 degrees, two of its steps) from a
+/// fit's offset, and within [`AMBIGUOUS_DEVIANCE`] of the lowest, is a rival the data allow:
+/// the fit stands on the prior alone ([`OffsetCheck::ambiguous`]).
+pub const RIVAL_APART: f32 = 30.0 * core::f32::consts::PI / 180.0;
+
+/// Two minima of an offset's profile round the circle closer than this in deviance (a
+/// likelihood ratio of 1 in 90) are both possible: the data do not choose between them.
+pub const AMBIGUOUS_DEVIANCE: f32 = 9.0;
+
+/// A relaxed fit whose offset sd exceeds this (radians: 15 degrees) did not measure the offset:
+/// its fix would rest on an offset the drive cannot show.
+pub const OBSERVED_SD: f32 = 15.0 * core::f32::consts::PI / 180.0;
+
+/// One pass of the search for a source in `set`, the consensus' common offsets searched in
+/// `window`.
+fn attempt<R: Rng + ?Sized>(
+    set: &[Item],
+    scratch: &mut [Item],
+    stations: &mut [StationSlot],
+    freq: ChannelFreq,
+    config: &LocateConfig,
+    window: OffsetWindow,
+    rng: &mut R,
+) -> Result<(Source, usize), NoEmitter> {
     let consensus = significant_consensus(set, window, config, rng)?;
     let refined = refine(set, scratch, stations, &consensus, config)?;
     let kept = refined.kept as usize;
@@ -273,6 +520,7 @@ fn as_reported(
         p_value: noise.p_value,
         chance,
         consistent: noise.consistent,
+        offset_check: OffsetCheck::default(),
         index_span: [
             first.map(|i| i.index).unwrap_or(0),
             last.map(|i| i.index).unwrap_or(0),

@@ -263,6 +263,7 @@ fn no_emitter(r: &Pipeline) -> String {
             NoEmitter::TooNoisy => "the bearings are too noisy for a fix".into(),
             NoEmitter::TooFew => "too few bearings for a checked fix".into(),
             NoEmitter::Geometry(e) => format!("no fix yet: {e}"),
+            NoEmitter::OffsetBeyondPrior(b) => crate::locate::explain::offset_beyond(&b),
         },
         _ => "no bearing yet".into(),
     }

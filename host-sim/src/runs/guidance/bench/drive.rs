@@ -149,6 +149,7 @@ fn view(f: &BiasedFix) -> FixView {
         covariance: f.covariance,
         consistent: p > 1e-3,
         effective: f.used as f32,
+        offset_beyond_prior: false,
     }
 }
 
@@ -212,6 +213,7 @@ pub fn run(set: Set, policy: Policy, g: Option<&RoadGraph>, run: usize, seed: u6
                     let q = FixQuality {
                         consistent: f.consistent,
                         effective: f.effective,
+                        offset_beyond_prior: f.offset_beyond_prior,
                     };
                     if let Ok(v) = verdict(f.position, &bearings, prior, q, &rule)
                         && v.limit == Limit::Offset
