@@ -43,6 +43,92 @@ pub struct Reach {
     pub stretch: f32,
     /// Whether the region ends within `max_range` of the fix on both sides.
     pub bounded: bool,
+    /// The walk's axis (a unit vector, east and north): the covariance's major axis.
+    pub axis: [f32; 2],
+    /// Along `+axis` then `-axis`: where the region ends, `None` where it ran out to
+    /// `max_range` (or sideways past it). Where the range is open these say how near the
+    /// region comes ([`edge`]).
+    pub ends: [Option<End>; 2],
+    /// -2 ln L at the fix's slice: the deviance the region's threshold is counted from.
+    pub deviance: f32,
+    /// Along `+axis` then `-axis`: the farthest slice's best fit inside the region, relative
+    /// to the fix (zero when none was): where the line of bearing heads.
+    pub farthest: [[f32; 2]; 2],
+}
+
+/// Where the walk left the region on one side: the last slice inside and the first outside
+/// (best fits relative to the fix, metres); the edge is between them ([`edge`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct End {
+    /// The last slice's best fit inside (the fix itself when the first slice was outside).
+    pub inside: [f32; 2],
+    /// The first slice's best fit outside (where a slice failed: where it started).
+    pub outside: [f32; 2],
+}
+
+/// Bisections [`edge`] makes once it has a bracket: its length over 256.
+pub const EDGE_BISECTIONS: u32 = 8;
+
+/// The region's edge on `side` (0: along `+axis`, 1: `-axis`) of a walk `held`, relative to
+/// the fix: probed outward from the fix toward the walk's first slice outside, then bisected
+/// (the walk's own edge interpolates the deviance linearly, fine for the ellipse's size but
+/// far off when its first slice overshoots by kilometres). `None` where the region ran out; the bracket's outer end
+/// when a slice fails (the region reaches no farther than that, as far as is known).
+pub fn edge<T: Sighting>(
+    items: &[T],
+    stations: &mut [StationSlot],
+    fit: Fit<'_>,
+    held: &Reach,
+    side: usize,
+    k: f32,
+) -> Option<[f32; 2]> {
+    let end = (*held.ends.get(side)?)?;
+    let n = [-held.axis[1], held.axis[0]];
+    let centre = fit.fix.position;
+    let options = BiasedOptions {
+        scale: fit.scale,
+        position_sd_m: POSITION_SD_M,
+        ..BiasedOptions::default()
+    };
+    // Along the axis, each probe's slice starting on it (a slice's best fit can run far
+    // sideways, and would make a poor bracket): outward from the fix in steps growing from a
+    // metre until the first probe outside (the walk's first slice can be far beyond the edge,
+    // and fits fail out there), then bisected.
+    let u = held.axis;
+    let far = end.outside[0] * u[0] + end.outside[1] * u[1];
+    let sign = if far < 0.0 { -1.0 } else { 1.0 };
+    let on_axis = |t: f32| [sign * t * u[0], sign * t * u[1]];
+    let probe = |stations: &mut [StationSlot], t: f32| {
+        let q = on_axis(t);
+        let start = Start {
+            position: [centre[0] + q[0], centre[1] + q[1]],
+            offsets: StartOffsets::Fitted,
+        };
+        profile(items, stations, start, n, &Gaussian, options)
+            .map(|p| (p.deviance - held.deviance) / fit.inflation <= k)
+    };
+    let (mut lo, mut hi) = (0.0f32, far.abs());
+    let mut t = 1.0f32;
+    while t < hi {
+        match probe(stations, t) {
+            Ok(true) => lo = t,
+            Ok(false) => {
+                hi = t;
+                break;
+            }
+            Err(_) => return Some(on_axis(t)),
+        }
+        t *= GROWTH;
+    }
+    for _ in 0..EDGE_BISECTIONS {
+        let mid = 0.5 * (lo + hi);
+        match probe(stations, mid) {
+            Ok(true) => lo = mid,
+            Ok(false) => hi = mid,
+            Err(_) => return Some(on_axis(hi)),
+        }
+    }
+    Some(on_axis(hi))
 }
 
 /// What [`reach`] needs to know about the fit (its offsets and their priors are in the station
@@ -99,20 +185,31 @@ pub fn reach<T: Sighting>(
     let at_fix = slice(stations, centre, StartOffsets::Fitted)?;
     let mut cov = *covariance;
     let mut bounded = true;
+    let mut ends = [None; 2];
+    let mut farthest = [[0.0f32; 2]; 2];
     let first = libm::sqrtf(k * l1);
     // Each direction's walk starts from the slice at the fix, whose offsets are kept aside;
     // each later slice from the one before it (the table's current offsets).
     for row in stations.iter_mut() {
         row.keep_current();
     }
-    for sign in [1.0f32, -1.0] {
+    for (side, sign) in [1.0f32, -1.0].into_iter().enumerate() {
         let mut last = (0.0f32, 0.0f32, at_fix);
+        // The end on this side: where the walk left the region, `None` once it ran out.
+        let mut end = Some(End {
+            inside: [0.0; 2],
+            outside: [0.0; 2],
+        });
+        let mut left = false;
         let mut offsets = StartOffsets::Saved;
         let mut s = first;
         let mut inside = true;
         for _ in 0..MAX_SLICES {
             if s > max_range {
-                bounded &= !inside;
+                if inside {
+                    bounded = false;
+                    end = None;
+                }
                 break;
             }
             // Start where the last slice's best fit was, moved out along the axis.
@@ -122,6 +219,11 @@ pub fn reach<T: Sighting>(
                 last.2.position[1] + step * u[1],
             ];
             let Ok(p) = slice(stations, from, offsets) else {
+                // No fit here: the edge is known only to lie before this slice's start.
+                if let Some(e) = end.as_mut() {
+                    e.outside = [from[0] - centre[0], from[1] - centre[1]];
+                }
+                left = true;
                 break;
             };
             offsets = StartOffsets::Current;
@@ -129,6 +231,7 @@ pub fn reach<T: Sighting>(
             if !(libm::hypotf(q[0], q[1]) <= max_range) {
                 // The slice's best fit ran off sideways past the search's range.
                 bounded = false;
+                end = None;
                 break;
             }
             let d = (p.deviance - at_fix.deviance) / fit.inflation;
@@ -143,6 +246,11 @@ pub fn reach<T: Sighting>(
                     );
                 }
                 inside = true;
+                left = false;
+                if let Some(e) = end.as_mut() {
+                    e.inside = q;
+                }
+                farthest[side] = q;
             } else {
                 if inside {
                     // The edge, between the last slice inside and this one.
@@ -152,6 +260,10 @@ pub fn reach<T: Sighting>(
                         last.2.position[1] + f * (p.position[1] - last.2.position[1]) - centre[1],
                     ];
                     hold(&mut cov, edge, k);
+                    if let Some(e) = end.as_mut() {
+                        e.outside = q;
+                    }
+                    left = true;
                 }
                 inside = false;
                 if d > STOP * k {
@@ -161,6 +273,17 @@ pub fn reach<T: Sighting>(
             last = (s, d, p);
             s *= GROWTH;
         }
+        // A walk that stopped inside (a slice failed) has no edge: its last slice then.
+        ends[side] = end.map(|e| {
+            if left {
+                e
+            } else {
+                End {
+                    outside: e.inside,
+                    ..e
+                }
+            }
+        });
     }
     let (w1, _, _) = linalg::eigen2(&cov).ok_or(Error::NonFinite)?;
     let stretch = libm::sqrtf(w1 / l1);
@@ -169,6 +292,10 @@ pub fn reach<T: Sighting>(
         covariance: cov,
         stretch,
         bounded,
+        axis: u,
+        ends,
+        deviance: at_fix.deviance,
+        farthest,
     })
 }
 

@@ -7,12 +7,21 @@ use super::super::bias::{self, BiasedFix, BiasedOptions, Sighting, StationSlot};
 use super::super::consistency;
 use super::super::noise::median_sigma;
 use super::super::robust::{self, Consensus, OffsetWindow, RefineOptions, RobustFix, TRIM_CUT};
-use super::region::{Region, confidence_region};
-use super::{ChannelFreq, Item, LocateConfig, NoEmitter, NoiseModel, Source};
+use super::region::{Confidence, Held, Wedge, confidence_region};
+use super::{ChannelFreq, Item, LocateConfig, NoEmitter, NoiseModel, Region, Source};
 use crate::error::{Error, check_finite};
 use crate::model::bearing::{predicted, wrap};
 use crate::stats;
 use rand_core::Rng;
+
+/// What a set of bearings agreeing on a source came to.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum Found {
+    /// A fix, and how many bearings it used.
+    Source(Source, usize),
+    /// The range is open: the line of bearing and range interval, and the bearings used.
+    Region(Region, usize),
+}
 
 /// One source from `set`: the consensus, its refinement and its honest statistics. On success
 /// the source's bearings are the first `kept` of `scratch`, and each station's offset in the
@@ -24,7 +33,7 @@ pub(super) fn find_source<R: Rng + ?Sized>(
     freq: ChannelFreq,
     config: &LocateConfig,
     rng: &mut R,
-) -> Result<(Source, usize), NoEmitter> {
+) -> Result<Found, NoEmitter> {
     let window = OffsetWindow::from_stations(set, stations);
     let consensus = significant_consensus(set, window, config, rng)?;
     let refined = refine(set, scratch, stations, &consensus, config)?;
@@ -41,14 +50,20 @@ pub(super) fn find_source<R: Rng + ?Sized>(
     }
     let noise = noise_used(members, stations, &refined, median, config)?;
     let at_scale = at_noise(members, stations, &refined, noise.scale, config.solver)?;
-    let region = confidence_region(
+    let region = match confidence_region(
         members,
         stations,
         &at_scale,
         &refined.fix.position,
         noise.for_region(),
         config,
-    )?;
+    )? {
+        Held::Bounded(c) => c,
+        Held::Open(w) => {
+            let region = as_region(members, freq, &w, &noise, config.confidence);
+            return Ok(Found::Region(region, kept));
+        }
+    };
     let source = as_reported(members, freq, &refined, &at_scale, &noise, &region, chance);
     check_finite(&[
         source.position[0],
@@ -68,7 +83,41 @@ pub(super) fn find_source<R: Rng + ?Sized>(
         source.chance,
     ])
     .map_err(NoEmitter::Geometry)?;
-    Ok((source, kept))
+    Ok(Found::Source(source, kept))
+}
+
+/// The open region as reported.
+fn as_region(
+    members: &[Item],
+    freq: ChannelFreq,
+    w: &Wedge,
+    noise: &Noise,
+    confidence: f32,
+) -> Region {
+    let (first, last) = (members.first(), members.last());
+    Region {
+        freq_mhz: freq.mean,
+        channel_lowest_mhz: freq.lowest,
+        apex: w.apex,
+        theta: w.theta,
+        half_width: w.half_width,
+        min_range: w.min_range,
+        max_range: w.max_range,
+        parallel: w.parallel,
+        confidence,
+        sigma: noise.sigma,
+        sigma_estimated: noise.estimated,
+        used: members.len() as u32,
+        effective: noise.effective,
+        index_span: [
+            first.map(|i| i.index).unwrap_or(0),
+            last.map(|i| i.index).unwrap_or(0),
+        ],
+        time_span: [
+            first.map(|i| i.obs.time_s).unwrap_or(0.0),
+            last.map(|i| i.obs.time_s).unwrap_or(0.0),
+        ],
+    }
 }
 
 /// RANSAC's best point, if luck is unlikely to have lined up as many bearings on it.
@@ -247,7 +296,7 @@ fn as_reported(
     refined: &RobustFix,
     at_scale: &BiasedFix,
     noise: &Noise,
-    region: &Region,
+    region: &Confidence,
     chance: f32,
 ) -> Source {
     let (first, last) = (members.first(), members.last());
