@@ -31,8 +31,33 @@ use report::{
 };
 use stations::station_reports;
 
+/// Why there is no fix, and, when the field pipeline's channels hold regions (an open range),
+/// the report without a fix that the maps and the live page draw them from.
+#[derive(Debug, Clone)]
+pub struct Unlocated {
+    /// Why there is no fix, in words.
+    pub error: String,
+    /// The report of the channels (no emitter, a region in at least one).
+    pub located: Option<Box<Located>>,
+}
+
+impl From<String> for Unlocated {
+    fn from(error: String) -> Self {
+        Self {
+            error,
+            located: None,
+        }
+    }
+}
+
 /// Locate every emitter of a decoded capture.
 pub fn locate(d: &Decoded, o: &LocateOptions) -> Result<Located, String> {
+    locate_answer(d, o).map_err(|u| u.error)
+}
+
+/// Locate every emitter of a decoded capture; no fix but regions (open ranges) is an error
+/// that keeps them.
+pub fn locate_answer(d: &Decoded, o: &LocateOptions) -> Result<Located, Unlocated> {
     o.check()?;
     let unit = d.unit.report();
     // The unit's own fix is the report of a capture of its output, when it has one.
@@ -42,10 +67,10 @@ pub fn locate(d: &Decoded, o: &LocateOptions) -> Result<Located, String> {
         return Ok(unit_only(d, o, u));
     }
     let Some(frame) = d.frame else {
-        return Err(no_vehicle_position(d));
+        return Err(no_vehicle_position(d).into());
     };
     if d.observations.is_empty() {
-        return Err(no_bearing(d));
+        return Err(no_bearing(d).into());
     }
     let mut rejected = rejections(d);
     let ((emitters, other_sources, channels, drawn, cloud, sources), stations) =
@@ -61,7 +86,7 @@ pub fn locate(d: &Decoded, o: &LocateOptions) -> Result<Located, String> {
             let stations = station_reports(d, o.network.as_deref(), &setup, &[], &[], &[]);
             (method::located_by(d, o, &frame, &mut rejected)?, stations)
         };
-    Ok(Located {
+    let located = Located {
         report: LocateReport {
             method: o.method.name(),
             emitters,
@@ -81,7 +106,21 @@ pub fn locate(d: &Decoded, o: &LocateOptions) -> Result<Located, String> {
         drawn,
         cloud,
         emitters: sources,
-    })
+    };
+    // Regions but no emitter: no fix, the regions kept for the report.
+    let open = located
+        .report
+        .channels
+        .iter()
+        .find(|c| c.region.is_some())
+        .map(|c| c.outcome.clone());
+    match open {
+        Some(error) if located.report.emitters.is_empty() => Err(Unlocated {
+            error,
+            located: Some(Box::new(located)),
+        }),
+        _ => Ok(located),
+    }
 }
 
 /// A capture of a DF unit's own output (its user port): the unit's fix is the report.
@@ -135,7 +174,7 @@ pub fn locate_guided(
     o: &LocateOptions,
     guide: &mut Guide,
 ) -> Result<Located, Box<NoFix>> {
-    match locate(d, o) {
+    match locate_answer(d, o) {
         Ok(mut l) => {
             let advice = match (l.emitters.is_empty(), o.method) {
                 (false, _) | (true, Method::MlRobust) => located_advice(guide, d, &l.emitters, o),
@@ -151,11 +190,22 @@ pub fn locate_guided(
             }
             Ok(l)
         }
-        Err(error) => {
+        Err(Unlocated { error, mut located }) => {
             let advice = located_advice(guide, d, &[], o);
+            if let Some(l) = located.as_mut() {
+                l.report.advice = advice.as_ref().ok().cloned();
+                l.report.advice_error = advice.as_ref().err().cloned();
+            }
+            let channels = located
+                .as_ref()
+                .map(|l| l.report.channels.clone())
+                .unwrap_or_default();
             Err(Box::new(NoFix {
                 used: d.observations.len() as u32,
                 error,
+                region: channels.iter().find_map(|c| c.region),
+                channels,
+                located,
                 advice_error: advice.as_ref().err().cloned(),
                 advice: advice.ok(),
                 unit: d.unit.report(),

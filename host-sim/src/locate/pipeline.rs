@@ -6,12 +6,15 @@ use crate::estimate::{PipelineRun, pipeline, pool};
 use crate::inputs::capture::Decoded;
 use crate::inputs::stations::Reference;
 use crate::locate::Parts;
-use crate::locate::explain::{explain, no_emitter};
-use crate::locate::report::{ChannelSummary, Drawn, EllipseReport, SourceReport, geodetic};
+use crate::locate::explain::{explain, no_emitter, open_range};
+use crate::locate::report::{
+    ChannelSummary, Drawn, EllipseReport, RegionReport, SourceReport, geodetic,
+};
 use crate::locate::stations::{StationReport, station_reports};
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_core::fix::locate::Observation;
-use foxhunt_core::fix::locate::{ChannelOutcome, Source};
+use foxhunt_core::fix::locate::{ChannelOutcome, Region, Source};
+use foxhunt_core::model::bearing::theta_to_azimuth;
 use foxhunt_core::{Bearing, Error};
 use std::borrow::Cow;
 use std::collections::BTreeMap;
@@ -41,6 +44,30 @@ fn source_report(s: &Source, frame: &LocalFrame, why: Option<&'static str>) -> S
     }
 }
 
+/// A pipeline region as the report has it.
+pub(crate) fn region_report(r: &Region, frame: &LocalFrame) -> RegionReport {
+    let g = geodetic(frame, r.apex);
+    RegionReport {
+        freq_mhz: r.freq_mhz,
+        lat: g.lat,
+        lon: g.lon,
+        east_m: r.apex[0],
+        north_m: r.apex[1],
+        bearing_deg: theta_to_azimuth(r.theta).to_degrees(),
+        half_width_deg: r.half_width.to_degrees(),
+        min_range_m: r.min_range,
+        max_range_m: r.max_range,
+        parallel: r.parallel,
+        confidence: r.confidence,
+        sigma_deg: r.sigma.to_degrees(),
+        used: r.used,
+        effective: r.effective,
+    }
+}
+
+/// Every channel of the field pipeline's `locate` (emitters, regions and others): a channel
+/// whose range is open has its region; an emitter of `located_by_pipeline` is absent when
+/// only regions came out (the caller then reports no fix, with them).
 pub(crate) fn located_by_pipeline(
     d: &Decoded,
     o: &LocateOptions,
@@ -121,8 +148,18 @@ pub(crate) fn located_by_pipeline(
     let mut channels = Vec::new();
     let mut why_none = None;
     for c in r.channels() {
+        let mut region = None;
         let outcome = match c.outcome {
             ChannelOutcome::Emitter(_) => "emitter".to_string(),
+            ChannelOutcome::Region(i) => {
+                let Some(g) = r.regions().get(i).map(|g| region_report(g, frame)) else {
+                    continue;
+                };
+                region = Some(g);
+                let text = open_range(&g);
+                why_none.get_or_insert(text.clone());
+                text
+            }
             ChannelOutcome::NoConsistentEmitter(why) => {
                 // A vehicle that never moved, or bearings that never cross, say so plainly.
                 let bearings = bearings();
@@ -143,6 +180,7 @@ pub(crate) fn located_by_pipeline(
             freq_mhz: c.freq_mhz,
             bearings: c.bearings,
             outcome,
+            region,
         });
     }
     for (i, r) in references.iter().enumerate() {
@@ -155,9 +193,10 @@ pub(crate) fn located_by_pipeline(
                 r.name,
                 heard.count()
             ),
+            region: None,
         });
     }
-    if r.emitters().is_empty() {
+    if r.emitters().is_empty() && r.regions().is_empty() {
         return Err(why_none.unwrap_or_else(|| "no consistent emitter".into()));
     }
     const WEAKER: &str = "fewer bearings agree on it than on its channel's emitter: a \

@@ -90,6 +90,41 @@ pub struct SourceReport {
     pub why: Option<&'static str>,
 }
 
+/// What the bearings of a channel hold when the range is open (no fix): a line of bearing from
+/// the observers, its half-width and the range interval (field names are stable;
+/// docs/src/field.md, "Regions").
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct RegionReport {
+    /// The channel's frequency, MHz (null for bearings without one).
+    pub freq_mhz: Option<f32>,
+    /// The apex (the observers' weighted centroid), latitude, degrees.
+    pub lat: f64,
+    /// The apex, longitude, degrees.
+    pub lon: f64,
+    /// The apex, east of the local origin, metres.
+    pub east_m: f32,
+    /// The apex, north of the local origin, metres.
+    pub north_m: f32,
+    /// The line of bearing, degrees clockwise from true north.
+    pub bearing_deg: f32,
+    /// Its half-width at `confidence`, degrees.
+    pub half_width_deg: f32,
+    /// The nearest range the bearings allow, metres.
+    pub min_range_m: f32,
+    /// The farthest, metres (null: unbounded).
+    pub max_range_m: Option<f32>,
+    /// The bearings are parallel (they never cross), not merely crossing too shallowly.
+    pub parallel: bool,
+    /// Probability inside.
+    pub confidence: f32,
+    /// Bearing noise used, degrees.
+    pub sigma_deg: f32,
+    /// Bearings used.
+    pub used: u32,
+    /// Their effective number.
+    pub effective: f32,
+}
+
 /// One channel and what it came to.
 #[derive(Debug, Clone, Serialize)]
 pub struct ChannelSummary {
@@ -99,6 +134,9 @@ pub struct ChannelSummary {
     pub bearings: u32,
     /// `emitter`, or why there is none.
     pub outcome: String,
+    /// What the bearings hold when the range is open (absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub region: Option<RegionReport>,
 }
 
 /// What `locate` found (the `--json` object; field names are stable).
@@ -168,6 +206,17 @@ pub struct NoFix {
     pub used: u32,
     /// Why there is no fix.
     pub error: String,
+    /// What the bearings hold when the range is open: the first channel's region (absent
+    /// when none has one).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub region: Option<RegionReport>,
+    /// Every channel and what it came to, when the field pipeline got that far (absent
+    /// otherwise).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub channels: Vec<ChannelSummary>,
+    /// The report without a fix, for the maps to draw the regions (not in the JSON).
+    #[serde(skip)]
+    pub located: Option<Box<Located>>,
     /// Where to drive (across the line of bearing) before there is a fix.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub advice: Option<LocatedAdvice>,
