@@ -46,7 +46,7 @@ pub struct Reach {
     /// The walk's axis (a unit vector, east and north): the covariance's major axis.
     pub axis: [f32; 2],
     /// Along `+axis` then `-axis`: where the region ends, `None` where it ran out to
-    /// `max_range` (or sideways past it). Where the range is open these say how near the
+    /// `max_range` along the axis ([`End::sideways`] where it ran off sideways). Where the range is open these say how near the
     /// region comes ([`edge`]).
     pub ends: [Option<End>; 2],
     /// -2 ln L at the fix's slice: the deviance the region's threshold is counted from.
@@ -62,73 +62,88 @@ pub struct Reach {
 pub struct End {
     /// The last slice's best fit inside (the fix itself when the first slice was outside).
     pub inside: [f32; 2],
-    /// The first slice's best fit outside (where a slice failed: where it started).
+    /// The first slice's best fit outside (where a slice failed or ran off sideways: where it
+    /// started).
     pub outside: [f32; 2],
+    /// The region ran off sideways past `max_range` at `outside`: open, though not along the
+    /// axis.
+    pub sideways: bool,
 }
 
-/// Bisections [`edge`] makes once it has a bracket: its length over 256.
+/// Bisections [`nearest`] makes once it has a bracket: its length over 256.
 pub const EDGE_BISECTIONS: u32 = 8;
 
-/// The region's edge on `side` (0: along `+axis`, 1: `-axis`) of a walk `held`, relative to
-/// the fix: probed outward from the fix toward the walk's first slice outside, then bisected
-/// (the walk's own edge interpolates the deviance linearly, fine for the ellipse's size but
-/// far off when its first slice overshoots by kilometres). `None` where the region ran out; the bracket's outer end
-/// when a slice fails (the region reaches no farther than that, as far as is known).
-pub fn edge<T: Sighting>(
+/// The nearest range along a ray that the likelihood-ratio region at threshold `k` reaches:
+/// the ray from `apex` along the unit vector `u`, searched inward from `from` metres (a range
+/// inside the region: the fix's) in steps shrinking by [`GROWTH`] down to `floor` metres (the
+/// drive's own extent, within which no ray describes the region), then bisected. Each probe is
+/// the best fit on the slice across the ray, warm-started from the last probe inside (with its
+/// offsets), its deviance counted from `held`'s fix. 0 when the region reaches `floor` (or a
+/// probe fails: the region is then not known to end farther out).
+#[allow(clippy::too_many_arguments)]
+pub fn nearest<T: Sighting>(
     items: &[T],
     stations: &mut [StationSlot],
     fit: Fit<'_>,
     held: &Reach,
-    side: usize,
+    apex: [f32; 2],
+    u: [f32; 2],
+    from: f32,
+    floor: f32,
     k: f32,
-) -> Option<[f32; 2]> {
-    let end = (*held.ends.get(side)?)?;
-    let n = [-held.axis[1], held.axis[0]];
-    let centre = fit.fix.position;
+) -> f32 {
+    let n = [-u[1], u[0]];
     let options = BiasedOptions {
         scale: fit.scale,
         position_sd_m: POSITION_SD_M,
         ..BiasedOptions::default()
     };
-    // Along the axis, each probe's slice starting on it (a slice's best fit can run far
-    // sideways, and would make a poor bracket): outward from the fix in steps growing from a
-    // metre until the first probe outside (the walk's first slice can be far beyond the edge,
-    // and fits fail out there), then bisected.
-    let u = held.axis;
-    let far = end.outside[0] * u[0] + end.outside[1] * u[1];
-    let sign = if far < 0.0 { -1.0 } else { 1.0 };
-    let on_axis = |t: f32| [sign * t * u[0], sign * t * u[1]];
-    let probe = |stations: &mut [StationSlot], t: f32| {
-        let q = on_axis(t);
+    for row in stations.iter_mut() {
+        row.keep_current();
+    }
+    let point = |r: f32| [apex[0] + r * u[0], apex[1] + r * u[1]];
+    // The last probe inside: its range and best fit.
+    let mut inside = (from, point(from));
+    let probe = |stations: &mut [StationSlot], r: f32, inside: &mut (f32, [f32; 2])| {
+        let step = r - inside.0;
         let start = Start {
-            position: [centre[0] + q[0], centre[1] + q[1]],
-            offsets: StartOffsets::Fitted,
+            position: [inside.1[0] + step * u[0], inside.1[1] + step * u[1]],
+            offsets: StartOffsets::Saved,
         };
-        profile(items, stations, start, n, &Gaussian, options)
-            .map(|p| (p.deviance - held.deviance) / fit.inflation <= k)
+        let p = profile(items, stations, start, n, &Gaussian, options)?;
+        let held_in = (p.deviance - held.deviance) / fit.inflation <= k;
+        if held_in {
+            for row in stations.iter_mut() {
+                row.keep_current();
+            }
+            *inside = (r, p.position);
+        }
+        Ok::<bool, Error>(held_in)
     };
-    let (mut lo, mut hi) = (0.0f32, far.abs());
-    let mut t = 1.0f32;
-    while t < hi {
-        match probe(stations, t) {
-            Ok(true) => lo = t,
+    let mut out = None;
+    let mut r = from / GROWTH;
+    while r > floor {
+        match probe(stations, r, &mut inside) {
+            Ok(true) => r /= GROWTH,
             Ok(false) => {
-                hi = t;
+                out = Some(r);
                 break;
             }
-            Err(_) => return Some(on_axis(t)),
+            Err(_) => return 0.0,
         }
-        t *= GROWTH;
     }
+    let Some(mut lo) = out else {
+        return 0.0;
+    };
     for _ in 0..EDGE_BISECTIONS {
-        let mid = 0.5 * (lo + hi);
-        match probe(stations, mid) {
-            Ok(true) => lo = mid,
-            Ok(false) => hi = mid,
-            Err(_) => return Some(on_axis(hi)),
+        let mid = 0.5 * (lo + inside.0);
+        match probe(stations, mid, &mut inside) {
+            Ok(true) => {}
+            Ok(false) => lo = mid,
+            Err(_) => break,
         }
     }
-    Some(on_axis(hi))
+    lo.max(floor)
 }
 
 /// What [`reach`] needs to know about the fit (its offsets and their priors are in the station
@@ -199,6 +214,7 @@ pub fn reach<T: Sighting>(
         let mut end = Some(End {
             inside: [0.0; 2],
             outside: [0.0; 2],
+            sideways: false,
         });
         let mut left = false;
         let mut offsets = StartOffsets::Saved;
@@ -229,9 +245,14 @@ pub fn reach<T: Sighting>(
             offsets = StartOffsets::Current;
             let q = [p.position[0] - centre[0], p.position[1] - centre[1]];
             if !(libm::hypotf(q[0], q[1]) <= max_range) {
-                // The slice's best fit ran off sideways past the search's range.
+                // The slice's best fit ran off sideways past the search's range: the region
+                // is open, but along the axis its edge lies before this slice.
                 bounded = false;
-                end = None;
+                if let Some(e) = end.as_mut() {
+                    e.outside = [from[0] - centre[0], from[1] - centre[1]];
+                    e.sideways = true;
+                }
+                left = true;
                 break;
             }
             let d = (p.deviance - at_fix.deviance) / fit.inflation;

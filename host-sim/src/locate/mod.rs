@@ -27,7 +27,8 @@ use explain::{no_bearing, no_vehicle_position};
 use foxhunt_core::Method;
 use foxhunt_core::fix::locate::Source;
 use report::{
-    ChannelSummary, Drawn, LatLonReport, LocateReport, Located, NoFix, SourceReport, rejections,
+    AcrossReport, ChannelSummary, Drawn, LatLonReport, LocateReport, Located, NoFix, RegionReport,
+    SourceReport, geodetic, rejections,
 };
 use stations::station_reports;
 
@@ -155,6 +156,39 @@ fn unit_only(d: &Decoded, o: &LocateOptions, u: UnitReport) -> Located {
     }
 }
 
+/// A leg across a region's line of bearing from the vehicle's last position (none before a
+/// GPS fix).
+fn across_region(d: &Decoded, r: &RegionReport) -> Option<AcrossReport> {
+    use crate::guidance::across::{LineOfBearing, across};
+    let frame = d.frame?;
+    let bearings: Vec<foxhunt_core::Bearing> = d.bearings().copied().collect();
+    let vehicle = bearings.last()?.vehicle;
+    let heading = crate::guidance::track_heading(&bearings)
+        .map(|h| foxhunt_core::model::bearing::theta_to_azimuth(h).to_degrees());
+    let line = LineOfBearing {
+        bearing_deg: r.bearing_deg,
+        half_width_deg: r.half_width_deg,
+        min_range_m: r.min_range_m,
+    };
+    let leg = across(&line, vehicle, heading);
+    let g = geodetic(&frame, leg.to);
+    Some(AcrossReport {
+        leg,
+        target: LatLonReport {
+            lat: g.lat,
+            lon: g.lon,
+        },
+        line: format!(
+            "drive {} heading {:.0} deg, across the line of bearing, to {:.5}, {:.5}: the \
+             bearing's turn gives the range",
+            explain::distance_words(leg.distance_m),
+            leg.heading_deg,
+            g.lat,
+            g.lon
+        ),
+    })
+}
+
 /// What one locate path gives: emitters, other sources, channels, drawn sources, particles,
 /// the pipeline's emitters.
 pub(crate) type Parts = (
@@ -200,10 +234,12 @@ pub fn locate_guided(
                 .as_ref()
                 .map(|l| l.report.channels.clone())
                 .unwrap_or_default();
+            let region = channels.iter().find_map(|c| c.region);
             Err(Box::new(NoFix {
                 used: d.observations.len() as u32,
                 error,
-                region: channels.iter().find_map(|c| c.region),
+                across: region.and_then(|r| across_region(d, &r)),
+                region,
                 channels,
                 located,
                 advice_error: advice.as_ref().err().cloned(),

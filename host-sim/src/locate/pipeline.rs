@@ -13,8 +13,7 @@ use crate::locate::report::{
 use crate::locate::stations::{StationReport, station_reports};
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_core::fix::locate::Observation;
-use foxhunt_core::fix::locate::{ChannelOutcome, Region, Source};
-use foxhunt_core::model::bearing::theta_to_azimuth;
+use foxhunt_core::fix::locate::{ChannelOutcome, Source};
 use foxhunt_core::{Bearing, Error};
 use std::borrow::Cow;
 use std::collections::BTreeMap;
@@ -41,27 +40,6 @@ fn source_report(s: &Source, frame: &LocalFrame, why: Option<&'static str>) -> S
         consistent: Some(s.consistent),
         time_span_s: Some(s.time_span),
         why,
-    }
-}
-
-/// A pipeline region as the report has it.
-pub(crate) fn region_report(r: &Region, frame: &LocalFrame) -> RegionReport {
-    let g = geodetic(frame, r.apex);
-    RegionReport {
-        freq_mhz: r.freq_mhz,
-        lat: g.lat,
-        lon: g.lon,
-        east_m: r.apex[0],
-        north_m: r.apex[1],
-        bearing_deg: theta_to_azimuth(r.theta).to_degrees(),
-        half_width_deg: r.half_width.to_degrees(),
-        min_range_m: r.min_range,
-        max_range_m: r.max_range,
-        parallel: r.parallel,
-        confidence: r.confidence,
-        sigma_deg: r.sigma.to_degrees(),
-        used: r.used,
-        effective: r.effective,
     }
 }
 
@@ -152,7 +130,7 @@ pub(crate) fn located_by_pipeline(
         let outcome = match c.outcome {
             ChannelOutcome::Emitter(_) => "emitter".to_string(),
             ChannelOutcome::Region(i) => {
-                let Some(g) = r.regions().get(i).map(|g| region_report(g, frame)) else {
+                let Some(g) = r.regions().get(i).map(|g| RegionReport::of(g, frame)) else {
                     continue;
                 };
                 region = Some(g);

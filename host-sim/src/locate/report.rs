@@ -8,7 +8,8 @@ use crate::inputs::unit::UnitReport;
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;
 use foxhunt_core::fix::ellipse::Ellipse;
-use foxhunt_core::fix::locate::Source;
+use foxhunt_core::fix::locate::{Region, Source};
+use foxhunt_core::model::bearing::theta_to_azimuth;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -125,6 +126,31 @@ pub struct RegionReport {
     pub effective: f32,
 }
 
+impl RegionReport {
+    /// A field pipeline region in `frame`.
+    pub fn of(r: &Region, frame: &LocalFrame) -> Self {
+        let g = geodetic(frame, r.apex);
+        // 359.99... is north too: 0, not "360.0".
+        let b = theta_to_azimuth(r.theta).to_degrees().rem_euclid(360.0);
+        Self {
+            freq_mhz: r.freq_mhz,
+            lat: g.lat,
+            lon: g.lon,
+            east_m: r.apex[0],
+            north_m: r.apex[1],
+            bearing_deg: if b >= 359.95 { 0.0 } else { b },
+            half_width_deg: r.half_width.to_degrees(),
+            min_range_m: r.min_range,
+            max_range_m: r.max_range,
+            parallel: r.parallel,
+            confidence: r.confidence,
+            sigma_deg: r.sigma.to_degrees(),
+            used: r.used,
+            effective: r.effective,
+        }
+    }
+}
+
 /// One channel and what it came to.
 #[derive(Debug, Clone, Serialize)]
 pub struct ChannelSummary {
@@ -214,6 +240,10 @@ pub struct NoFix {
     /// otherwise).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub channels: Vec<ChannelSummary>,
+    /// With a region: a leg across its line of bearing, to measure the range (absent
+    /// otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub across: Option<AcrossReport>,
     /// The report without a fix, for the maps to draw the regions (not in the JSON).
     #[serde(skip)]
     pub located: Option<Box<Located>>,
@@ -226,6 +256,19 @@ pub struct NoFix {
     /// What a DF unit running foxhunt's firmware said, as in [`LocateReport::unit`].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub unit: Option<UnitReport>,
+}
+
+/// Where to drive when the range is open: across the line of bearing
+/// ([`crate::guidance::across`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct AcrossReport {
+    /// The leg's heading and length.
+    #[serde(flatten)]
+    pub leg: crate::guidance::across::Across,
+    /// Where it ends.
+    pub target: LatLonReport,
+    /// The advice in one line.
+    pub line: String,
 }
 
 /// Rejections by reason, every reason listed (zero included) so scripts can rely on the keys.

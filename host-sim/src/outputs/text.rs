@@ -1,8 +1,8 @@
 //! The terminal's words for what `locate` found: the report, and one line per live update.
 
 use crate::inputs::unit::UnitReport;
-use crate::locate::report::LocatedAdvice;
 use crate::locate::explain::range_words;
+use crate::locate::report::LocatedAdvice;
 use crate::locate::report::{LocateReport, NoFix, RegionReport, SourceReport};
 use std::fmt::Write;
 

@@ -133,16 +133,13 @@ pub(super) fn confidence_region(
 /// a point at range r along phi at phi + d / r, and the weighted d sum to zero), so the line of
 /// bearing is a straight ray from it. Its direction is the one the region's far slices take.
 ///
-/// The half-width is the `confidence` quantile (normal, or Student's t with the estimated
-/// noise's degrees of freedom) of the direction's sd at long range, where every station's
-/// offset is confounded with the direction: each station's bearings give their mean at
-/// precision W = sum 1 / (scale sigma)^2 / (N / N_eff), its offset prior P = 1 / sd^2 is added
-/// in series (1 / (1 / W + 1 / P); a station without a prior gives nothing), the stations in
-/// parallel. It is widened to hold the fix and the region's near end when they lie off the ray
+/// The half-width is the direction's at long range, where every station's offset is
+/// confounded with the direction ([`direction_half_width`]). It is widened to hold the fix and the region's near end when they lie off the ray
 /// beyond the drive's own extent (a drive not small against the range).
 ///
-/// The range interval runs from the region's nearest point (the likelihood-ratio region's end
-/// toward the observers, or the fix if nearer) to its far end, `None` where it ran out.
+/// The range interval runs from the likelihood-ratio region's nearest point along the ray
+/// ([`reach::nearest`]; the drive's extent when it reaches that close) to its far end, `None`
+/// where it ran out.
 fn wedge(
     members: &[Item],
     stations: &mut [StationSlot],
@@ -156,9 +153,10 @@ fn wedge(
     let fix = fit.fix.position;
     let at = |q: [f32; 2]| [fix[0] + q[0] - apex[0], fix[1] + q[1] - apex[1]];
     // The far side: the one that ran out (the one farther from the apex if both did).
-    let far_side = match held.ends {
-        [None, Some(_)] => 0,
-        [Some(_), None] => 1,
+    let open = |e: Option<reach::End>| e.is_none_or(|e| e.sideways);
+    let far_side = match held.ends.map(open) {
+        [true, false] => 0,
+        [false, true] => 1,
         _ => {
             let r = |q| {
                 let p = at(q);
@@ -175,23 +173,25 @@ fn wedge(
         libm::atan2f(p[1], p[0])
     };
     let u = [libm::cosf(theta), libm::sinf(theta)];
-    let precision = direction_precision(members, stations, noise.scale, noise.inflation);
-    let z = quantile(confidence, noise.dof)?;
-    let mut half_width = half_width_of(z, precision);
-    // The range along the ray of each point the region is known to hold, and how far off the
-    // ray it lies.
-    let near = reach::edge(members, stations, fit, held, 1 - far_side, k);
-    let mut min_range = f32::INFINITY;
-    for q in [Some([0.0f32; 2]), near].into_iter().flatten() {
-        let p = at(q);
-        let along = p[0] * u[0] + p[1] * u[1];
-        let off = wrap(libm::atan2f(p[1], p[0]) - theta).abs();
-        if along > spread {
-            half_width = half_width.max(off);
-        }
-        min_range = min_range.min(along.max(0.0));
+    let mut half_width = direction_half_width(
+        members,
+        stations,
+        noise.scale,
+        noise.inflation,
+        confidence,
+        noise.dof,
+    )?;
+    // The nearest range: searched along the ray inward from the fix's range (the fix when it
+    // lies within the drive's extent, or behind the apex: the drive's extent), the half-width
+    // widened to hold the fix when it lies off the ray beyond the drive's extent.
+    let p = at([0.0; 2]);
+    let along = p[0] * u[0] + p[1] * u[1];
+    let from = along.max(spread);
+    let min_range = reach::nearest(members, stations, fit, held, apex, u, from, spread, k);
+    if along > spread {
+        half_width = half_width.max(wrap(libm::atan2f(p[1], p[0]) - theta).abs());
     }
-    let max_range = held.ends[far_side].map(|e| {
+    let max_range = held.ends[far_side].filter(|e| !e.sideways).map(|e| {
         let p = at(e.outside);
         libm::hypotf(p[0], p[1]).max(min_range)
     });
@@ -235,18 +235,23 @@ fn apex_of(members: &[Item]) -> Result<([f32; 2], f32), Error> {
     Ok((apex, libm::sqrtf(spread)))
 }
 
-/// The information on the direction of a distant emitter, rad^-2: each station's bearings give
-/// their mean at W = sum 1 / (scale sigma)^2 / inflation, its offset prior (P = 1 / sd^2) in
-/// series, 1 / (1 / W + 1 / P) (a calibrated station gives W, one without a prior nothing),
-/// the stations summed.
-fn direction_precision(
+/// The half-width at `confidence` of the direction of a distant emitter, radians (pi: any
+/// direction, without information). Each station's bearings give their mean at W = sum 1 /
+/// (scale sigma)^2 / inflation, its offset prior (P = 1 / sd^2) in series, 1 / (1 / W + 1 /
+/// P) (a calibrated station gives W, one without a prior nothing), the stations summed. The
+/// variance splits into the noise's share (1 / sum W, scaled by Student's t with `dof` when
+/// the noise was estimated) and the offsets' (known priors: the normal quantile); a t on the
+/// whole would count the prior's sd as estimated too.
+fn direction_half_width(
     members: &[Item],
     stations: &[StationSlot],
     scale: f32,
     inflation: f32,
-) -> f32 {
+    confidence: f32,
+    dof: Option<f32>,
+) -> Result<f32, Error> {
     let inflation = inflation.max(1.0);
-    let mut precision = 0.0f32;
+    let (mut precision, mut noise) = (0.0f32, 0.0f32);
     for (s, slot) in stations.iter().enumerate() {
         let w: f32 = members
             .iter()
@@ -260,6 +265,7 @@ fn direction_precision(
         if !(w > 0.0) {
             continue;
         }
+        noise += w;
         let sd = slot.prior_in_force().sd;
         precision += if sd == 0.0 {
             w
@@ -270,26 +276,17 @@ fn direction_precision(
             0.0
         };
     }
-    precision
-}
-
-/// The two-sided `confidence` quantile of one direction: Student's t with the estimated noise's
-/// degrees of freedom, else normal.
-fn quantile(confidence: f32, dof: Option<f32>) -> Result<f32, Error> {
-    match dof {
-        Some(dof) => stats::t_quantile(confidence, dof),
-        None => Ok(libm::sqrtf(stats::chi2_quantile(confidence, 1.0)?)),
+    if !(precision > 0.0 && noise > 0.0) {
+        return Ok(core::f32::consts::PI);
     }
-}
-
-/// The half-width of `z` sds of a direction of information `precision`: pi (any direction)
-/// without information.
-fn half_width_of(z: f32, precision: f32) -> f32 {
-    if precision > 0.0 {
-        (z / libm::sqrtf(precision)).min(core::f32::consts::PI)
-    } else {
-        core::f32::consts::PI
-    }
+    let (total, of_noise) = (1.0 / precision, 1.0 / noise);
+    let z = libm::sqrtf(stats::chi2_quantile(confidence, 1.0)?);
+    let t = match dof {
+        Some(dof) => stats::t_quantile(confidence, dof)?,
+        None => z,
+    };
+    let hw = libm::sqrtf(t * t * of_noise + z * z * (total - of_noise).max(0.0));
+    Ok(hw.min(core::f32::consts::PI))
 }
 
 /// Whether the bearings, less their stations' offsets (`offset`), spread by no more than
@@ -372,8 +369,8 @@ pub(super) fn direction_only(
     };
     let sigma = scale * super::super::noise::median_sigma(set);
     let (apex, _) = apex_of(set).ok()?;
-    let z = quantile(config.confidence, Some(dof)).ok()?;
-    let half_width = half_width_of(z, direction_precision(set, stations, scale, tau));
+    let half_width =
+        direction_half_width(set, stations, scale, tau, config.confidence, Some(dof)).ok()?;
     if !(half_width <= MAX_DIRECTION_HALF_WIDTH) {
         return None;
     }

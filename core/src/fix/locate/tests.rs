@@ -315,5 +315,8 @@ fn noisy_crossing_bearings_are_no_parallel_region() {
             held += r.contains(&e) as u32;
         }
     }
-    assert!(regions == 20 && held >= 15, "{regions} regions, {held} held");
+    assert!(
+        regions == 20 && held >= 15,
+        "{regions} regions, {held} held"
+    );
 }

@@ -438,6 +438,9 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
                 out.line(&text)?;
             } else if let Some(l) = &no_fix.located {
                 out.text(&l.report.text())?;
+                if let Some(a) = &no_fix.across {
+                    out.line(&format!("across: {}", a.line))?;
+                }
             }
             Err(Stop::Error(no_fix.error))
         }
