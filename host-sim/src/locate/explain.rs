@@ -115,7 +115,7 @@ fn noise_deg(bearings: &[Bearing]) -> f32 {
 /// mirrored DF convention. Fewer, a mixed picture, or lines that turn too little for their
 /// crossing to mean anything (a distant emitter: noise puts it behind as often as ahead) is a
 /// geometry problem instead.
-fn points_away(bearings: &[Bearing]) -> bool {
+pub(crate) fn points_away(bearings: &[Bearing]) -> bool {
     if turn_deg(bearings) < 10.0 * noise_deg(bearings).max(1.0) {
         return false;
     }

@@ -6,7 +6,7 @@ use crate::estimate::{PipelineRun, pipeline, pool};
 use crate::inputs::capture::Decoded;
 use crate::inputs::stations::Reference;
 use crate::locate::Parts;
-use crate::locate::explain::{explain, no_emitter, open_range};
+use crate::locate::explain::{explain, no_emitter, open_range, points_away};
 use crate::locate::report::{
     ChannelSummary, Drawn, EllipseReport, RegionReport, SourceReport, geodetic,
 };
@@ -133,8 +133,15 @@ pub(crate) fn located_by_pipeline(
                 let Some(g) = r.regions().get(i).map(|g| RegionReport::of(g, frame)) else {
                     continue;
                 };
-                region = Some(g);
-                let text = open_range(&g);
+                // Bearings that meet behind the vehicle point the wrong way: their direction
+                // is no answer, the convention is the question.
+                let bearings = bearings();
+                let text = if points_away(&bearings) {
+                    explain(Error::BehindVehicle, &bearings)
+                } else {
+                    region = Some(g);
+                    open_range(&g)
+                };
                 why_none.get_or_insert(text.clone());
                 text
             }
@@ -174,7 +181,7 @@ pub(crate) fn located_by_pipeline(
             region: None,
         });
     }
-    if r.emitters().is_empty() && r.regions().is_empty() {
+    if r.emitters().is_empty() && channels.iter().all(|c| c.region.is_none()) {
         return Err(why_none.unwrap_or_else(|| "no consistent emitter".into()));
     }
     const WEAKER: &str = "fewer bearings agree on it than on its channel's emitter: a \
