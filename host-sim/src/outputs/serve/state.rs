@@ -461,6 +461,40 @@ mod tests {
     }
 
     #[test]
+    fn an_open_range_is_drawn_as_its_region() {
+        // Six 15 degree bearings on 300 m: no fix, a region; the page gets its wedge and words.
+        let (bytes, truths) = crate::runs::field::capture(
+            crate::runs::field::Condition::OpenNoisyFew,
+            0,
+            crate::runs::simulate::DEFAULT_ORIGIN,
+        )
+        .unwrap();
+        let d = crate::inputs::capture::decode(&bytes, Default::default(), false);
+        let mut guide = Guide::new(None, 100.0).unwrap();
+        let st = build(&d, 1, &[], &mut guide, true);
+        assert!(st.emitters.is_empty(), "{:?}", st.emitters);
+        assert_eq!(st.regions.len(), 1, "{:?}", st.fix_error);
+        let r = &st.regions[0];
+        // A closed wedge from the apex (its range starts at 0) out to the rays' length.
+        assert!(
+            r.wedge.len() > 10 && r.wedge.first() == r.wedge.last(),
+            "{r:?}"
+        );
+        assert_eq!(r.wedge[0], [r.report.lat, r.report.lon]);
+        assert!(r.line.starts_with("the range is open"), "{}", r.line);
+        assert_eq!(st.fix_error.as_deref(), Some(r.line.as_str()));
+        // The truth (1200, 800) m lies 56 degrees from the route's start: within the wedge.
+        let t = truths[0].position;
+        let b = t[0].atan2(t[1]).to_degrees();
+        assert!(
+            (b - r.report.bearing_deg).abs() <= r.report.half_width_deg,
+            "{r:?}"
+        );
+        let json = serde_json::to_string(&st).unwrap();
+        assert!(json.contains("\"regions\":[{") && json.contains("\"wedge\""));
+    }
+
+    #[test]
     fn an_ellipse_beyond_drawing_is_left_undrawn() {
         let at = LatLon {
             lat: 47.0,
