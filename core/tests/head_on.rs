@@ -10,10 +10,9 @@
 //! front of the vehicle with a 3-60 m CEP50 while the truth was hundreds of metres to
 //! kilometres further on: 10 of 40 drives made such a claim, every claim of CEP50 < 100 m wrong.
 
-use foxhunt_core::Error;
 use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::fix::locate::{
-    ChannelOutcome, LocateConfig, NoEmitter, NoiseModel, Observation, Workspace, locate,
+    ChannelOutcome, LocateConfig, NoiseModel, Observation, Workspace, locate,
 };
 use foxhunt_core::model::bearing::{Bearing, predicted, wrap};
 use foxhunt_core::random;
@@ -60,6 +59,7 @@ fn driving_at_the_emitter_makes_no_confident_wrong_claim() {
         ..LocateConfig::default()
     };
     let (mut wrong_drives, mut fixes, mut inside, mut unobservable, mut claims) = (0, 0, 0, 0, 0);
+    let (mut region_held, mut parallel) = (0, 0);
     for seed in 0..DRIVES {
         let o = drive(seed);
         let mut wrong = false;
@@ -80,10 +80,14 @@ fn driving_at_the_emitter_makes_no_confident_wrong_claim() {
                         wrong |= !holds;
                     }
                 }
-                // The range unobservable: said so, not a fix.
-                ChannelOutcome::NoConsistentEmitter(NoEmitter::Geometry(
-                    Error::ParallelBearings,
-                )) => unobservable += 1,
+                // The range unobservable: not a fix, but the line of bearing and the range
+                // interval the bearings allow.
+                ChannelOutcome::Region(i) => {
+                    let r = report.regions()[i];
+                    unobservable += 1;
+                    region_held += r.contains(&EMITTER) as u32;
+                    parallel += r.parallel as u32;
+                }
                 ChannelOutcome::NoConsistentEmitter(_) => {}
             }
         }
@@ -92,8 +96,10 @@ fn driving_at_the_emitter_makes_no_confident_wrong_claim() {
     let coverage = inside as f32 / fixes.max(1) as f32;
     println!(
         "{wrong_drives} of {DRIVES} drives claimed CEP50 < 100 m with the truth outside ({claims} \
-         claims); {fixes} fixes, 95 % ellipse held the truth in {:.1} %; range unobservable {unobservable} times",
-        100.0 * coverage
+         claims); {fixes} fixes, 95 % ellipse held the truth in {:.1} %; range unobservable {unobservable} times, \
+         the 95 % region held the truth in {:.1} %",
+        100.0 * coverage,
+        100.0 * region_held as f32 / unobservable.max(1) as f32
     );
     // An honest 95 % region misses 5 % of the time, and a drive makes up to 11 checks: 4 of 40
     // (10 %) leaves room for that; the unfixed pipeline had 10 of 40.
@@ -114,4 +120,14 @@ fn driving_at_the_emitter_makes_no_confident_wrong_claim() {
         unobservable > 100,
         "range unobservable only {unobservable} times"
     );
+    // Each region should hold the truth 95 % of the time; the same 85 % floor as the ellipses
+    // (a drive's checkpoints share its bearings: about 40 independent draws).
+    let region_coverage = region_held as f32 / unobservable as f32;
+    assert!(
+        region_coverage >= 0.85,
+        "regions held the truth in {:.1} % of {unobservable}",
+        100.0 * region_coverage
+    );
+    // 4 degree noise: the bearings cross (at random), never parallel.
+    assert_eq!(parallel, 0, "{parallel} regions called parallel");
 }

@@ -28,8 +28,11 @@ enum Command {
     /// (a heading, or with --roads FILE the next road turn) and why ("widen the angle", "get
     /// closer", "drive a calibration leg"), or "good enough: stop" once the stop rule holds
     /// (--target-cep50-m, default 100 m). Maps are written only where asked (--maps PREFIX, or
-    /// --geojson/--kml/--svg), never onto an input. Exit status: 0 with a fix, 1 when the
-    /// capture gives none (the message says why), 2 on a usage error.
+    /// --geojson/--kml/--svg), never onto an input. Where the bearings cross but leave the
+    /// range open, the answer is a region (a line of bearing from the observers, its
+    /// half-width and range interval), printed and drawn, but no fix. Exit status: 0 with a
+    /// fix, 1 when the capture gives none (the message says why; a region only is no fix), 2
+    /// on a usage error.
     ///
     /// Examples:
     ///   foxhunt locate                                  # the bundled sample drive

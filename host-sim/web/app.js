@@ -123,6 +123,18 @@ function render(st) {
     fix += `<div class="other">Other source ${i + 1}: ${fmt(o.at[0], 5)}, ${fmt(o.at[1], 5)}, `
       + `CEP50 ${fmt(o.cep50_m, 0)} m, ${o.used} bearings</div>`;
   });
+  // Open ranges: the observers' line of bearing as a dashed wedge, its figures in the panel.
+  (st.regions || []).forEach((r, i) => {
+    L.polygon(r.wedge, { color: "#ff7f0e", weight: 2, dashArray: "6 4", fillOpacity: 0.08 }).addTo(layers);
+    L.circleMarker([r.lat, r.lon], { radius: 4, color: "#ff7f0e", fillOpacity: 1 }).addTo(layers)
+      .bindTooltip(`region ${i + 1}: the line of bearing`);
+    const to = r.max_range_m == null ? "unbounded" : `${fmt(r.max_range_m / 1000, 1)} km`;
+    fix += `<div class="region" data-region="${i + 1}" data-parallel="${r.parallel}">`
+      + `Region${r.freq_mhz ? ` (${fmt(r.freq_mhz, 3)} MHz)` : ""}: bearing `
+      + `<b>${fmt(r.bearing_deg, 1)}° ± ${fmt(r.half_width_deg, 1)}°</b> from `
+      + `${fmt(r.lat, 5)}, ${fmt(r.lon, 5)}, range ${fmt(r.min_range_m / 1000, 1)} km to ${to}`
+      + `<br><span class="why">${r.line}</span></div>`;
+  });
   text("fix", fix || (st.fix_error || "no fix yet"), { "data-emitters": st.emitters.length });
   drawUnit(st.unit, bounds);
   const a = st.advice;

@@ -43,6 +43,107 @@ pub struct Reach {
     pub stretch: f32,
     /// Whether the region ends within `max_range` of the fix on both sides.
     pub bounded: bool,
+    /// The walk's axis (a unit vector, east and north): the covariance's major axis.
+    pub axis: [f32; 2],
+    /// Along `+axis` then `-axis`: where the region ends, `None` where it ran out to
+    /// `max_range` along the axis ([`End::sideways`] where it ran off sideways). Where the range is open these say how near the
+    /// region comes ([`edge`]).
+    pub ends: [Option<End>; 2],
+    /// -2 ln L at the fix's slice: the deviance the region's threshold is counted from.
+    pub deviance: f32,
+    /// Along `+axis` then `-axis`: the farthest slice's best fit inside the region, relative
+    /// to the fix (zero when none was): where the line of bearing heads.
+    pub farthest: [[f32; 2]; 2],
+}
+
+/// Where the walk left the region on one side: the last slice inside and the first outside
+/// (best fits relative to the fix, metres); the edge is between them ([`edge`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct End {
+    /// The last slice's best fit inside (the fix itself when the first slice was outside).
+    pub inside: [f32; 2],
+    /// The first slice's best fit outside (where a slice failed or ran off sideways: where it
+    /// started).
+    pub outside: [f32; 2],
+    /// The region ran off sideways past `max_range` at `outside`: open, though not along the
+    /// axis.
+    pub sideways: bool,
+}
+
+/// Bisections [`nearest`] makes once it has a bracket: its length over 256.
+pub const EDGE_BISECTIONS: u32 = 8;
+
+/// The nearest range along a ray that the likelihood-ratio region at threshold `k` reaches:
+/// the ray from `apex` along the unit vector `u`, searched inward from `from` metres (a range
+/// inside the region: the fix's) in steps shrinking by [`GROWTH`] down to `floor` metres (the
+/// drive's own extent, within which no ray describes the region), then bisected. Each probe is
+/// the best fit on the slice across the ray, warm-started from the last probe inside (with its
+/// offsets), its deviance counted from `held`'s fix. 0 when the region reaches `floor` (or a
+/// probe fails: the region is then not known to end farther out).
+#[allow(clippy::too_many_arguments)]
+pub fn nearest<T: Sighting>(
+    items: &[T],
+    stations: &mut [StationSlot],
+    fit: Fit<'_>,
+    held: &Reach,
+    apex: [f32; 2],
+    u: [f32; 2],
+    from: f32,
+    floor: f32,
+    k: f32,
+) -> f32 {
+    let n = [-u[1], u[0]];
+    let options = BiasedOptions {
+        scale: fit.scale,
+        position_sd_m: POSITION_SD_M,
+        ..BiasedOptions::default()
+    };
+    for row in stations.iter_mut() {
+        row.keep_current();
+    }
+    let point = |r: f32| [apex[0] + r * u[0], apex[1] + r * u[1]];
+    // The last probe inside: its range and best fit.
+    let mut inside = (from, point(from));
+    let probe = |stations: &mut [StationSlot], r: f32, inside: &mut (f32, [f32; 2])| {
+        let step = r - inside.0;
+        let start = Start {
+            position: [inside.1[0] + step * u[0], inside.1[1] + step * u[1]],
+            offsets: StartOffsets::Saved,
+        };
+        let p = profile(items, stations, start, n, &Gaussian, options)?;
+        let held_in = (p.deviance - held.deviance) / fit.inflation <= k;
+        if held_in {
+            for row in stations.iter_mut() {
+                row.keep_current();
+            }
+            *inside = (r, p.position);
+        }
+        Ok::<bool, Error>(held_in)
+    };
+    let mut out = None;
+    let mut r = from / GROWTH;
+    while r > floor {
+        match probe(stations, r, &mut inside) {
+            Ok(true) => r /= GROWTH,
+            Ok(false) => {
+                out = Some(r);
+                break;
+            }
+            Err(_) => return 0.0,
+        }
+    }
+    let Some(mut lo) = out else {
+        return 0.0;
+    };
+    for _ in 0..EDGE_BISECTIONS {
+        let mid = 0.5 * (lo + inside.0);
+        match probe(stations, mid, &mut inside) {
+            Ok(true) => {}
+            Ok(false) => lo = mid,
+            Err(_) => break,
+        }
+    }
+    lo.max(floor)
 }
 
 /// What [`reach`] needs to know about the fit (its offsets and their priors are in the station
@@ -99,20 +200,32 @@ pub fn reach<T: Sighting>(
     let at_fix = slice(stations, centre, StartOffsets::Fitted)?;
     let mut cov = *covariance;
     let mut bounded = true;
+    let mut ends = [None; 2];
+    let mut farthest = [[0.0f32; 2]; 2];
     let first = libm::sqrtf(k * l1);
     // Each direction's walk starts from the slice at the fix, whose offsets are kept aside;
     // each later slice from the one before it (the table's current offsets).
     for row in stations.iter_mut() {
         row.keep_current();
     }
-    for sign in [1.0f32, -1.0] {
+    for (side, sign) in [1.0f32, -1.0].into_iter().enumerate() {
         let mut last = (0.0f32, 0.0f32, at_fix);
+        // The end on this side: where the walk left the region, `None` once it ran out.
+        let mut end = Some(End {
+            inside: [0.0; 2],
+            outside: [0.0; 2],
+            sideways: false,
+        });
+        let mut left = false;
         let mut offsets = StartOffsets::Saved;
         let mut s = first;
         let mut inside = true;
         for _ in 0..MAX_SLICES {
             if s > max_range {
-                bounded &= !inside;
+                if inside {
+                    bounded = false;
+                    end = None;
+                }
                 break;
             }
             // Start where the last slice's best fit was, moved out along the axis.
@@ -122,13 +235,24 @@ pub fn reach<T: Sighting>(
                 last.2.position[1] + step * u[1],
             ];
             let Ok(p) = slice(stations, from, offsets) else {
+                // No fit here: the edge is known only to lie before this slice's start.
+                if let Some(e) = end.as_mut() {
+                    e.outside = [from[0] - centre[0], from[1] - centre[1]];
+                }
+                left = true;
                 break;
             };
             offsets = StartOffsets::Current;
             let q = [p.position[0] - centre[0], p.position[1] - centre[1]];
             if !(libm::hypotf(q[0], q[1]) <= max_range) {
-                // The slice's best fit ran off sideways past the search's range.
+                // The slice's best fit ran off sideways past the search's range: the region
+                // is open, but along the axis its edge lies before this slice.
                 bounded = false;
+                if let Some(e) = end.as_mut() {
+                    e.outside = [from[0] - centre[0], from[1] - centre[1]];
+                    e.sideways = true;
+                }
+                left = true;
                 break;
             }
             let d = (p.deviance - at_fix.deviance) / fit.inflation;
@@ -143,6 +267,11 @@ pub fn reach<T: Sighting>(
                     );
                 }
                 inside = true;
+                left = false;
+                if let Some(e) = end.as_mut() {
+                    e.inside = q;
+                }
+                farthest[side] = q;
             } else {
                 if inside {
                     // The edge, between the last slice inside and this one.
@@ -152,6 +281,10 @@ pub fn reach<T: Sighting>(
                         last.2.position[1] + f * (p.position[1] - last.2.position[1]) - centre[1],
                     ];
                     hold(&mut cov, edge, k);
+                    if let Some(e) = end.as_mut() {
+                        e.outside = q;
+                    }
+                    left = true;
                 }
                 inside = false;
                 if d > STOP * k {
@@ -161,6 +294,17 @@ pub fn reach<T: Sighting>(
             last = (s, d, p);
             s *= GROWTH;
         }
+        // A walk that stopped inside (a slice failed) has no edge: its last slice then.
+        ends[side] = end.map(|e| {
+            if left {
+                e
+            } else {
+                End {
+                    outside: e.inside,
+                    ..e
+                }
+            }
+        });
     }
     let (w1, _, _) = linalg::eigen2(&cov).ok_or(Error::NonFinite)?;
     let stretch = libm::sqrtf(w1 / l1);
@@ -169,6 +313,10 @@ pub fn reach<T: Sighting>(
         covariance: cov,
         stretch,
         bounded,
+        axis: u,
+        ends,
+        deviance: at_fix.deviance,
+        farthest,
     })
 }
 

@@ -11,6 +11,7 @@
 //! is assumed able to drive any direction (open terrain), which on a real road network it is
 //! not: give `--roads` there.
 
+pub mod across;
 pub mod guide;
 pub mod reach;
 

@@ -1,6 +1,7 @@
 //! Why a capture gives no fix, in words a user can act on.
 
 use crate::inputs::capture::Decoded;
+use crate::locate::report::RegionReport;
 use foxhunt_core::fix::locate::NoEmitter;
 use foxhunt_core::{Bearing, Error};
 
@@ -114,7 +115,7 @@ fn noise_deg(bearings: &[Bearing]) -> f32 {
 /// mirrored DF convention. Fewer, a mixed picture, or lines that turn too little for their
 /// crossing to mean anything (a distant emitter: noise puts it behind as often as ahead) is a
 /// geometry problem instead.
-fn points_away(bearings: &[Bearing]) -> bool {
+pub(crate) fn points_away(bearings: &[Bearing]) -> bool {
     if turn_deg(bearings) < 10.0 * noise_deg(bearings).max(1.0) {
         return false;
     }
@@ -166,6 +167,44 @@ pub fn explain(e: Error, bearings: &[Bearing]) -> String {
             .into(),
         Error::BehindVehicle => "the bearings meet behind the vehicle: no emitter there".into(),
         e => format!("no fix: {e}"),
+    }
+}
+
+/// A distance in words: metres below a kilometre, else kilometres.
+pub fn distance_words(m: f32) -> String {
+    if m < 1000.0 {
+        format!("{m:.0} m")
+    } else {
+        format!("{:.1} km", m / 1000.0)
+    }
+}
+
+/// The range interval of a region in words: `1.2 km to unbounded`, `300 m to 2.5 km`.
+pub fn range_words(r: &RegionReport) -> String {
+    let to = r
+        .max_range_m
+        .map_or_else(|| "unbounded".to_string(), distance_words);
+    format!("{} to {to}", distance_words(r.min_range_m))
+}
+
+/// Why a channel with a region has no fix, in words: "parallel" only when the bearings are.
+pub fn open_range(r: &RegionReport) -> String {
+    if r.parallel {
+        format!(
+            "all bearings are parallel: they never cross, so the range is unknown (bearing \
+             {:.1} deg +- {:.1} deg, range {}); drive across the line of bearing",
+            r.bearing_deg,
+            r.half_width_deg,
+            range_words(r)
+        )
+    } else {
+        format!(
+            "the range is open: the bearings hold a line of bearing, {:.1} deg +- {:.1} deg, \
+             and a range of {}, not a fix; drive across the line of bearing",
+            r.bearing_deg,
+            r.half_width_deg,
+            range_words(r)
+        )
     }
 }
 

@@ -166,6 +166,7 @@ pub(crate) fn located_by(
         freq_mhz: freq,
         bearings: bearings.len() as u32,
         outcome: "emitter".into(),
+        region: None,
     };
     let drawn = vec![Drawn {
         position: s.position,

@@ -27,12 +27,38 @@ use explain::{no_bearing, no_vehicle_position};
 use foxhunt_core::Method;
 use foxhunt_core::fix::locate::Source;
 use report::{
-    ChannelSummary, Drawn, LatLonReport, LocateReport, Located, NoFix, SourceReport, rejections,
+    AcrossReport, ChannelSummary, Drawn, LatLonReport, LocateReport, Located, NoFix, RegionReport,
+    SourceReport, geodetic, rejections,
 };
 use stations::station_reports;
 
+/// Why there is no fix, and, when the field pipeline's channels hold regions (an open range),
+/// the report without a fix that the maps and the live page draw them from.
+#[derive(Debug, Clone)]
+pub struct Unlocated {
+    /// Why there is no fix, in words.
+    pub error: String,
+    /// The report of the channels (no emitter, a region in at least one).
+    pub located: Option<Box<Located>>,
+}
+
+impl From<String> for Unlocated {
+    fn from(error: String) -> Self {
+        Self {
+            error,
+            located: None,
+        }
+    }
+}
+
 /// Locate every emitter of a decoded capture.
 pub fn locate(d: &Decoded, o: &LocateOptions) -> Result<Located, String> {
+    locate_answer(d, o).map_err(|u| u.error)
+}
+
+/// Locate every emitter of a decoded capture; no fix but regions (open ranges) is an error
+/// that keeps them.
+pub fn locate_answer(d: &Decoded, o: &LocateOptions) -> Result<Located, Unlocated> {
     o.check()?;
     let unit = d.unit.report();
     // The unit's own fix is the report of a capture of its output, when it has one.
@@ -42,10 +68,10 @@ pub fn locate(d: &Decoded, o: &LocateOptions) -> Result<Located, String> {
         return Ok(unit_only(d, o, u));
     }
     let Some(frame) = d.frame else {
-        return Err(no_vehicle_position(d));
+        return Err(no_vehicle_position(d).into());
     };
     if d.observations.is_empty() {
-        return Err(no_bearing(d));
+        return Err(no_bearing(d).into());
     }
     let mut rejected = rejections(d);
     let ((emitters, other_sources, channels, drawn, cloud, sources), stations) =
@@ -61,7 +87,7 @@ pub fn locate(d: &Decoded, o: &LocateOptions) -> Result<Located, String> {
             let stations = station_reports(d, o.network.as_deref(), &setup, &[], &[], &[]);
             (method::located_by(d, o, &frame, &mut rejected)?, stations)
         };
-    Ok(Located {
+    let located = Located {
         report: LocateReport {
             method: o.method.name(),
             emitters,
@@ -81,7 +107,21 @@ pub fn locate(d: &Decoded, o: &LocateOptions) -> Result<Located, String> {
         drawn,
         cloud,
         emitters: sources,
-    })
+    };
+    // Regions but no emitter: no fix, the regions kept for the report.
+    let open = located
+        .report
+        .channels
+        .iter()
+        .find(|c| c.region.is_some())
+        .map(|c| c.outcome.clone());
+    match open {
+        Some(error) if located.report.emitters.is_empty() => Err(Unlocated {
+            error,
+            located: Some(Box::new(located)),
+        }),
+        _ => Ok(located),
+    }
 }
 
 /// A capture of a DF unit's own output (its user port): the unit's fix is the report.
@@ -116,6 +156,39 @@ fn unit_only(d: &Decoded, o: &LocateOptions, u: UnitReport) -> Located {
     }
 }
 
+/// A leg across a region's line of bearing from the vehicle's last position (none before a
+/// GPS fix).
+fn across_region(d: &Decoded, r: &RegionReport) -> Option<AcrossReport> {
+    use crate::guidance::across::{LineOfBearing, across};
+    let frame = d.frame?;
+    let bearings: Vec<foxhunt_core::Bearing> = d.bearings().copied().collect();
+    let vehicle = bearings.last()?.vehicle;
+    let heading = crate::guidance::track_heading(&bearings)
+        .map(|h| foxhunt_core::model::bearing::theta_to_azimuth(h).to_degrees());
+    let line = LineOfBearing {
+        bearing_deg: r.bearing_deg,
+        half_width_deg: r.half_width_deg,
+        min_range_m: r.min_range_m,
+    };
+    let leg = across(&line, vehicle, heading);
+    let g = geodetic(&frame, leg.to);
+    Some(AcrossReport {
+        leg,
+        target: LatLonReport {
+            lat: g.lat,
+            lon: g.lon,
+        },
+        line: format!(
+            "drive {} heading {:.0} deg, across the line of bearing, to {:.5}, {:.5}: the \
+             bearing's turn gives the range",
+            explain::distance_words(leg.distance_m),
+            leg.heading_deg,
+            g.lat,
+            g.lon
+        ),
+    })
+}
+
 /// What one locate path gives: emitters, other sources, channels, drawn sources, particles,
 /// the pipeline's emitters.
 pub(crate) type Parts = (
@@ -135,7 +208,7 @@ pub fn locate_guided(
     o: &LocateOptions,
     guide: &mut Guide,
 ) -> Result<Located, Box<NoFix>> {
-    match locate(d, o) {
+    match locate_answer(d, o) {
         Ok(mut l) => {
             let advice = match (l.emitters.is_empty(), o.method) {
                 (false, _) | (true, Method::MlRobust) => located_advice(guide, d, &l.emitters, o),
@@ -151,11 +224,24 @@ pub fn locate_guided(
             }
             Ok(l)
         }
-        Err(error) => {
+        Err(Unlocated { error, mut located }) => {
             let advice = located_advice(guide, d, &[], o);
+            if let Some(l) = located.as_mut() {
+                l.report.advice = advice.as_ref().ok().cloned();
+                l.report.advice_error = advice.as_ref().err().cloned();
+            }
+            let channels = located
+                .as_ref()
+                .map(|l| l.report.channels.clone())
+                .unwrap_or_default();
+            let region = channels.iter().find_map(|c| c.region);
             Err(Box::new(NoFix {
                 used: d.observations.len() as u32,
                 error,
+                across: region.and_then(|r| across_region(d, &r)),
+                region,
+                channels,
+                located,
                 advice_error: advice.as_ref().err().cloned(),
                 advice: advice.ok(),
                 unit: d.unit.report(),

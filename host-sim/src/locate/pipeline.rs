@@ -6,9 +6,9 @@ use crate::estimate::{PipelineRun, pipeline, pool};
 use crate::inputs::capture::Decoded;
 use crate::inputs::stations::Reference;
 use crate::locate::Parts;
-use crate::locate::explain::{explain, no_emitter};
+use crate::locate::explain::{explain, no_emitter, open_range, points_away};
 use crate::locate::report::{
-    ChannelSummary, Drawn, EllipseReport, OffsetCheckReport, SourceReport, geodetic,
+    ChannelSummary, Drawn, EllipseReport, OffsetCheckReport, RegionReport, SourceReport, geodetic,
 };
 use crate::locate::stations::{StationReport, station_reports};
 use foxhunt_bridge::geo::LocalFrame;
@@ -48,6 +48,9 @@ fn source_report(s: &Source, frame: &LocalFrame, why: Option<&'static str>) -> S
     }
 }
 
+/// Every channel of the field pipeline's `locate` (emitters, regions and others): a channel
+/// whose range is open has its region; an emitter of `located_by_pipeline` is absent when
+/// only regions came out (the caller then reports no fix, with them).
 pub(crate) fn located_by_pipeline(
     d: &Decoded,
     o: &LocateOptions,
@@ -128,8 +131,25 @@ pub(crate) fn located_by_pipeline(
     let mut channels = Vec::new();
     let mut why_none = None;
     for c in r.channels() {
+        let mut region = None;
         let outcome = match c.outcome {
             ChannelOutcome::Emitter(_) => "emitter".to_string(),
+            ChannelOutcome::Region(i) => {
+                let Some(g) = r.regions().get(i).map(|g| RegionReport::of(g, frame)) else {
+                    continue;
+                };
+                // Bearings that meet behind the vehicle point the wrong way: their direction
+                // is no answer, the convention is the question.
+                let bearings = bearings();
+                let text = if points_away(&bearings) {
+                    explain(Error::BehindVehicle, &bearings)
+                } else {
+                    region = Some(g);
+                    open_range(&g)
+                };
+                why_none.get_or_insert(text.clone());
+                text
+            }
             ChannelOutcome::NoConsistentEmitter(why) => {
                 // A vehicle that never moved, or bearings that never cross, say so plainly.
                 let bearings = bearings();
@@ -150,6 +170,7 @@ pub(crate) fn located_by_pipeline(
             freq_mhz: c.freq_mhz,
             bearings: c.bearings,
             outcome,
+            region,
         });
     }
     for (i, r) in references.iter().enumerate() {
@@ -162,9 +183,10 @@ pub(crate) fn located_by_pipeline(
                 r.name,
                 heard.count()
             ),
+            region: None,
         });
     }
-    if r.emitters().is_empty() {
+    if r.emitters().is_empty() && channels.iter().all(|c| c.region.is_none()) {
         return Err(why_none.unwrap_or_else(|| "no consistent emitter".into()));
     }
     const WEAKER: &str = "fewer bearings agree on it than on its channel's emitter: a \

@@ -8,7 +8,8 @@ use crate::inputs::unit::UnitReport;
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;
 use foxhunt_core::fix::ellipse::Ellipse;
-use foxhunt_core::fix::locate::Source;
+use foxhunt_core::fix::locate::{Region, Source};
+use foxhunt_core::model::bearing::theta_to_azimuth;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -108,6 +109,66 @@ pub struct OffsetCheckReport {
     pub ambiguous: bool,
 }
 
+/// What the bearings of a channel hold when the range is open (no fix): a line of bearing from
+/// the observers, its half-width and the range interval (field names are stable;
+/// docs/src/field.md, "Regions").
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct RegionReport {
+    /// The channel's frequency, MHz (null for bearings without one).
+    pub freq_mhz: Option<f32>,
+    /// The apex (the observers' weighted centroid), latitude, degrees.
+    pub lat: f64,
+    /// The apex, longitude, degrees.
+    pub lon: f64,
+    /// The apex, east of the local origin, metres.
+    pub east_m: f32,
+    /// The apex, north of the local origin, metres.
+    pub north_m: f32,
+    /// The line of bearing, degrees clockwise from true north.
+    pub bearing_deg: f32,
+    /// Its half-width at `confidence`, degrees.
+    pub half_width_deg: f32,
+    /// The nearest range the bearings allow, metres.
+    pub min_range_m: f32,
+    /// The farthest, metres (null: unbounded).
+    pub max_range_m: Option<f32>,
+    /// The bearings are parallel (they never cross), not merely crossing too shallowly.
+    pub parallel: bool,
+    /// Probability inside.
+    pub confidence: f32,
+    /// Bearing noise used, degrees.
+    pub sigma_deg: f32,
+    /// Bearings used.
+    pub used: u32,
+    /// Their effective number.
+    pub effective: f32,
+}
+
+impl RegionReport {
+    /// A field pipeline region in `frame`.
+    pub fn of(r: &Region, frame: &LocalFrame) -> Self {
+        let g = geodetic(frame, r.apex);
+        // 359.99... is north too: 0, not "360.0".
+        let b = theta_to_azimuth(r.theta).to_degrees().rem_euclid(360.0);
+        Self {
+            freq_mhz: r.freq_mhz,
+            lat: g.lat,
+            lon: g.lon,
+            east_m: r.apex[0],
+            north_m: r.apex[1],
+            bearing_deg: if b >= 359.95 { 0.0 } else { b },
+            half_width_deg: r.half_width.to_degrees(),
+            min_range_m: r.min_range,
+            max_range_m: r.max_range,
+            parallel: r.parallel,
+            confidence: r.confidence,
+            sigma_deg: r.sigma.to_degrees(),
+            used: r.used,
+            effective: r.effective,
+        }
+    }
+}
+
 /// One channel and what it came to.
 #[derive(Debug, Clone, Serialize)]
 pub struct ChannelSummary {
@@ -117,6 +178,9 @@ pub struct ChannelSummary {
     pub bearings: u32,
     /// `emitter`, or why there is none.
     pub outcome: String,
+    /// What the bearings hold when the range is open (absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub region: Option<RegionReport>,
 }
 
 /// What `locate` found (the `--json` object; field names are stable).
@@ -186,6 +250,21 @@ pub struct NoFix {
     pub used: u32,
     /// Why there is no fix.
     pub error: String,
+    /// What the bearings hold when the range is open: the first channel's region (absent
+    /// when none has one).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub region: Option<RegionReport>,
+    /// Every channel and what it came to, when the field pipeline got that far (absent
+    /// otherwise).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub channels: Vec<ChannelSummary>,
+    /// With a region: a leg across its line of bearing, to measure the range (absent
+    /// otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub across: Option<AcrossReport>,
+    /// The report without a fix, for the maps to draw the regions (not in the JSON).
+    #[serde(skip)]
+    pub located: Option<Box<Located>>,
     /// Where to drive (across the line of bearing) before there is a fix.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub advice: Option<LocatedAdvice>,
@@ -195,6 +274,19 @@ pub struct NoFix {
     /// What a DF unit running foxhunt's firmware said, as in [`LocateReport::unit`].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub unit: Option<UnitReport>,
+}
+
+/// Where to drive when the range is open: across the line of bearing
+/// ([`crate::guidance::across`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct AcrossReport {
+    /// The leg's heading and length.
+    #[serde(flatten)]
+    pub leg: crate::guidance::across::Across,
+    /// Where it ends.
+    pub target: LatLonReport,
+    /// The advice in one line.
+    pub line: String,
 }
 
 /// Rejections by reason, every reason listed (zero included) so scripts can rely on the keys.

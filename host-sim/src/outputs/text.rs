@@ -1,8 +1,9 @@
 //! The terminal's words for what `locate` found: the report, and one line per live update.
 
 use crate::inputs::unit::UnitReport;
+use crate::locate::explain::range_words;
 use crate::locate::report::LocatedAdvice;
-use crate::locate::report::{LocateReport, NoFix, SourceReport};
+use crate::locate::report::{LocateReport, NoFix, RegionReport, SourceReport};
 use std::fmt::Write;
 
 impl NoFix {
@@ -29,6 +30,34 @@ fn advice_suffix(advice: Option<&LocatedAdvice>, error: Option<&str>) -> String 
         (Some(a), _) => format!("; {}", a.line),
         (None, Some(e)) => format!("; no advice: {e}"),
         (None, None) => String::new(),
+    }
+}
+
+impl RegionReport {
+    /// `region: bearing 123.4° ± 5.6° from LAT, LON, range 1.2 km to unbounded` (with the
+    /// frequency when `freq` is asked for), and the region's noise and bearings.
+    pub fn lines(&self, freq: bool, out: &mut String) {
+        let f = match (freq, self.freq_mhz) {
+            (true, Some(f)) => format!(" ({f:.3} MHz)"),
+            _ => String::new(),
+        };
+        let _ = writeln!(
+            out,
+            "region{f}: bearing {:.1}° ± {:.1}° from {:.6}, {:.6}, range {}",
+            self.bearing_deg,
+            self.half_width_deg,
+            self.lat,
+            self.lon,
+            range_words(self)
+        );
+        let _ = writeln!(
+            out,
+            "  {:.0} % region; noise {:.2} deg; {} bearings ({:.1} effective)",
+            100.0 * self.confidence,
+            self.sigma_deg,
+            self.used,
+            self.effective
+        );
     }
 }
 
@@ -115,7 +144,11 @@ impl LocateReport {
         for o in &self.other_sources {
             o.lines("other source", &mut out);
         }
+        let several = self.channels.len() > 1;
         for c in self.channels.iter().filter(|c| c.outcome != "emitter") {
+            if let Some(r) = &c.region {
+                r.lines(several, &mut out);
+            }
             let freq = c
                 .freq_mhz
                 .map(|f| format!("{f:.3} MHz"))

@@ -29,8 +29,9 @@
 //!    `consistent: false`). The ellipse is then made to hold the likelihood-ratio region along
 //!    its major axis ([`super::reach`]): driving at the emitter, the Fisher ellipse at a fix on
 //!    the line of bearing next to the vehicle is tens of metres while the likelihood stays flat
-//!    for kilometres. A region that runs out to [`super::robust::RansacOptions::max_range`] is "no consistent
-//!    emitter" with [`Error::ParallelBearings`]: the range is unobservable, not a fix.
+//!    for kilometres. A region that runs out to [`super::robust::RansacOptions::max_range`] is
+//!    no fix but a [`Region`] ([`ChannelOutcome::Region`]): the line of bearing from the
+//!    observers, its half-width and the range interval the bearings allow.
 //!
 //! No allocation: the caller lends the working storage ([`Buffers`], or a [`Workspace`] of
 //! fixed capacity: `B` observations, `S` stations), the report holds at most `C` channels and
@@ -72,9 +73,10 @@ mod workspace;
 
 pub use super::observation::Observation;
 pub use config::{LocateConfig, NoiseModel};
+pub use region::PARALLEL_SPREAD;
 pub use report::{
     ChannelOutcome, ChannelReport, NoEmitter, OffsetBeyond, OffsetCheck, OtherReason, OtherSource,
-    Rejected, Report, Source, StationOffset,
+    Region, Rejected, Report, Source, StationOffset,
 };
 pub use workspace::{Buffers, Item, Workspace};
 

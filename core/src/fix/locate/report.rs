@@ -182,11 +182,73 @@ pub enum NoEmitter {
     OffsetBeyondPrior(OffsetBeyond),
 }
 
+/// What the bearings of a channel hold when their likelihood region is open in range (it runs
+/// out to [`RansacOptions::max_range`](super::super::robust::RansacOptions::max_range), or the
+/// bearings are parallel): no fix, but a line of bearing from the observers and a range
+/// interval. The emitter is within `half_width` of `theta` seen from `apex`, and between
+/// `min_range` and `max_range` of it, at the configured confidence (docs/src/field.md,
+/// "Regions").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Region {
+    /// The channel's frequency, the mean of its bearings', MHz (`None` for bearings without
+    /// one).
+    pub freq_mhz: Option<f32>,
+    /// The channel's lowest frequency, MHz (as [`Source::channel_lowest_mhz`]).
+    pub channel_lowest_mhz: Option<f32>,
+    /// Where the line of bearing starts (east, north), metres: the observers' centroid, each
+    /// bearing weighted by its information, from which the best-fitting direction is the same
+    /// at every range (to first order in the drive's extent over the range).
+    pub apex: [f32; 2],
+    /// The line of bearing, radians counter-clockwise from east (the model's angle; the
+    /// outputs give it clockwise from north).
+    pub theta: f32,
+    /// The `confidence` half-width about `theta`, radians: the bearings' noise over their
+    /// effective number, each station's offset prior in series (at long range the offset and
+    /// the direction are one unknown); pi when an offset without a prior leaves the direction
+    /// unknown.
+    pub half_width: f32,
+    /// The nearest range from `apex` the likelihood-ratio region allows, metres.
+    pub min_range: f32,
+    /// The farthest, metres; `None`: the region runs out to the search's range (unbounded).
+    pub max_range: Option<f32>,
+    /// The bearings (less their stations' offsets) spread by under
+    /// [`PARALLEL_SPREAD`](super::PARALLEL_SPREAD): parallel, not merely crossing too
+    /// shallowly for their noise.
+    pub parallel: bool,
+    /// The probability the region is drawn at.
+    pub confidence: f32,
+    /// Bearing noise used, radians.
+    pub sigma: f32,
+    /// Whether `sigma` was estimated from the residuals.
+    pub sigma_estimated: bool,
+    /// Bearings used.
+    pub used: u32,
+    /// Their effective number (N / tau).
+    pub effective: f32,
+    /// First and last input index of its bearings.
+    pub index_span: [u32; 2],
+    /// First and last time of its bearings, seconds.
+    pub time_span: [f32; 2],
+}
+
+impl Region {
+    /// Whether `p` (east, north, metres) is inside: within the half-width of the line of
+    /// bearing and within the range interval.
+    pub fn contains(&self, p: &[f32; 2]) -> bool {
+        let d = [p[0] - self.apex[0], p[1] - self.apex[1]];
+        let r = libm::hypotf(d[0], d[1]);
+        let off = crate::model::bearing::wrap(libm::atan2f(d[1], d[0]) - self.theta).abs();
+        off <= self.half_width && r >= self.min_range && self.max_range.is_none_or(|m| r <= m)
+    }
+}
+
 /// What a channel came to.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ChannelOutcome {
     /// Its emitter is `emitters()[i]`.
     Emitter(usize),
+    /// No fix: the range is open; what the bearings hold is `regions()[i]`.
+    Region(usize),
     /// No consistent emitter.
     NoConsistentEmitter(NoEmitter),
 }
@@ -274,6 +336,25 @@ const EMPTY_SOURCE: Source = Source {
     time_span: [0.0; 2],
 };
 
+/// A region slot not yet filled.
+const EMPTY_REGION: Region = Region {
+    freq_mhz: None,
+    channel_lowest_mhz: None,
+    apex: [0.0; 2],
+    theta: 0.0,
+    half_width: 0.0,
+    min_range: 0.0,
+    max_range: None,
+    parallel: false,
+    confidence: 0.0,
+    sigma: 0.0,
+    sigma_estimated: false,
+    used: 0,
+    effective: 0.0,
+    index_span: [0; 2],
+    time_span: [0.0; 2],
+};
+
 /// What [`super::locate`] found: up to `C` channels (one emitter each) and `O` other sources.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Report<const C: usize, const O: usize> {
@@ -283,6 +364,8 @@ pub struct Report<const C: usize, const O: usize> {
     pub(super) emitter_count: usize,
     pub(super) others: [OtherSource; O],
     pub(super) other_count: usize,
+    pub(super) regions: [Region; C],
+    pub(super) region_count: usize,
     /// Entries of the offsets table written.
     pub(super) offsets_written: usize,
     /// Observations set aside, by reason.
@@ -309,6 +392,8 @@ impl<const C: usize, const O: usize> Report<C, O> {
                 why: OtherReason::Weaker,
             }; O],
             other_count: 0,
+            regions: [EMPTY_REGION; C],
+            region_count: 0,
             offsets_written: 0,
             rejected: Rejected::default(),
             accepted: 0,
@@ -318,6 +403,11 @@ impl<const C: usize, const O: usize> Report<C, O> {
     /// One consistent emitter per channel that has one.
     pub fn emitters(&self) -> &[Source] {
         self.emitters.get(..self.emitter_count).unwrap_or(&[])
+    }
+
+    /// The regions of the channels whose range is open ([`ChannelOutcome::Region`]).
+    pub fn regions(&self) -> &[Region] {
+        self.regions.get(..self.region_count).unwrap_or(&[])
     }
 
     /// Other sources, every channel's.

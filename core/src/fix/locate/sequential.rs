@@ -3,10 +3,11 @@
 //! later ones (a reflection, a second transmitter) other sources.
 
 use super::super::bias::{BiasPrior, StationSlot};
-use super::source::find_source;
+use super::region::direction_only;
+use super::source::{Found, find_source};
 use super::{
-    ChannelFreq, ChannelOutcome, Item, LocateConfig, NoEmitter, OtherReason, OtherSource, Report,
-    StationOffset,
+    ChannelFreq, ChannelOutcome, Item, LocateConfig, NoEmitter, OtherReason, OtherSource, Region,
+    Report, StationOffset,
 };
 use rand_core::Rng;
 
@@ -48,10 +49,33 @@ pub(super) fn channel_sources<const C: usize, const O: usize, R: Rng + ?Sized>(
         }
         let found = find_source(set, scratch, stations, freq, config, rng);
         let (mut source, kept) = match found {
-            Ok(f) => f,
+            Ok(Found::Source(s, kept)) => (s, kept),
+            // An open range: the channel's answer is its region; a later source's is none
+            // (its bearings stay outliers).
+            Ok(Found::Region(region, kept)) => {
+                if first && let Some(slot) = report.regions.get_mut(report.region_count) {
+                    *slot = region;
+                    outcome = ChannelOutcome::Region(report.region_count);
+                    report.region_count += 1;
+                    len -= kept;
+                }
+                break;
+            }
             Err(why) => {
                 if first {
                     outcome = ChannelOutcome::NoConsistentEmitter(why);
+                    // No point, but perhaps a direction.
+                    if matches!(
+                        why,
+                        NoEmitter::NoConsensus | NoEmitter::TooNoisy | NoEmitter::Geometry(_)
+                    ) && let Some(region) = direction_region(set, stations, freq, config)
+                        && let Some(slot) = report.regions.get_mut(report.region_count)
+                    {
+                        *slot = region;
+                        outcome = ChannelOutcome::Region(report.region_count);
+                        report.region_count += 1;
+                        len = 0;
+                    }
                 }
                 break;
             }
@@ -84,7 +108,9 @@ pub(super) fn channel_sources<const C: usize, const O: usize, R: Rng + ?Sized>(
         len = remove_kept(&mut run[..len], &scratch[..kept]);
     }
     match outcome {
-        ChannelOutcome::Emitter(_) => report.rejected.outliers += len as u32,
+        ChannelOutcome::Emitter(_) | ChannelOutcome::Region(_) => {
+            report.rejected.outliers += len as u32
+        }
         ChannelOutcome::NoConsistentEmitter(_) => report.rejected.no_emitter += run.len() as u32,
     }
     outcome
@@ -114,6 +140,41 @@ fn record_offsets(
         *written += 1;
     }
     [start as u32, *written as u32]
+}
+
+/// The region of a channel's bearings that agree on a direction but no point
+/// ([`direction_only`]), all of them used.
+fn direction_region(
+    set: &[Item],
+    stations: &[StationSlot],
+    freq: ChannelFreq,
+    config: &LocateConfig,
+) -> Option<Region> {
+    let (w, noise) = direction_only(set, stations, config)?;
+    let (first, last) = (set.first(), set.last());
+    Some(Region {
+        freq_mhz: freq.mean,
+        channel_lowest_mhz: freq.lowest,
+        apex: w.apex,
+        theta: w.theta,
+        half_width: w.half_width,
+        min_range: w.min_range,
+        max_range: w.max_range,
+        parallel: w.parallel,
+        confidence: config.confidence,
+        sigma: noise.sigma,
+        sigma_estimated: true,
+        used: set.len() as u32,
+        effective: noise.effective,
+        index_span: [
+            first.map(|i| i.index).unwrap_or(0),
+            last.map(|i| i.index).unwrap_or(0),
+        ],
+        time_span: [
+            first.map(|i| i.obs.time_s).unwrap_or(0.0),
+            last.map(|i| i.obs.time_s).unwrap_or(0.0),
+        ],
+    })
 }
 
 /// Drop from `run` every item of `kept` (both in increasing input index); returns the new

@@ -9,14 +9,24 @@ use super::super::bias::{
 use super::super::consistency;
 use super::super::noise::median_sigma;
 use super::super::robust::{self, Consensus, OffsetWindow, RefineOptions, RobustFix, TRIM_CUT};
-use super::region::{Region, confidence_region};
+use super::region::{Confidence, Held, Wedge, confidence_region};
 use super::{
-    ChannelFreq, Item, LocateConfig, NoEmitter, NoiseModel, OffsetBeyond, OffsetCheck, Source,
+    ChannelFreq, Item, LocateConfig, NoEmitter, NoiseModel, OffsetBeyond, OffsetCheck, Region,
+    Source,
 };
 use crate::error::{Error, check_finite};
 use crate::model::bearing::{predicted, wrap};
 use crate::stats;
 use rand_core::Rng;
+
+/// What a set of bearings agreeing on a source came to.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum Found {
+    /// A fix, and how many bearings it used.
+    Source(Source, usize),
+    /// The range is open: the line of bearing and range interval, and the bearings used.
+    Region(Region, usize),
+}
 
 /// One source from `set`: the consensus, its refinement and its honest statistics, the main
 /// station's offset checked against its prior ([`past_prior`] where the data contradict it).
@@ -29,10 +39,11 @@ pub(super) fn find_source<R: Rng + ?Sized>(
     freq: ChannelFreq,
     config: &LocateConfig,
     rng: &mut R,
-) -> Result<(Source, usize), NoEmitter> {
+) -> Result<Found, NoEmitter> {
     let window = OffsetWindow::from_stations(set, stations);
     let (mut source, kept) = match attempt(set, scratch, stations, freq, config, window, rng) {
-        Ok(found) => found,
+        Ok(Found::Source(source, kept)) => (source, kept),
+        Ok(region @ Found::Region(..)) => return Ok(region),
         Err(why @ (NoEmitter::NoConsensus | NoEmitter::TooNoisy | NoEmitter::Geometry(_)))
             if window.half_width > 0.0 =>
         {
@@ -63,7 +74,7 @@ pub(super) fn find_source<R: Rng + ?Sized>(
             source.offset_check.ambiguous =
                 circle.rival(source.bias, RIVAL_APART, AMBIGUOUS_DEVIANCE);
         }
-        return Ok((source, kept));
+        return Ok(Found::Source(source, kept));
     }
     past_prior(
         set,
@@ -96,7 +107,7 @@ fn past_prior<R: Rng + ?Sized>(
     rng: &mut R,
     first: (&Source, usize),
     prior: BiasPrior,
-) -> Result<(Source, usize), NoEmitter> {
+) -> Result<Found, NoEmitter> {
     let (source, kept) = first;
     let main = usize::from(source.bias_station);
     let members = scratch.get(..kept).ok_or(NoEmitter::TooFew)?;
@@ -124,19 +135,20 @@ fn past_prior<R: Rng + ?Sized>(
     }
     let window = OffsetWindow::from_prior(relaxed);
     match attempt(set, scratch, stations, freq, config, window, rng) {
-        Ok((mut again, kept)) if again.bias_sd <= OBSERVED_SD => {
+        Ok(Found::Source(mut again, kept)) if again.bias_sd <= OBSERVED_SD => {
             again.offset_check = OffsetCheck {
                 z: source.offset_check.z,
                 relaxed: true,
                 ambiguous: false,
             };
-            Ok((again, kept))
+            Ok(Found::Source(again, kept))
         }
-        Ok((again, _)) => {
+        Ok(Found::Source(again, _)) => {
             beyond.offset = again.bias;
             Err(NoEmitter::OffsetBeyondPrior(beyond))
         }
-        Err(_) => Err(NoEmitter::OffsetBeyondPrior(beyond)),
+        // With the offset free the range opened: the drive does not show the offset.
+        Ok(Found::Region(..)) | Err(_) => Err(NoEmitter::OffsetBeyondPrior(beyond)),
     }
 }
 
@@ -156,7 +168,7 @@ fn round_the_circle<R: Rng + ?Sized>(
     config: &LocateConfig,
     rng: &mut R,
     why: NoEmitter,
-) -> Result<(Source, usize), NoEmitter> {
+) -> Result<Found, NoEmitter> {
     let restore = |stations: &mut [StationSlot]| {
         for s in stations.iter_mut() {
             s.reset();
@@ -192,7 +204,9 @@ fn round_the_circle<R: Rng + ?Sized>(
     };
     let mut best: Option<(usize, u32)> = None;
     for k in 0..CIRCLE_WINDOWS {
-        if let Ok((found, _)) = attempt(set, scratch, stations, freq, &shared, window(k), rng) {
+        if let Ok(Found::Source(found, _)) =
+            attempt(set, scratch, stations, freq, &shared, window(k), rng)
+        {
             let beyond = surprise(stations, &found).1.abs() > CONTRADICTED_Z;
             if beyond && best.is_none_or(|(_, used)| found.used > used) {
                 best = Some((k, found.used));
@@ -200,7 +214,7 @@ fn round_the_circle<R: Rng + ?Sized>(
         }
     }
     let found = best.map(|(k, _)| attempt(set, scratch, stations, freq, &shared, window(k), rng));
-    let Some(Ok((mut source, kept))) = found else {
+    let Some(Ok(Found::Source(mut source, kept))) = found else {
         restore(stations);
         return Err(why);
     };
@@ -272,7 +286,7 @@ fn attempt<R: Rng + ?Sized>(
     config: &LocateConfig,
     window: OffsetWindow,
     rng: &mut R,
-) -> Result<(Source, usize), NoEmitter> {
+) -> Result<Found, NoEmitter> {
     let consensus = significant_consensus(set, window, config, rng)?;
     let refined = refine(set, scratch, stations, &consensus, config)?;
     let kept = refined.kept as usize;
@@ -288,14 +302,20 @@ fn attempt<R: Rng + ?Sized>(
     }
     let noise = noise_used(members, stations, &refined, median, config)?;
     let at_scale = at_noise(members, stations, &refined, noise.scale, config.solver)?;
-    let region = confidence_region(
+    let region = match confidence_region(
         members,
         stations,
         &at_scale,
         &refined.fix.position,
         noise.for_region(),
         config,
-    )?;
+    )? {
+        Held::Bounded(c) => c,
+        Held::Open(w) => {
+            let region = as_region(members, freq, &w, &noise, config.confidence);
+            return Ok(Found::Region(region, kept));
+        }
+    };
     let source = as_reported(members, freq, &refined, &at_scale, &noise, &region, chance);
     check_finite(&[
         source.position[0],
@@ -315,7 +335,41 @@ fn attempt<R: Rng + ?Sized>(
         source.chance,
     ])
     .map_err(NoEmitter::Geometry)?;
-    Ok((source, kept))
+    Ok(Found::Source(source, kept))
+}
+
+/// The open region as reported.
+fn as_region(
+    members: &[Item],
+    freq: ChannelFreq,
+    w: &Wedge,
+    noise: &Noise,
+    confidence: f32,
+) -> Region {
+    let (first, last) = (members.first(), members.last());
+    Region {
+        freq_mhz: freq.mean,
+        channel_lowest_mhz: freq.lowest,
+        apex: w.apex,
+        theta: w.theta,
+        half_width: w.half_width,
+        min_range: w.min_range,
+        max_range: w.max_range,
+        parallel: w.parallel,
+        confidence,
+        sigma: noise.sigma,
+        sigma_estimated: noise.estimated,
+        used: members.len() as u32,
+        effective: noise.effective,
+        index_span: [
+            first.map(|i| i.index).unwrap_or(0),
+            last.map(|i| i.index).unwrap_or(0),
+        ],
+        time_span: [
+            first.map(|i| i.obs.time_s).unwrap_or(0.0),
+            last.map(|i| i.obs.time_s).unwrap_or(0.0),
+        ],
+    }
 }
 
 /// RANSAC's best point, if luck is unlikely to have lined up as many bearings on it.
@@ -494,7 +548,7 @@ fn as_reported(
     refined: &RobustFix,
     at_scale: &BiasedFix,
     noise: &Noise,
-    region: &Region,
+    region: &Confidence,
     chance: f32,
 ) -> Source {
     let (first, last) = (members.first(), members.last());

@@ -505,9 +505,18 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
         Err(no_fix) => {
             // `--json` promises one object on standard output: why there is none, and the
             // advice from the bearings alone.
+            // No fix, but regions (an open range): printed and drawn; still exit status 1.
+            if let Some(l) = &no_fix.located {
+                write_maps(l, &decoded, &paths, &outputs)?;
+            }
             if a.json {
                 let text = serde_json::to_string(&no_fix).map_err(|e| e.to_string())?;
                 out.line(&text)?;
+            } else if let Some(l) = &no_fix.located {
+                out.text(&l.report.text())?;
+                if let Some(a) = &no_fix.across {
+                    out.line(&format!("across: {}", a.line))?;
+                }
             }
             Err(Stop::Error(no_fix.error))
         }

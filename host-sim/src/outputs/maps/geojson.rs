@@ -1,7 +1,7 @@
 //! GeoJSON of a fix (RFC 7946: longitude first, polygons closed, nothing crossing the
 //! antimeridian).
 
-use super::{ellipse_ring, lonlat, rays, sources};
+use super::{ellipse_ring, lonlat, rays, regions, sources, wedge_length, wedge_ring};
 use crate::inputs::capture::Decoded;
 use crate::locate::report::Located;
 use crate::outputs::json::Short;
@@ -144,6 +144,26 @@ pub fn geojson(l: &Located, d: &Decoded) -> Value {
             features.push(json!({"type": "Feature",
                 "properties": {"kind": "ellipse", "of": kind,
                     "confidence": s.ellipse.confidence.short()},
+                "geometry": polygon_geometry(&ring)}));
+        }
+    }
+    // Each open range: its apex and its wedge.
+    for r in regions(l) {
+        features.push(json!({"type": "Feature",
+            "properties": {"kind": "region", "method": l.report.method,
+                "freq_mhz": r.freq_mhz.short(), "bearing_deg": r.bearing_deg.short(),
+                "half_width_deg": r.half_width_deg.short(),
+                "min_range_m": r.min_range_m.short(), "max_range_m": r.max_range_m.short(),
+                "parallel": r.parallel, "used": r.used},
+            "geometry": {"type": "Point", "coordinates": [r.lon, r.lat]}}));
+        let ring: Vec<[f64; 2]> = wedge_ring(r, wedge_length(r, d))
+            .into_iter()
+            .map(|p| lonlat(&frame, p))
+            .collect();
+        if !ring.is_empty() {
+            features.push(json!({"type": "Feature",
+                "properties": {"kind": "wedge", "of": "region",
+                    "confidence": r.confidence.short(), "unbounded": r.max_range_m.is_none()},
                 "geometry": polygon_geometry(&ring)}));
         }
     }

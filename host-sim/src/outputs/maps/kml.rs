@@ -1,7 +1,8 @@
 //! KML of a fix, for Google Earth and most GIS tools.
 
-use super::{ellipse_ring, lonlat, rays, sources, xml_text};
+use super::{ellipse_ring, lonlat, rays, regions, sources, wedge_length, wedge_ring, xml_text};
 use crate::inputs::capture::Decoded;
+use crate::locate::explain::range_words;
 use crate::locate::report::Located;
 use std::fmt::Write;
 
@@ -38,6 +39,29 @@ pub fn kml(l: &Located, d: &Decoded) -> String {
                 out,
                 "<Placemark><name>{name}: {:.0} % ellipse</name><Polygon><outerBoundaryIs><LinearRing><coordinates>{}</coordinates></LinearRing></outerBoundaryIs></Polygon></Placemark>",
                 100.0 * s.ellipse.confidence,
+                ring.join(" ")
+            );
+        }
+    }
+    for r in regions(l) {
+        let ring: Vec<String> = wedge_ring(r, wedge_length(r, d))
+            .into_iter()
+            .map(|p| coords(lonlat(&frame, p)))
+            .collect();
+        if !ring.is_empty() {
+            let _ = writeln!(
+                out,
+                "<Placemark><name>region: {:.0} % wedge</name><description>bearing {:.1} deg +- {:.1} deg from the observers; range {}{}; {} bearings</description><Polygon><outerBoundaryIs><LinearRing><coordinates>{}</coordinates></LinearRing></outerBoundaryIs></Polygon></Placemark>",
+                100.0 * r.confidence,
+                r.bearing_deg,
+                r.half_width_deg,
+                range_words(r),
+                if r.max_range_m.is_none() {
+                    " (drawn to the map's edge)"
+                } else {
+                    ""
+                },
+                r.used,
                 ring.join(" ")
             );
         }

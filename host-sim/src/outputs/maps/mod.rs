@@ -15,7 +15,7 @@ pub use kml::kml;
 pub use svg::{svg, track_svg};
 
 use crate::inputs::capture::Decoded;
-use crate::locate::report::{Drawn, Located, SourceReport, geodetic};
+use crate::locate::report::{Drawn, Located, RegionReport, SourceReport, geodetic};
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_core::fix::ellipse::Ellipse;
 
@@ -40,8 +40,62 @@ pub fn ellipse_ring(position: [f32; 2], e: &Ellipse) -> Vec<[f32; 2]> {
     ring
 }
 
+/// Vertices of each arc of a region's wedge.
+const ARC_VERTICES: usize = 24;
+
+/// The wedge of a region in local metres, closed: the arc at its nearest range (the apex when
+/// that is 0) and the arc at its farthest, `unbounded_m` for an unbounded region (a wedge
+/// drawn that far, not a claim that it ends there); empty when a figure is not finite.
+pub fn wedge_ring(r: &RegionReport, unbounded_m: f32) -> Vec<[f32; 2]> {
+    let far = r
+        .max_range_m
+        .unwrap_or(unbounded_m.max(2.0 * r.min_range_m));
+    let (b, w) = (r.bearing_deg.to_radians(), r.half_width_deg.to_radians());
+    if !([r.east_m, r.north_m, b, w, r.min_range_m, far]
+        .iter()
+        .all(|v| v.is_finite()))
+    {
+        return Vec::new();
+    }
+    let at = |range: f32, azimuth: f32| {
+        [
+            r.east_m + range * azimuth.sin(),
+            r.north_m + range * azimuth.cos(),
+        ]
+    };
+    let arc = |range: f32, reverse: bool| -> Vec<[f32; 2]> {
+        (0..=ARC_VERTICES)
+            .map(|k| {
+                let k = if reverse { ARC_VERTICES - k } else { k };
+                at(range, b - w + 2.0 * w * k as f32 / ARC_VERTICES as f32)
+            })
+            .collect()
+    };
+    let mut ring = if r.min_range_m > 0.0 {
+        arc(r.min_range_m, false)
+    } else {
+        vec![[r.east_m, r.north_m]]
+    };
+    ring.extend(arc(far, true));
+    ring.push(ring[0]);
+    ring
+}
+
+/// The regions of a report's channels (open ranges).
+pub(super) fn regions(l: &Located) -> impl Iterator<Item = &RegionReport> {
+    l.report.channels.iter().filter_map(|c| c.region.as_ref())
+}
+
+/// How far an unbounded region's wedge is drawn: past every vehicle position, 1.3 times the
+/// farthest one's distance from the apex, and at least 5 km.
+pub fn wedge_length(r: &RegionReport, d: &Decoded) -> f32 {
+    d.bearings()
+        .map(|b| (b.vehicle[0] - r.east_m).hypot(b.vehicle[1] - r.north_m) * 1.3)
+        .fold(5000.0f32, f32::max)
+}
+
 /// How far bearing rays are drawn: past every source, 1.3 times the farthest vehicle
-/// position's distance from one.
+/// position's distance from one (and as far as a region's wedge).
 pub fn ray_length(l: &Located, d: &Decoded) -> f32 {
     l.drawn
         .iter()
@@ -50,6 +104,11 @@ pub fn ray_length(l: &Located, d: &Decoded) -> f32 {
                 .map(|b| (b.vehicle[0] - s.position[0]).hypot(b.vehicle[1] - s.position[1]))
         })
         .fold(1.0f32, f32::max)
+        .max(
+            regions(l)
+                .map(|r| wedge_length(r, d) / 1.3)
+                .fold(0.0, f32::max),
+        )
         * 1.3
 }
 

@@ -43,3 +43,39 @@ fn polygons_are_cut_at_the_antimeridian() {
     let plain = [[1.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 0.0]];
     assert_eq!(polygon_geometry(&plain)["type"], "Polygon");
 }
+
+#[test]
+fn an_open_range_is_drawn_as_a_wedge() {
+    // Six 15 degree bearings on 300 m: no fix but a region, which the maps draw as a wedge
+    // from the observers' centroid out past the drive (unbounded).
+    let (bytes, _) = crate::runs::field::capture(
+        crate::runs::field::Condition::OpenNoisyFew,
+        0,
+        crate::runs::simulate::DEFAULT_ORIGIN,
+    )
+    .expect("capture");
+    let d = crate::inputs::capture::decode(&bytes, Default::default(), false);
+    let no_fix = crate::locate::locate_answer(&d, &Default::default()).expect_err("no fix");
+    let l = no_fix.located.expect("a region");
+    let g = geojson(&l, &d);
+    let kinds: Vec<&str> = g["features"]
+        .as_array()
+        .expect("features")
+        .iter()
+        .filter_map(|f| f["properties"]["kind"].as_str())
+        .collect();
+    assert!(
+        kinds.contains(&"region") && kinds.contains(&"wedge"),
+        "{kinds:?}"
+    );
+    let wedge = g["features"]
+        .as_array()
+        .expect("features")
+        .iter()
+        .find(|f| f["properties"]["kind"] == "wedge")
+        .expect("a wedge");
+    assert_eq!(wedge["properties"]["unbounded"], true);
+    assert_eq!(wedge["geometry"]["type"], "Polygon");
+    let k = kml(&l, &d);
+    assert!(k.contains("<name>region: 95 % wedge</name>"), "{k}");
+}

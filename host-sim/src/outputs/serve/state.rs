@@ -10,9 +10,10 @@ use crate::estimate::{Pipeline, PipelineRun};
 use crate::guidance::guide::Guide;
 use crate::inputs::capture::Decoded;
 use crate::inputs::unit::UnitReport;
-use crate::locate::report::geodetic;
+use crate::locate::explain::open_range;
+use crate::locate::report::{RegionReport, geodetic};
 use crate::locate::stations::station_reports;
-use crate::outputs::maps::ellipse_ring;
+use crate::outputs::maps::{ellipse_ring, wedge_ring};
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;
 use foxhunt_core::fix::bias::BiasPrior;
@@ -120,6 +121,8 @@ pub struct MapState {
     pub emitters: Vec<MapSource>,
     /// Other sources (reflections, a second transmitter on a channel).
     pub others: Vec<MapSource>,
+    /// The channels whose range is open: their lines of bearing and range intervals.
+    pub regions: Vec<MapRegion>,
     /// Why there is no fix, when there is none.
     pub fix_error: Option<String>,
     /// The suggested move.
@@ -269,6 +272,18 @@ fn no_emitter(r: &Pipeline) -> String {
     }
 }
 
+/// An open range on the map: the observers' line of bearing and its range interval.
+#[derive(Debug, Clone, Serialize)]
+pub struct MapRegion {
+    /// The region as `foxhunt locate --json` reports it.
+    #[serde(flatten)]
+    pub report: RegionReport,
+    /// Its wedge (an unbounded one drawn as far as the rays).
+    pub wedge: Vec<LL>,
+    /// It in words.
+    pub line: String,
+}
+
 /// Build the map's state after `update` updates; `history` carries the CEP50 history from
 /// the last state; `guide` advises (with roads: a road turn).
 pub fn build(
@@ -332,8 +347,27 @@ pub fn build(
                 .iter()
                 .map(|o| map_source(&frame, &o.source))
                 .collect();
+            st.regions = r
+                .regions()
+                .iter()
+                .map(|g| {
+                    let report = RegionReport::of(g, &frame);
+                    MapRegion {
+                        wedge: wedge_ring(&report, reach)
+                            .into_iter()
+                            .map(|p| ll(&frame, p))
+                            .collect(),
+                        line: open_range(&report),
+                        report,
+                    }
+                })
+                .collect();
             if st.emitters.is_empty() {
-                st.fix_error = Some(no_emitter(r));
+                st.fix_error = Some(
+                    st.regions
+                        .first()
+                        .map_or_else(|| no_emitter(r), |g| g.line.clone()),
+                );
             }
         }
         Err(e) => st.fix_error = Some(e.clone()),
@@ -420,6 +454,40 @@ mod tests {
             );
             assert!(s.bearings >= 595, "{s:?}");
         }
+    }
+
+    #[test]
+    fn an_open_range_is_drawn_as_its_region() {
+        // Six 15 degree bearings on 300 m: no fix, a region; the page gets its wedge and words.
+        let (bytes, truths) = crate::runs::field::capture(
+            crate::runs::field::Condition::OpenNoisyFew,
+            0,
+            crate::runs::simulate::DEFAULT_ORIGIN,
+        )
+        .unwrap();
+        let d = crate::inputs::capture::decode(&bytes, Default::default(), false);
+        let mut guide = Guide::new(None, 100.0).unwrap();
+        let st = build(&d, 1, &[], &mut guide, true);
+        assert!(st.emitters.is_empty(), "{:?}", st.emitters);
+        assert_eq!(st.regions.len(), 1, "{:?}", st.fix_error);
+        let r = &st.regions[0];
+        // A closed wedge from the apex (its range starts at 0) out to the rays' length.
+        assert!(
+            r.wedge.len() > 10 && r.wedge.first() == r.wedge.last(),
+            "{r:?}"
+        );
+        assert_eq!(r.wedge[0], [r.report.lat, r.report.lon]);
+        assert!(r.line.starts_with("the range is open"), "{}", r.line);
+        assert_eq!(st.fix_error.as_deref(), Some(r.line.as_str()));
+        // The truth (1200, 800) m lies 56 degrees from the route's start: within the wedge.
+        let t = truths[0].position;
+        let b = t[0].atan2(t[1]).to_degrees();
+        assert!(
+            (b - r.report.bearing_deg).abs() <= r.report.half_width_deg,
+            "{r:?}"
+        );
+        let json = serde_json::to_string(&st).unwrap();
+        assert!(json.contains("\"regions\":[{") && json.contains("\"wedge\""));
     }
 
     #[test]

@@ -87,6 +87,15 @@ fn pipeline_rows(c: Condition, runs: usize) -> Vec<Row> {
             r.failures = runs - e.found;
             let mut n = note.clone();
             n.push(format!("mean offset {:.2} deg", e.mean_bias_deg));
+            if e.regions > 0 {
+                n.push(format!(
+                    "an open range's region in {} runs, holding the truth in {}; fixes and \
+                     regions held it in {:.1} %",
+                    e.regions,
+                    e.regions_covered,
+                    100.0 * e.answer_coverage()
+                ));
+            }
             r.note = Some(n.join("; "));
             r
         })

@@ -85,6 +85,48 @@ fn simple(
     }
 }
 
+/// 60 s at 15 m/s along an arc of 3 km radius (1.2 km, turning 23 degrees), 5 running-mean
+/// reports a second (the last 10 raw bearings of 8 degrees), the emitter 8 km off to the
+/// side of the drive's heading, an offset from the default prior.
+fn open_correlated_curved(rng: &mut XorShiftRng) -> FieldDrive {
+    let (radius, speed, rate) = (3000.0f32, 15.0f32, 5.0f32);
+    let n = (60.0 * rate) as usize;
+    let route: Vec<[f32; 2]> = (0..n)
+        .map(|k| {
+            let a = speed * k as f32 / rate / radius;
+            [radius * a.sin(), radius * (1.0 - a.cos())]
+        })
+        .collect();
+    let emitter = [6000.0f32, 5300.0];
+    let raw_sigma = 8.0 * DEG;
+    let bias = foxhunt_core::fix::bias::DEFAULT_BIAS_SD * random::normal(rng);
+    let mut window = [0.0f32; 10];
+    for w in window.iter_mut() {
+        *w = raw_sigma * random::normal(rng);
+    }
+    let sigma = raw_sigma / 10f32.sqrt();
+    let bearings: Vec<Bearing> = route
+        .iter()
+        .enumerate()
+        .map(|(k, v)| {
+            window[k % 10] = raw_sigma * random::normal(rng);
+            let mean = window.iter().sum::<f32>() / 10.0;
+            bearing_to(emitter, *v, bias + mean, sigma)
+        })
+        .collect();
+    FieldDrive {
+        observations: timed(bearings, 1.0 / rate),
+        emitters: vec![Truth {
+            position: emitter,
+            freq_mhz: None,
+        }],
+        ghost: None,
+        stations: Vec::new(),
+        bias,
+        sigma,
+    }
+}
+
 /// The 20 km L at `lat`, on the ellipsoid; `turned`: the convergence turned out.
 fn long_drive(lat: f64, turned: bool, rng: &mut XorShiftRng) -> FieldDrive {
     let origin = LatLon { lat, lon: 10.0 };
@@ -254,6 +296,17 @@ pub fn simulate(condition: Condition, run: usize) -> FieldDrive {
         Condition::Long70 => long_drive(70.0, true, rng),
         Condition::Long70Uncorrected => long_drive(70.0, false, rng),
         Condition::Wild15 => simple(&l600(), [1200.0, 800.0], two, two, 0.0, 0.15, rng),
+        Condition::OpenNoisyFew => {
+            let n = 6 + run % 7;
+            let first: Vec<[f32; 2]> = l600().into_iter().take(30).collect();
+            let route: Vec<[f32; 2]> = (0..n)
+                .map(|k| first[(k * (first.len() - 1)) / (n - 1)])
+                .collect();
+            let bias = foxhunt_core::fix::bias::DEFAULT_BIAS_SD * random::normal(rng);
+            let sigma = 15.0 * DEG;
+            simple(&route, [1200.0, 800.0], sigma, sigma, bias, 0.0, rng)
+        }
+        Condition::OpenCorrelatedCurved => open_correlated_curved(rng),
         Condition::AoaAfsaWild | Condition::AoaAfsa | Condition::AoaDrive => {
             let name = match condition {
                 Condition::AoaAfsaWild => "aoa-afsa-wild",

@@ -6,7 +6,9 @@ use crate::estimate::PipelineRun;
 use foxhunt_core::Error;
 use foxhunt_core::fix::bias::{self, BiasPrior, StationSlot};
 use foxhunt_core::fix::ellipse::mahalanobis;
-use foxhunt_core::fix::locate::{ChannelOutcome, LocateConfig, Observation, Report, Source};
+use foxhunt_core::fix::locate::{
+    ChannelOutcome, LocateConfig, Observation, Region, Report, Source,
+};
 use foxhunt_core::model::bearing::{Bearing, predicted};
 use rayon::prelude::*;
 
@@ -31,6 +33,9 @@ pub struct RunOutcome {
     pub bias: f32,
     /// The truth lies within the reported CEP50.
     pub within_cep50: bool,
+    /// No emitter but a region for the truth's channel (an open range): whether it holds the
+    /// truth (bearing within its half-width, range within its interval).
+    pub region: Option<bool>,
 }
 
 /// The observations' geometry at the truth with the true noise: the bound's input (each
@@ -91,6 +96,19 @@ pub fn emitter_for<'a>(r: &'a Report<CHANNELS, OTHERS>, t: &Truth) -> Option<&'a
     })
 }
 
+/// The region reported for the channel of truth `t` (an open range), if any.
+pub fn region_for<'a>(r: &'a Report<CHANNELS, OTHERS>, t: &Truth) -> Option<&'a Region> {
+    let same = |f: Option<f32>| match (f, t.freq_mhz) {
+        (None, None) => true,
+        (Some(a), Some(b)) => (a - b).abs() < 0.05,
+        _ => false,
+    };
+    r.channels().iter().find_map(|c| match c.outcome {
+        ChannelOutcome::Region(i) if same(c.freq_mhz) => r.regions().get(i),
+        _ => None,
+    })
+}
+
 /// Whether the source's ellipse holds `truth`, and the tail probability of its distance.
 fn sigmas_of(s: &Source, truth: &[f32; 2]) -> (bool, f32) {
     let m = mahalanobis(&s.covariance, &s.position, truth).unwrap_or(f32::INFINITY);
@@ -140,6 +158,7 @@ pub fn judge(
                         ghost_reported,
                         bias: s.bias,
                         within_cep50: error <= s.cep50,
+                        region: None,
                     }
                 }
                 None => RunOutcome {
@@ -151,6 +170,9 @@ pub fn judge(
                     ghost_reported,
                     bias: f32::NAN,
                     within_cep50: false,
+                    region: r
+                        .and_then(|r| region_for(r, t))
+                        .map(|g| g.contains(&t.position)),
                 },
             }
         })
@@ -189,12 +211,20 @@ pub struct EmitterSummary {
     pub mean_bias_deg: f64,
     /// Of the found runs, those with the truth within the reported CEP50.
     pub within_cep50: usize,
+    /// Runs with a region (an open range) instead of an emitter for its channel.
+    pub regions: usize,
+    /// Of those, runs whose region holds the truth.
+    pub regions_covered: usize,
 }
 
 impl EmitterSummary {
     /// Share of found runs whose ellipse holds the truth.
     pub fn coverage(&self) -> f64 {
         self.covered as f64 / self.found.max(1) as f64
+    }
+    /// Share of answers (emitters and regions) that hold the truth.
+    pub fn answer_coverage(&self) -> f64 {
+        (self.covered + self.regions_covered) as f64 / (self.found + self.regions).max(1) as f64
     }
     /// rmse / bound.
     pub fn ratio(&self) -> f64 {
@@ -230,6 +260,8 @@ pub fn measure(
                 bound: 0.0,
                 mean_bias_deg: 0.0,
                 within_cep50: 0,
+                regions: 0,
+                regions_covered: 0,
             };
             let mut sq = 0.0f64;
             let mut bound_sq = 0.0f64;
@@ -243,6 +275,10 @@ pub fn measure(
                     sq += (o.error as f64).powi(2);
                     s.mean_bias_deg += (o.bias / DEG) as f64;
                     s.within_cep50 += o.within_cep50 as usize;
+                }
+                if let Some(held) = o.region {
+                    s.regions += 1;
+                    s.regions_covered += held as usize;
                 }
             }
             s.rmse = (sq / s.found.max(1) as f64).sqrt();
@@ -284,6 +320,15 @@ impl std::fmt::Display for Summary {
                 e.ratio(),
                 e.mean_bias_deg
             )?;
+            if e.regions > 0 {
+                write!(
+                    f,
+                    " regions {:>3} held {:>3} answers held {:>5.1} %",
+                    e.regions,
+                    e.regions_covered,
+                    100.0 * e.answer_coverage()
+                )?;
+            }
         }
         if self.condition == Condition::Multipath {
             write!(f, "  | ghost reported {}", self.ghost_reported)?;

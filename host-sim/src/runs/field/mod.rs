@@ -13,6 +13,8 @@
 //!   (0, 1500): east along y = 0 from x = -1500, north along x = 1500, west along y = 3000.
 //!   Its bearings span more than 180 degrees, so a mounting offset is observable.
 //! - `L600` (docs/src/scenarios.md), with the emitter at 1.4 km (aoa-drive) or 10 km.
+//! - `open-*`: drives that leave the range open (few 15 degree bearings on 300 m; a short
+//!   curved track toward a distant emitter, correlated 5 Hz reports), judged by their regions.
 //! - `long`: a 20 km L (10 km east, 10 km north, 400 bearings) placed at 47 or 70 degrees
 //!   north and simulated on the WGS-84 ellipsoid: each bearing is the true azimuth at the
 //!   vehicle plus noise, turned into the local frame of the drive's start by the meridian
@@ -28,7 +30,7 @@ pub use capture::capture;
 pub use drives::{l600, simulate, u_route};
 pub use judge::{
     EmitterSummary, RunOutcome, Summary, THREE_SIGMA_TAIL, bound_at, emitter_for, judge, measure,
-    run_locate,
+    region_for, run_locate,
 };
 
 use crate::estimate::Priors;
@@ -82,11 +84,19 @@ pub enum Condition {
     AoaAfsa,
     /// The canonical aoa-drive (L600, clean).
     AoaDrive,
+    /// An open range: 6 to 12 bearings (run r has 6 + r % 7) spread along L600's first 300 m,
+    /// 15 degree noise stated as such, the emitter at (1200, 800), the unit's offset drawn from
+    /// the default prior (6 degrees sd) each run.
+    OpenNoisyFew,
+    /// An open range: 60 s on a curved track (a 1.2 km arc of 3 km radius, 15 m/s) with a DF
+    /// reporting 5 times a second the running mean of its last 10 raw bearings (8 degrees
+    /// each), the emitter 8 km off, the offset drawn from the default prior each run.
+    OpenCorrelatedCurved,
 }
 
 impl Condition {
     /// Every condition, in report order.
-    pub const ALL: [Condition; 16] = [
+    pub const ALL: [Condition; 18] = [
         Condition::Bias2,
         Condition::Bias4,
         Condition::Bias4Short,
@@ -103,7 +113,15 @@ impl Condition {
         Condition::AoaAfsaWild,
         Condition::AoaAfsa,
         Condition::AoaDrive,
+        Condition::OpenNoisyFew,
+        Condition::OpenCorrelatedCurved,
     ];
+
+    /// The conditions made to leave the range open: judged by their regions too (a region
+    /// holds the truth when the bearing is within its half-width and the range within its
+    /// interval).
+    pub const OPEN_RANGE: [Condition; 2] =
+        [Condition::OpenNoisyFew, Condition::OpenCorrelatedCurved];
 
     /// The name printed in reports.
     pub fn name(&self) -> &'static str {
@@ -124,6 +142,8 @@ impl Condition {
             Condition::AoaAfsaWild => "aoa-afsa-wild",
             Condition::AoaAfsa => "aoa-afsa",
             Condition::AoaDrive => "aoa-drive",
+            Condition::OpenNoisyFew => "open-15deg-few",
+            Condition::OpenCorrelatedCurved => "open-5hz-curved",
         }
     }
 }
