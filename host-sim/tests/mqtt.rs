@@ -15,6 +15,14 @@ use std::time::{Duration, Instant};
 
 const FOXHUNT: &str = env!("CARGO_BIN_EXE_foxhunt");
 
+/// One broker at a time: a port freed by one test's broker restart could otherwise be handed
+/// to another test's new broker, and two brokers would fight over it.
+fn serial() -> std::sync::MutexGuard<'static, ()> {
+    static ONE: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    ONE.lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
 /// The broker's program: on PATH, else where Debian puts it.
 fn mosquitto_program() -> PathBuf {
     let on_path = std::env::var_os("PATH")
@@ -92,6 +100,14 @@ impl Broker {
             );
             std::thread::sleep(Duration::from_millis(20));
         }
+        // Listening, and this broker (not another on the port) is the one that answered.
+        let exited = self.child.as_mut().map(|c| c.try_wait());
+        assert!(
+            matches!(exited, Some(Ok(None))),
+            "mosquitto on {} exited: {}",
+            self.port,
+            std::fs::read_to_string(self.dir.join("mosquitto.log")).unwrap_or_default()
+        );
     }
 
     /// Stop the broker as a service stop does (SIGTERM: it saves its database) and wait.
@@ -300,6 +316,7 @@ fn retained_fix(port: u16, topic: &str) -> Value {
 
 #[test]
 fn three_stations_through_the_broker_give_the_recorded_files_fix() {
+    let _one_broker = serial();
     let broker = Broker::start("fix");
     let files = station_files(&broker.dir);
     let url = broker.url("net");
@@ -328,6 +345,7 @@ fn three_stations_through_the_broker_give_the_recorded_files_fix() {
 
 #[test]
 fn a_broker_restarted_mid_stream_loses_no_bearing_and_counts_none_twice() {
+    let _one_broker = serial();
     let mut broker = Broker::start("restart");
     let files = station_files(&broker.dir);
     let url = broker.url("net");
@@ -363,6 +381,7 @@ fn a_broker_restarted_mid_stream_loses_no_bearing_and_counts_none_twice() {
 
 #[test]
 fn a_station_that_sends_its_capture_twice_counts_once() {
+    let _one_broker = serial();
     let broker = Broker::start("twice");
     let files = station_files(&broker.dir);
     let url = broker.url("net");
@@ -390,6 +409,7 @@ fn a_station_that_sends_its_capture_twice_counts_once() {
 
 #[test]
 fn an_unreachable_broker_is_one_line_and_status_1() {
+    let _one_broker = serial();
     // A port nothing listens on: bound, then closed.
     let port = std::net::TcpListener::bind("127.0.0.1:0")
         .and_then(|l| l.local_addr())

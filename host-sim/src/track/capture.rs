@@ -4,14 +4,11 @@
 //! timed by the GPS fix before it when the capture has fixes.
 
 use crate::inputs::capture::{Decoded, Decoder};
-use crate::track::indoor::AnchorsFile;
+use crate::track::indoor::{AnchorsFile, MAX_ANCHORS};
 use foxhunt_bridge::Frame;
 use foxhunt_bridge::bridge::{BridgeConfig, Event, Receiver};
 use foxhunt_bridge::mt::AfIncomingMsg;
 use std::collections::BTreeSet;
-
-/// Anchors an anchors file may list.
-pub const MAX_ANCHORS: usize = 16;
 
 /// One RSSI reading of a known anchor.
 #[derive(Debug, Clone, Copy, PartialEq)]

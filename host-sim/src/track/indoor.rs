@@ -17,6 +17,9 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeSet;
 use std::fmt::Write;
 
+/// Anchors an anchors file may list.
+pub const MAX_ANCHORS: usize = 16;
+
 /// Particles of the tracker.
 pub const PARTICLES: usize = 1000;
 
@@ -111,10 +114,10 @@ impl AnchorsFile {
     /// error naming the key.
     pub fn from_toml(text: &str) -> Result<Self, String> {
         let f: Self = crate::inputs::files::parse_toml(text)?;
-        if !(3..=crate::track::capture::MAX_ANCHORS).contains(&f.anchor.len()) {
+        if !(3..=MAX_ANCHORS).contains(&f.anchor.len()) {
             return Err(format!(
                 "give 3 to {} anchors, not {}",
-                crate::track::capture::MAX_ANCHORS,
+                MAX_ANCHORS,
                 f.anchor.len()
             ));
         }

@@ -9,6 +9,7 @@
 //! parses (km/h or mph) and from the road class otherwise. Every OSM node of a kept way is a
 //! graph node (no chains contracted), so a curved road is its polyline.
 
+mod extract;
 mod osm;
 mod osm_xml;
 #[cfg(test)]

@@ -1,6 +1,7 @@
 //! What an extract holds for the graph, whichever its format: the ways a car drives on (their
 //! class, `maxspeed`, `oneway`) and their nodes, and the graph built from them.
 
+use super::extract::Extract;
 use super::osm_xml::{MarkupRuns, read_xml};
 use super::{RoadGraph, Segment};
 use crate::inputs::files::{ROADS_CAP, open_capped};
@@ -78,15 +79,6 @@ impl WayTags {
         };
         Some((speed, dir))
     }
-}
-
-/// What the two readers hand over, element by element, whichever the format.
-pub(super) trait Extract {
-    /// A node and where it is (as the file says: not checked).
-    fn node(&mut self, id: i64, at: LatLon);
-    /// A way: its nodes in order, their locations when the file carries them on the way
-    /// (else empty), and its tags.
-    fn way(&mut self, refs: &[i64], at: &[LatLon], tags: &mut dyn Iterator<Item = (&str, &str)>);
 }
 
 /// What an extract holds for the graph: node coordinates by id and the drivable ways.

@@ -1,6 +1,6 @@
 //! OSM XML through quick-xml, with a guard against files that are not markup.
 
-use super::osm::Extract;
+use super::extract::Extract;
 use foxhunt_bridge::nmea::LatLon;
 use std::io::{BufRead, Read};
 

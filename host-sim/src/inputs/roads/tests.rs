@@ -1,3 +1,4 @@
+use super::extract::Extract;
 use super::osm::*;
 use super::osm_xml::{MarkupRuns, Tag, read_xml};
 use super::*;
