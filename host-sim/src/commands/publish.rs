@@ -6,11 +6,10 @@
 //! what `locate` would have used: true bearings at the station's position, on UTC.
 
 use super::locate::live::{LiveSource, reader};
-use super::locate::{Given, given};
+use super::locate::{Given, given, kraken_urls};
 use super::values;
 use crate::inputs::capture::{Decoder, kind_name};
 use crate::inputs::files::{Source, stream};
-use crate::inputs::kraken_http::KrakenUrl;
 use crate::inputs::mqtt::{BearingMessage, MqttUrl, check_station};
 use crate::outputs::mqtt::{Backlog, Link, Message};
 use crate::outputs::terminal::{Outcome, Stop, note};
@@ -84,17 +83,11 @@ enum Input {
 
 fn input(a: &Args) -> Result<Input, Stop> {
     if !a.kraken.is_empty() {
-        if !a.sources.is_empty() || a.baud.is_some() {
-            return Err(Stop::usage(
-                "--kraken reads the unit's web page: give no SOURCE and no --baud",
-            ));
-        }
-        let urls = a
-            .kraken
-            .iter()
-            .map(|u| KrakenUrl::parse(u))
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(Stop::Usage)?;
+        let urls = kraken_urls(
+            &a.kraken,
+            !a.sources.is_empty() || a.baud.is_some(),
+            "SOURCE",
+        )?;
         return Ok(Input::Live(LiveSource::Kraken(urls)));
     }
     match given(a.baud, &a.sources)? {

@@ -223,17 +223,11 @@ fn input(a: &Args) -> Result<Input, Stop> {
         return Ok(Input::Mqtt(MqttUrl::parse(url).map_err(Stop::Usage)?));
     }
     if !a.kraken.is_empty() {
-        if !a.captures.is_empty() || a.baud.is_some() {
-            return Err(Stop::usage(
-                "--kraken reads the unit's web page: give no CAPTURE and no --baud",
-            ));
-        }
-        let urls = a
-            .kraken
-            .iter()
-            .map(|u| KrakenUrl::parse(u))
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(Stop::Usage)?;
+        let urls = kraken_urls(
+            &a.kraken,
+            !a.captures.is_empty() || a.baud.is_some(),
+            "CAPTURE",
+        )?;
         return Ok(Input::Kraken(urls, gpsd));
     }
     if let Some(g) = gpsd {
@@ -246,6 +240,24 @@ fn input(a: &Args) -> Result<Input, Stop> {
         };
     }
     line_input(a)
+}
+
+/// The `--kraken` URLs of a command, which reads them instead of its `what` arguments and
+/// `--baud` (`other`: some were given too).
+pub(crate) fn kraken_urls(
+    urls: &[String],
+    other: bool,
+    what: &str,
+) -> Result<Vec<KrakenUrl>, Stop> {
+    if other {
+        return Err(Stop::usage(format!(
+            "--kraken reads the unit's web page: give no {what} and no --baud"
+        )));
+    }
+    urls.iter()
+        .map(|u| KrakenUrl::parse(u))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(Stop::Usage)
 }
 
 /// What a command's CAPTURE arguments and `--baud` ask to read: nothing (the command's
