@@ -4,7 +4,7 @@
 
 use super::super::bias::{BiasPrior, StationSlot};
 use super::region::direction_only;
-use super::source::{Found, find_source};
+use super::source::{Found, as_region, find_source};
 use super::{
     ChannelFreq, ChannelOutcome, Item, LocateConfig, NoEmitter, OtherReason, OtherSource, Region,
     Report, StationOffset,
@@ -151,30 +151,8 @@ fn direction_region(
     config: &LocateConfig,
 ) -> Option<Region> {
     let (w, noise) = direction_only(set, stations, config)?;
-    let (first, last) = (set.first(), set.last());
-    Some(Region {
-        freq_mhz: freq.mean,
-        channel_lowest_mhz: freq.lowest,
-        apex: w.apex,
-        theta: w.theta,
-        half_width: w.half_width,
-        min_range: w.min_range,
-        max_range: w.max_range,
-        parallel: w.parallel,
-        confidence: config.confidence,
-        sigma: noise.sigma,
-        sigma_estimated: true,
-        used: set.len() as u32,
-        effective: noise.effective,
-        index_span: [
-            first.map(|i| i.index).unwrap_or(0),
-            last.map(|i| i.index).unwrap_or(0),
-        ],
-        time_span: [
-            first.map(|i| i.obs.time_s).unwrap_or(0.0),
-            last.map(|i| i.obs.time_s).unwrap_or(0.0),
-        ],
-    })
+    let noise_used = (noise.sigma, true, noise.effective);
+    Some(as_region(set, freq, &w, noise_used, config.confidence))
 }
 
 /// Drop from `run` every item of `kept` (both in increasing input index); returns the new

@@ -312,7 +312,8 @@ fn attempt<R: Rng + ?Sized>(
     )? {
         Held::Bounded(c) => c,
         Held::Open(w) => {
-            let region = as_region(members, freq, &w, &noise, config.confidence);
+            let noise_used = (noise.sigma, noise.estimated, noise.effective);
+            let region = as_region(members, freq, &w, noise_used, config.confidence);
             return Ok(Found::Region(region, kept));
         }
     };
@@ -338,12 +339,13 @@ fn attempt<R: Rng + ?Sized>(
     Ok(Found::Source(source, kept))
 }
 
-/// The open region as reported.
-fn as_region(
+/// `members`' open region `w` as reported, at the noise `sigma` (estimated or given) with
+/// `effective` independent bearings.
+pub(super) fn as_region(
     members: &[Item],
     freq: ChannelFreq,
     w: &Wedge,
-    noise: &Noise,
+    (sigma, estimated, effective): (f32, bool, f32),
     confidence: f32,
 ) -> Region {
     let (first, last) = (members.first(), members.last());
@@ -357,10 +359,10 @@ fn as_region(
         max_range: w.max_range,
         parallel: w.parallel,
         confidence,
-        sigma: noise.sigma,
-        sigma_estimated: noise.estimated,
+        sigma,
+        sigma_estimated: estimated,
         used: members.len() as u32,
-        effective: noise.effective,
+        effective,
         index_span: [
             first.map(|i| i.index).unwrap_or(0),
             last.map(|i| i.index).unwrap_or(0),
