@@ -174,6 +174,16 @@ pub fn pipeline(
 /// The 95 % ellipse scale of a Gaussian fix in two dimensions, chi-square(2).
 pub const CHI2_2_95: f32 = 5.991_465;
 
+/// The noise of a set of residuals: the bearing noise a fix found and the degrees of freedom
+/// behind it (what scales its ellipse).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Noise {
+    /// The bearing noise, radians.
+    pub sigma: f32,
+    /// Its degrees of freedom: residuals used less the position's two unknowns.
+    pub dof: f32,
+}
+
 /// A static-emitter fix: position, covariance, its ellipse, and what it cost.
 #[derive(Debug, Clone)]
 pub struct BearingFix {

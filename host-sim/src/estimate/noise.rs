@@ -8,7 +8,7 @@
 //! ([`Method::robust_loss`]) estimates it from the inliers (a MAD cut), with the inliers'
 //! degrees of freedom; a plain one from every residual, as its fit used them.
 
-use super::{BearingFix, locate_bearings};
+use super::{BearingFix, Noise, locate_bearings};
 use foxhunt_core::estimator::batch_fix;
 use foxhunt_core::fix::consistency::ellipse_scale;
 use foxhunt_core::fix::crlb::information;
@@ -40,15 +40,6 @@ const MAX_ROUNDS: usize = 20;
 /// Smallest noise a fix states, radians: residuals of a few hundredths of a degree are a
 /// simulation's, not a DF unit's.
 const FLOOR_DEG: f32 = 0.05;
-
-/// The noise of a set of residuals.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Noise {
-    /// The bearing noise, radians.
-    pub sigma: f32,
-    /// Its degrees of freedom: residuals used less the position's two unknowns.
-    pub dof: f32,
-}
 
 /// Bearing noise from the residuals at `p`, as `method`'s fit weighed them: every residual for a
 /// plain method (RSS / (n - 2)); for a robust one the inliers' RMS over n_in - 2, corrected for

@@ -3,8 +3,7 @@
 //! the unit's own noise model, and the last update as the answer. Its ellipse is the unit's
 //! own (no floor at the bound, no rescaling): what the unit says is what is measured.
 
-use super::BearingFix;
-use super::noise::Noise;
+use super::{BearingFix, Noise};
 use foxhunt_core::fix::ellipse::Ellipse;
 use foxhunt_core::fix::window::{self, Status, WindowConfig};
 use foxhunt_core::{Bearing, Error};
