@@ -180,7 +180,13 @@ fn noise_of(noise: Option<f32>, what: &str) -> Result<Option<f32>, String> {
 
 /// Parse `LAT,LON@MHZ` (a `--reference`).
 pub fn parse_reference(text: &str) -> Result<Reference, String> {
-    let bad = || format!("--reference wants LAT,LON@MHZ in decimal degrees and MHz, not `{text}`");
+    // Echoed escaped: an error is one line, whatever the value held.
+    let bad = || {
+        format!(
+            "--reference wants LAT,LON@MHZ in decimal degrees and MHz, not `{}`",
+            text.escape_debug()
+        )
+    };
     let (at, mhz) = text.split_once('@').ok_or_else(bad)?;
     let (lat, lon) = at.split_once(',').ok_or_else(bad)?;
     let p = [
@@ -191,7 +197,8 @@ pub fn parse_reference(text: &str) -> Result<Reference, String> {
     let position = lat_lon(p).ok_or_else(bad)?;
     if !(freq_mhz > 0.0 && freq_mhz.is_finite()) {
         return Err(format!(
-            "--reference: the frequency must be a positive number of MHz, not {mhz}"
+            "--reference: the frequency must be a positive number of MHz, not {}",
+            mhz.escape_debug()
         ));
     }
     Ok(Reference {
@@ -448,8 +455,10 @@ freq_mhz = 145.5
             assert!(e.contains(says) && !e.contains('\n'), "{text}: {e}");
         }
         assert!(parse_reference("47.0,8.0@145.5").is_ok());
-        for bad in ["47.0,8.0", "47.0@145", "95,8@1", "47,8@0", "47,8@x"] {
-            assert!(parse_reference(bad).is_err(), "{bad}");
+        // A value holding a line break is echoed escaped: the error stays one line.
+        for bad in ["47.0,8.0", "47.0@145", "95,8@1", "47,8@0", "47,8@x", "47,8@1\nx"] {
+            let e = parse_reference(bad).expect_err(bad);
+            assert!(!e.contains('\n'), "{bad:?}: {e}");
         }
     }
 }
