@@ -8,7 +8,9 @@ use std::sync::OnceLock;
 
 fn scratch() -> &'static PathBuf {
     static P: OnceLock<PathBuf> = OnceLock::new();
-    P.get_or_init(|| std::env::temp_dir().join(format!("foxhunt-fuzz-{}.stations.toml", std::process::id())))
+    P.get_or_init(|| {
+        std::env::temp_dir().join(format!("foxhunt-fuzz-{}.stations.toml", std::process::id()))
+    })
 }
 
 fuzz_target!(|data: &[u8]| {
