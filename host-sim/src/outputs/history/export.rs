@@ -223,4 +223,20 @@ mod tests {
         );
         assert!(super::super::parse_time("yesterday").is_err());
     }
+
+    proptest::proptest! {
+        /// Any station id or reason reads back from its CSV field as it was.
+        #[test]
+        fn a_field_reads_back(text in "\\PC{0,30}") {
+            let f = field(&text);
+            let back = match f.strip_prefix('"').and_then(|r| r.strip_suffix('"')) {
+                Some(inner) => inner.replace("\"\"", "\""),
+                None => {
+                    proptest::prop_assert!(!f.contains([',', '"', '\n', '\r']));
+                    f.clone()
+                }
+            };
+            proptest::prop_assert_eq!(back, text);
+        }
+    }
 }

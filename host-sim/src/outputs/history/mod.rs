@@ -601,3 +601,83 @@ impl Reader {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn message(station: &str, time_ms: i64) -> BearingMessage {
+        BearingMessage {
+            station: station.into(),
+            time_ms,
+            lat: 47.0,
+            lon: 8.0,
+            bearing_deg: 45.0,
+            sigma_deg: 1.0,
+            freq_mhz: Some(433.92),
+            quality: 80.0,
+            kind: "kraken-xml".into(),
+        }
+    }
+
+    #[test]
+    fn a_bearing_is_stored_once_and_read_back_in_the_order_it_came() {
+        let dir = std::env::temp_dir().join(format!("foxhunt-history-unit-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("dir");
+        let path = dir.join("h.db");
+        let mut h = History::open(&path).expect("open");
+        // Out of time order, as a network's stations deliver them.
+        for (s, t) in [("b", 2_000), ("a", 1_000), ("a", 3_000)] {
+            assert!(h.keep(&message(s, t)).expect("keep"));
+        }
+        assert!(!h.keep(&message("a", 1_000)).expect("keep"), "a copy");
+        let other_channel = BearingMessage {
+            freq_mhz: Some(145.5),
+            ..message("a", 1_000)
+        };
+        assert!(h.keep(&other_channel).expect("keep"), "another channel");
+        let mut seen = Vec::new();
+        h.bearings(|m| seen.push((m.station, m.time_ms)))
+            .expect("read");
+        assert_eq!(
+            seen,
+            [("b", 2_000), ("a", 1_000), ("a", 3_000), ("a", 1_000)]
+                .map(|(s, t)| (s.to_string(), t))
+        );
+        assert_eq!(h.newest_ms, Some(3_000));
+        drop(h);
+        let r = Reader::open(&path).expect("reader");
+        let mut n = 0;
+        let window = Window {
+            since_ms: Some(1_000),
+            until_ms: Some(3_000),
+        };
+        r.bearings(window, |m| {
+            assert!((1_000..3_000).contains(&m.time_ms));
+            assert_eq!(
+                m,
+                if m.station == "b" {
+                    message("b", 2_000)
+                } else {
+                    m.clone()
+                }
+            );
+            n += 1;
+        })
+        .expect("read");
+        assert_eq!(n, 3);
+        let s = r.summary(Window::default()).expect("summary");
+        assert_eq!((s.bearings, s.stations, s.channels), (4, 2, 2));
+        assert_eq!(s.span_ms, Some((1_000, 3_000)));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    proptest::proptest! {
+        /// Any text: a time or one line saying why not, never a panic.
+        #[test]
+        fn any_text_is_a_time_or_an_error(text in ".{0,40}") {
+            let _ = parse_time(&text);
+        }
+    }
+}
