@@ -375,7 +375,6 @@ pub struct LiveEnd {
 /// (why there is no fix). What was decoded, and whether the last update had a fix.
 pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd, Stop> {
     o.locate.check()?;
-    let mut line = reader(&o.source, o.gpsd.as_ref(), o.history.clone())?;
     let mut dec = Decoder::new(BridgeConfig::default(), o.keep_track);
     // Several KrakenSDRs: each URL an input, so a unit without a STATION_ID is a station of
     // its own.
@@ -387,7 +386,10 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
         }
     }
     o.locate.survey(&mut dec);
+    // The history's bearings first, before the line starts: a bearing the broker delivers now
+    // is stored and handed on once, after them.
     let mut stamper = resume(o, &mut dec)?;
+    let mut line = reader(&o.source, o.gpsd.as_ref(), o.history.clone())?;
     let mut failed = 0;
     let mut tak = o.cot.clone().map(CotSender::new);
     let mut reported = (0usize, 0u32);
