@@ -22,21 +22,17 @@ use crate::guidance::guide::Guide;
 use crate::inputs::capture::{Decoded, Decoder};
 use crate::inputs::gpsd::{GpsdAddress, Report, Watch};
 use crate::inputs::kraken_http::KrakenUrl;
-use crate::inputs::messages::{Stamper, today_ms};
-use crate::inputs::mqtt::{BearingMessage, Handed, MqttUrl, Subscription, channel_name};
+use crate::inputs::mqtt::{Handed, MqttUrl, Subscription, channel_name};
 use crate::locate::locate_guided;
 use crate::outputs::cot::{self, CotSender, CotUrl};
-use crate::outputs::history::History;
+use crate::outputs::history::recorder::Recorder;
 use crate::outputs::terminal::{Out, Stop, note};
 use foxhunt_bridge::BridgeConfig;
 use foxhunt_bridge::Frame;
 use foxhunt_bridge::kraken::KrakenXml;
 use std::io::{ErrorKind, Read};
-use std::sync::{Arc, Mutex, mpsc};
+use std::sync::mpsc;
 use std::time::{Duration, Instant};
-
-/// A history written by the line's reader (the broker's bearings) and by the updates.
-pub type SharedHistory = Arc<Mutex<History>>;
 
 /// Where live bytes come from.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -80,7 +76,7 @@ pub struct LiveOptions {
     /// Send every fix to TAK.
     pub cot: Option<CotUrl>,
     /// Keep every bearing and update there, and resume from what it holds.
-    pub history: Option<SharedHistory>,
+    pub history: Option<Recorder>,
 }
 
 /// A read's outcome, sent from the reader thread.
@@ -156,34 +152,12 @@ pub struct LiveLine {
     pub mqtt: Option<Subscription>,
 }
 
-/// Bearing `m` into `history` (if any): whether it is new. A bearing the file cannot take is
-/// still fused (noted, the first few).
-fn keep(history: Option<&SharedHistory>, m: &BearingMessage, failed: &mut u32) -> bool {
-    let Some(h) = history else {
-        return true;
-    };
-    match h
-        .lock()
-        .map_err(|_| "the history's lock".to_string())
-        .and_then(|mut h| h.keep(m))
-    {
-        Ok(new) => new,
-        Err(e) => {
-            *failed += 1;
-            if *failed <= 5 {
-                note(&format!("{e}; a bearing not stored"));
-            }
-            true
-        }
-    }
-}
-
 /// Start the threads that read the line (and gpsd); the broker's bearings go to `history`
 /// before they are acknowledged.
 pub fn reader(
     source: &LiveSource,
     gpsd_at: Option<&GpsdAddress>,
-    history: Option<SharedHistory>,
+    history: Option<Recorder>,
 ) -> Result<LiveLine, String> {
     let (tx, rx) = mpsc::sync_channel::<Chunk>(16);
     let line = |rx, mqtt| LiveLine {
@@ -225,10 +199,7 @@ pub fn reader(
                         Err(_) => Handed::Closed,
                     },
                 },
-                {
-                    let mut failed = 0;
-                    move |m| keep(history.as_ref(), m, &mut failed)
-                },
+                move |m| history.as_ref().is_none_or(|h| h.keep(m)),
                 note,
             )?;
             return Ok(line(rx, Some(sub)));
@@ -305,62 +276,6 @@ impl LiveLine {
     }
 }
 
-/// Resume `dec` from the history's bearings, in the order they arrived (the broker's path:
-/// their KrakenSDR records through the bridge). The stamper of the line's own bearings when
-/// they are to be stored from the decoder (every source but the broker, whose messages are
-/// stored as they came).
-fn resume(o: &LiveOptions, dec: &mut Decoder) -> Result<Option<Stamper>, Stop> {
-    let Some(h) = &o.history else {
-        return Ok(None);
-    };
-    let h = h
-        .lock()
-        .map_err(|_| Stop::Error("the history's lock".into()))?;
-    let n = h.bearings(|m| dec.push_frame(&Frame::KrakenXml(m.record())))?;
-    note(&format!(
-        "history: {n} bearings resumed from {}",
-        h.path().display()
-    ));
-    if matches!(o.source, LiveSource::Mqtt { .. }) {
-        return Ok(None);
-    }
-    dec.keep_measurements();
-    Ok(Some(Stamper {
-        station: None,
-        day0_ms: today_ms(),
-        dated: false,
-    }))
-}
-
-/// The bearings `dec` decoded since the last call, stored as the network's messages.
-pub fn keep_decoded(
-    history: Option<&SharedHistory>,
-    stamper: &mut Stamper,
-    dec: &mut Decoder,
-    failed: &mut u32,
-) {
-    if dec.decoded.measurements.is_empty() {
-        return;
-    }
-    dec.snapshot();
-    if let Some(m) = dec.decoded.measurements.first() {
-        stamper.date_live(m.time_ms);
-    }
-    for m in std::mem::take(&mut dec.decoded.measurements) {
-        match stamper.message(dec, &m) {
-            Ok(msg) => {
-                keep(history, &msg, failed);
-            }
-            Err(e) => {
-                *failed += 1;
-                if *failed <= 5 {
-                    note(&format!("{e}; a bearing not stored"));
-                }
-            }
-        }
-    }
-}
-
 /// How a live line ended.
 #[derive(Debug)]
 pub struct LiveEnd {
@@ -387,10 +302,16 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
     }
     o.locate.survey(&mut dec);
     // The history's bearings first, before the line starts: a bearing the broker delivers now
-    // is stored and handed on once, after them.
-    let mut stamper = resume(o, &mut dec)?;
+    // is stored and handed on once, after them. The broker's messages are stored as they
+    // come, every other source's bearings from the decoder.
+    let mut stamper = None;
+    if let Some(h) = &o.history {
+        h.resume(&mut dec)?;
+        if !matches!(o.source, LiveSource::Mqtt { .. }) {
+            stamper = Some(h.stamper(&mut dec));
+        }
+    }
     let mut line = reader(&o.source, o.gpsd.as_ref(), o.history.clone())?;
-    let mut failed = 0;
     let mut tak = o.cot.clone().map(CotSender::new);
     let mut reported = (0usize, 0u32);
     let mut ended = false;
@@ -402,8 +323,8 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
             // Bearings still waiting for a later fix are placed with the fixes there are.
             dec.end();
         }
-        if let Some(stamper) = stamper.as_mut() {
-            keep_decoded(o.history.as_ref(), stamper, &mut dec, &mut failed);
+        if let (Some(h), Some(stamper)) = (&o.history, stamper.as_mut()) {
+            h.keep_decoded(stamper, &mut dec);
         }
         // New bearings, or a new fix sentence of a DF unit (its user port carries no bearings).
         let n = (dec.decoded.observations.len(), dec.decoded.unit.fixes);
@@ -433,13 +354,8 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
                     sub.publish_fix(&channel_name(e.freq_mhz.map(f64::from)), json);
                 }
             }
-            if let Some(h) = &o.history
-                && let Err(e) = h
-                    .lock()
-                    .map_err(|_| "the history's lock".to_string())
-                    .and_then(|mut h| h.keep_update(&located))
-            {
-                note(&format!("{e}; this update not stored"));
+            if let Some(h) = &o.history {
+                h.keep_update(&located);
             }
             last = Some(located.err().map(|e| e.error));
             out.line(&text)?;

@@ -16,7 +16,8 @@ use crate::locate::report::Located;
 use crate::locate::{locate, locate_guided};
 use crate::outputs::cot::{self, CotSender, CotUrl};
 use crate::outputs::files::Outputs;
-use crate::outputs::history::{History, Reader, Window, parse_time};
+use crate::outputs::history::recorder::{Recorder, replay};
+use crate::outputs::history::{Window, parse_time};
 use crate::outputs::maps;
 use crate::outputs::terminal::{Out, Outcome, Stop, note};
 use foxhunt_bridge::BridgeConfig;
@@ -460,33 +461,35 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
     }
     let keep_track = paths.iter().any(Option::is_some);
     let mut guide = a.guidance.guide()?;
-    // The history this run writes (a replay only reads its own).
+    // The history this run writes (a replay only reads its own), and the recorded capture's
+    // bearings stamped with the capture's day.
     let history = match &a.db {
-        Some(db) if !matches!(input, Input::History(..)) => Some(std::sync::Arc::new(
-            std::sync::Mutex::new(History::open(db)?),
-        )),
+        Some(db) if !matches!(input, Input::History(..)) => Some(Recorder::open(db)?),
         _ => None,
     };
-    let mut recorded = history.as_ref().map(|h| Recorded::new(h.clone()));
+    let mut recorded = None;
+    if let (Some(h), Input::Sample | Input::Files(_)) = (&history, &input) {
+        let day = match &input {
+            Input::Files(sources) => crate::inputs::messages::capture_day(sources),
+            _ => crate::inputs::messages::day_of(SAMPLE_DRIVE),
+        };
+        recorded = Some((h, day));
+    }
     let decoded = match input {
         Input::Sample => {
             let mut dec = Decoder::new(BridgeConfig::default(), keep_track);
             options.survey(&mut dec);
-            if let Some(r) = &mut recorded {
-                r.begin(&mut dec, crate::inputs::messages::day_of(SAMPLE_DRIVE));
-            }
+            let mut stamper = recorded.map(|(h, day)| (h, stamp(h, &mut dec, day)));
             dec.feed(SAMPLE_DRIVE);
             dec.end();
-            if let Some(r) = &mut recorded {
-                r.keep(&mut dec);
+            if let Some((h, s)) = &mut stamper {
+                h.keep_decoded(s, &mut dec);
             }
             dec.finish()
         }
         Input::Files(sources) => {
             let mut dec = Decoder::new(BridgeConfig::default(), keep_track);
-            if let Some(r) = &mut recorded {
-                r.begin(&mut dec, crate::inputs::messages::capture_day(&sources));
-            }
+            let mut stamper = recorded.map(|(h, day)| (h, stamp(h, &mut dec, day)));
             // Each file is an input of its own: a unit whose records name no station is one
             // station per file.
             for (s, path) in sources.iter().zip(&a.captures) {
@@ -496,28 +499,21 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
                 options.survey(&mut dec);
                 stream(std::slice::from_ref(s), |b| {
                     dec.feed(b);
-                    if let Some(r) = &mut recorded {
-                        r.keep(&mut dec);
+                    if let Some((h, s)) = &mut stamper {
+                        h.keep_decoded(s, &mut dec);
                     }
                 })?;
             }
             dec.end();
-            if let Some(r) = &mut recorded {
-                r.keep(&mut dec);
+            if let Some((h, s)) = &mut stamper {
+                h.keep_decoded(s, &mut dec);
             }
             dec.finish()
         }
         Input::History(db, window) => {
-            let reader = Reader::open(&db)?;
             let mut dec = Decoder::new(BridgeConfig::default(), keep_track);
             options.survey(&mut dec);
-            let n = reader.bearings(window, |m| {
-                dec.push_frame(&foxhunt_bridge::Frame::KrakenXml(m.record()))
-            })?;
-            note(&format!(
-                "history: {n} bearings replayed from {}",
-                db.display()
-            ));
+            replay(&db, window, &mut dec)?;
             dec.finish()
         }
         Input::Live(_) | Input::Gpsd(..) | Input::Kraken(..) | Input::Mqtt(_) => {
@@ -581,8 +577,8 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
         return Ok(());
     }
     let located = locate_guided(&decoded, &options, &mut guide);
-    if let Some(r) = &recorded {
-        r.keep_update(&located);
+    if let Some(h) = &history {
+        h.keep_update(&located);
     }
     let result = match located {
         Ok(l) => {
@@ -625,56 +621,16 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
     result
 }
 
-/// A recorded capture's bearings and fix going to a history.
-struct Recorded {
-    history: live::SharedHistory,
-    stamper: crate::inputs::messages::Stamper,
-    failed: u32,
-}
-
-impl Recorded {
-    fn new(history: live::SharedHistory) -> Self {
-        Self {
-            history,
-            stamper: crate::inputs::messages::Stamper {
-                station: None,
-                day0_ms: crate::inputs::messages::today_ms(),
-                dated: true,
-            },
-            failed: 0,
-        }
+/// The stamper of a recorded capture's bearings going to `h`: on the capture's `day`, today's
+/// when it names none.
+fn stamp(h: &Recorder, dec: &mut Decoder, day: Option<i64>) -> crate::inputs::messages::Stamper {
+    let mut s = h.stamper(dec);
+    s.dated = true;
+    match day {
+        Some(d) => s.day0_ms = d,
+        None => note("history: no date in the capture, its times are counted from today"),
     }
-
-    /// Keep `dec`'s bearings, on the capture's `day` (today's when it names none).
-    fn begin(&mut self, dec: &mut Decoder, day: Option<i64>) {
-        dec.keep_measurements();
-        match day {
-            Some(d) => self.stamper.day0_ms = d,
-            None => note("history: no date in the capture, its times are counted from today"),
-        }
-    }
-
-    /// Store the bearings decoded since the last call.
-    fn keep(&mut self, dec: &mut Decoder) {
-        live::keep_decoded(
-            Some(&self.history),
-            &mut self.stamper,
-            dec,
-            &mut self.failed,
-        );
-    }
-
-    /// Store the fix.
-    fn keep_update(&self, located: &Result<Located, Box<crate::locate::report::NoFix>>) {
-        if let Err(e) = self
-            .history
-            .lock()
-            .map_err(|_| "the history's lock".to_string())
-            .and_then(|mut h| h.keep_update(located))
-        {
-            note(&format!("{e}; the fix not stored"));
-        }
-    }
+    s
 }
 
 fn write_maps(

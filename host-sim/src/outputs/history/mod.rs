@@ -15,6 +15,7 @@
 //! arrived, so a killed worker loses none.
 
 pub mod export;
+pub mod recorder;
 
 use crate::inputs::mqtt::{BearingMessage, channel_name};
 use crate::locate::report::{Located, NoFix};
