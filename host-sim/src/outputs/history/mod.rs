@@ -170,6 +170,15 @@ impl std::fmt::Debug for History {
     }
 }
 
+impl Drop for History {
+    /// Back to one file (no `-wal` and `-shm` beside it, which a reader would otherwise make
+    /// again) when no reader has it open; otherwise it stays as it is, as after a kill.
+    fn drop(&mut self) {
+        let _ = self.conn.busy_timeout(Duration::ZERO);
+        let _ = self.conn.execute_batch("PRAGMA journal_mode = DELETE;");
+    }
+}
+
 impl History {
     /// Open `path` to write, made a history if it is new (absent or empty); refused (nothing
     /// written) when it is another file, or another worker's.
@@ -205,16 +214,17 @@ impl History {
         conn.busy_timeout(BUSY_WAIT)
             .map_err(|e| refused(path, &e))?;
         if !check(&conn, path)? {
-            // WAL: readers go on while the worker writes; NORMAL: a commit survives the
-            // process being killed (a power cut may lose the last ones).
             conn.execute_batch(&format!(
-                "PRAGMA journal_mode = WAL; BEGIN IMMEDIATE; {SCHEMA} \
+                "BEGIN IMMEDIATE; {SCHEMA} \
                  PRAGMA application_id = {APPLICATION_ID}; \
                  PRAGMA user_version = {SCHEMA_VERSION}; COMMIT;"
             ))
             .map_err(|e| refused(path, &e))?;
         }
-        conn.execute_batch("PRAGMA synchronous = NORMAL;")
+        // WAL while the worker writes: readers go on beside it (back to a single file when it
+        // closes, below). NORMAL: a commit survives the process being killed (a power cut may
+        // lose the last ones).
+        conn.execute_batch("PRAGMA journal_mode = WAL; PRAGMA synchronous = NORMAL;")
             .map_err(|e| refused(path, &e))?;
         let (newest_ms, last_update): (Option<i64>, Option<i64>) = conn
             .query_row(
