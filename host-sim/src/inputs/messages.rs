@@ -98,15 +98,6 @@ pub fn capture_day(sources: &[Source]) -> Option<i64> {
     f.day
 }
 
-/// Midnight UTC of the day the first dated record of `bytes` names (in its first megabyte).
-pub fn day_of(bytes: &[u8]) -> Option<i64> {
-    let mut f = DayFinder::new();
-    for chunk in bytes.chunks(64 * 1024) {
-        f.feed(chunk);
-    }
-    f.day
-}
-
 /// Midnight UTC of an RMC sentence's date.
 pub fn rmc_day(body: &str) -> Option<i64> {
     let fields: Vec<&str> = body.split(',').collect();

@@ -461,35 +461,23 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
     }
     let keep_track = paths.iter().any(Option::is_some);
     let mut guide = a.guidance.guide()?;
-    // The history this run writes (a replay only reads its own), and the recorded capture's
-    // bearings stamped with the capture's day.
+    // The history this run writes (a replay only reads its own).
     let history = match &a.db {
         Some(db) if !matches!(input, Input::History(..)) => Some(Recorder::open(db)?),
         _ => None,
     };
-    let mut recorded = None;
-    if let (Some(h), Input::Sample | Input::Files(_)) = (&history, &input) {
-        let day = match &input {
-            Input::Files(sources) => crate::inputs::messages::capture_day(sources),
-            _ => crate::inputs::messages::day_of(SAMPLE_DRIVE),
-        };
-        recorded = Some((h, day));
-    }
     let decoded = match input {
         Input::Sample => {
             let mut dec = Decoder::new(BridgeConfig::default(), keep_track);
             options.survey(&mut dec);
-            let mut stamper = recorded.map(|(h, day)| (h, stamp(h, &mut dec, day)));
             dec.feed(SAMPLE_DRIVE);
-            dec.end();
-            if let Some((h, s)) = &mut stamper {
-                h.keep_decoded(s, &mut dec);
-            }
             dec.finish()
         }
         Input::Files(sources) => {
             let mut dec = Decoder::new(BridgeConfig::default(), keep_track);
-            let mut stamper = recorded.map(|(h, day)| (h, stamp(h, &mut dec, day)));
+            // The bearings to the history on the capture's day.
+            let day = || crate::inputs::messages::capture_day(&sources);
+            let mut stamper = history.as_ref().map(|h| (h, stamp(h, &mut dec, day())));
             // Each file is an input of its own: a unit whose records name no station is one
             // station per file.
             for (s, path) in sources.iter().zip(&a.captures) {
