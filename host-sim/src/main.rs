@@ -141,6 +141,19 @@ enum Command {
     ///   foxhunt publish --kraken http://192.168.1.20:8081 --mqtt mqtt://broker/net
     #[command(verbatim_doc_comment, allow_negative_numbers = true)]
     Publish(commands::publish::Args),
+    /// What a run's history holds (`foxhunt locate --db FILE`): its bearings, stations,
+    /// channels, period and fixes, and with --csv or --geojson all of them exported.
+    ///
+    /// The file is only read, also while a worker writes it. --since and --until (RFC 3339 or
+    /// ms since 1970 UTC) keep a period. Exit status: 0, 1 when the file cannot be read
+    /// (locked by another program), 2 on a usage error or a file that is not a foxhunt history
+    /// of this schema.
+    ///
+    /// Examples:
+    ///   foxhunt history net.db
+    ///   foxhunt history net.db --csv net --geojson net.geojson --since 2026-06-01T10:00:00Z
+    #[command(verbatim_doc_comment)]
+    History(commands::history::Args),
 }
 
 fn main() -> ExitCode {
@@ -155,6 +168,7 @@ fn main() -> ExitCode {
         Command::Perf(a) => commands::perf::run(a, &mut out),
         Command::Serve(a) => commands::serve::run(a),
         Command::Publish(a) => commands::publish::run(a),
+        Command::History(a) => commands::history::run(a, &mut out),
     }
     .and_then(|()| out.flush());
     // What went wrong decides the status (`Stop::status`: 1 no result, 2 usage; clap's own

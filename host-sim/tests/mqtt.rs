@@ -167,6 +167,8 @@ struct Worker {
     child: Child,
     stdout: Receiver<String>,
     stderr: Receiver<String>,
+    /// Standard error's lines read before the subscription's.
+    early: Vec<String>,
 }
 
 fn lines_of(r: impl std::io::Read + Send + 'static) -> Receiver<String> {
@@ -184,6 +186,11 @@ fn lines_of(r: impl std::io::Read + Send + 'static) -> Receiver<String> {
 
 impl Worker {
     fn start(url: &str, id: &str, quiet_s: u32) -> Self {
+        Self::start_with(url, id, quiet_s, &[])
+    }
+
+    /// Started with `more` arguments.
+    fn start_with(url: &str, id: &str, quiet_s: u32, more: &[&str]) -> Self {
         let mut child = Command::new(FOXHUNT)
             .args([
                 "locate",
@@ -195,21 +202,31 @@ impl Worker {
                 id,
             ])
             .args(["--quiet-exit", &quiet_s.to_string()])
+            .args(more)
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
             .spawn()
             .expect("run locate --mqtt");
         let stdout = lines_of(child.stdout.take().expect("stdout"));
         let stderr = lines_of(child.stderr.take().expect("stderr"));
-        let w = Self {
+        let mut w = Self {
             child,
             stdout,
             stderr,
+            early: Vec::new(),
         };
-        let line = w
-            .stderr
-            .recv_timeout(Duration::from_secs(10))
-            .expect("locate --mqtt says it subscribed");
+        // Its first notes: what it resumed from a history, if any, and the subscription.
+        let mut line = String::new();
+        for _ in 0..2 {
+            line = w
+                .stderr
+                .recv_timeout(Duration::from_secs(10))
+                .expect("locate --mqtt says it subscribed");
+            w.early.push(line.clone());
+            if !line.starts_with("history: ") {
+                break;
+            }
+        }
         assert!(line.contains("subscribed"), "{line}");
         w
     }
@@ -218,7 +235,7 @@ impl Worker {
     fn finish(mut self) -> (Value, Vec<String>) {
         let status = self.child.wait().expect("wait");
         let out: Vec<String> = self.stdout.iter().collect();
-        let err: Vec<String> = self.stderr.iter().collect();
+        let err: Vec<String> = self.early.into_iter().chain(self.stderr.iter()).collect();
         assert!(status.success(), "locate --mqtt: {status}: {err:?}");
         let last = out.last().expect("an update");
         (serde_json::from_str(last).expect("JSON"), err)
@@ -460,4 +477,99 @@ fn an_unreachable_broker_is_one_line_and_status_1() {
         );
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Each station's file cut in two at its 300th record: `[first halves, second halves]`.
+fn halves(files: &[PathBuf]) -> [Vec<PathBuf>; 2] {
+    let mut out = [Vec::new(), Vec::new()];
+    for f in files {
+        let text = std::fs::read_to_string(f).expect("read");
+        let lines: Vec<&str> = text.lines().collect();
+        for (k, part) in lines.chunks(300).enumerate() {
+            let p = f.with_extension(format!("{k}.xml"));
+            std::fs::write(&p, part.join("\n") + "\n").expect("write");
+            out[k].push(p);
+        }
+    }
+    out
+}
+
+/// Publish `files` one after the other, each acknowledged before the next: the broker hands
+/// the worker their bearings in this order.
+fn publish_in_turn(files: &[PathBuf], url: &str) {
+    for f in files {
+        published(publish(f, url, None));
+    }
+}
+
+#[test]
+fn a_worker_killed_and_started_again_on_its_history_gives_the_uninterrupted_fix() {
+    let _one_broker = serial();
+    let broker = Broker::start("history");
+    let files = station_files(&broker.dir);
+    let [first, second] = halves(&files);
+    let url = broker.url("net");
+    let db = |name: &str| broker.dir.join(name).display().to_string();
+
+    // One worker throughout.
+    let whole_db = db("whole.db");
+    let worker = Worker::start_with(&url, "whole-worker", 3, &["--db", &whole_db]);
+    publish_in_turn(&first, &url);
+    publish_in_turn(&second, &url);
+    let (whole, _) = worker.finish();
+    assert_eq!(whole["used"], 1800);
+
+    // A worker killed once it has fused the first halves; the second halves sent while it is
+    // away (the broker keeps them on its session); then started again on its history.
+    let restart_db = db("restart.db");
+    let mut killed = Worker::start_with(&url, "restart-worker", 30, &["--db", &restart_db]);
+    publish_in_turn(&first, &url);
+    // Killed once its history holds every bearing sent (the bridge holds each station's
+    // latest until the next, so its updates stop 3 short until the line ends).
+    let start = Instant::now();
+    loop {
+        let out = Command::new(FOXHUNT)
+            .args(["history", &restart_db])
+            .output()
+            .expect("history");
+        if String::from_utf8_lossy(&out.stdout).starts_with("bearings 900 ") {
+            break;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(30),
+            "never stored 900: {out:?}"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let before: Value = killed
+        .stdout
+        .try_iter()
+        .last()
+        .map(|l| serde_json::from_str(&l).expect("JSON"))
+        .expect("an update before the kill");
+    killed.child.kill().expect("kill");
+    let _ = killed.child.wait();
+    publish_in_turn(&second, &url);
+    let again = Worker::start_with(&url, "restart-worker", 3, &["--db", &restart_db]);
+    let first_line = again
+        .stdout
+        .recv_timeout(Duration::from_secs(20))
+        .expect("an update");
+    let (resumed, err) = again.finish();
+    eprintln!("{}", err.join("\n"));
+    assert!(
+        err.iter()
+            .any(|l| l.starts_with("history: 900 bearings resumed")),
+        "{err:?}"
+    );
+    // Its first update holds the bearings it had before (and perhaps some new ones).
+    let first_update: Value = serde_json::from_str(&first_line).expect("JSON");
+    assert!(first_update["used"].as_u64() >= before["used"].as_u64());
+    // The same bearings in the same order through the same path: the very fix.
+    assert_eq!(resumed["used"], 1800);
+    assert_eq!(
+        resumed["emitters"], whole["emitters"],
+        "the fix after the restart is the uninterrupted run's"
+    );
+    assert_same_fix(&resumed, &recorded(&files));
 }

@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod frames;
+pub mod history;
 pub mod locate;
 pub mod perf;
 pub mod publish;

@@ -8,19 +8,16 @@
 use super::locate::live::{LiveSource, reader};
 use super::locate::{Given, given, kraken_urls};
 use super::values;
-use crate::inputs::capture::{Decoder, kind_name};
+use crate::inputs::capture::Decoder;
 use crate::inputs::files::{Source, stream};
-use crate::inputs::mqtt::{BearingMessage, MqttUrl, check_station};
+use crate::inputs::messages::{Stamper, capture_day, now_ms, parse_date, today_ms};
+use crate::inputs::mqtt::{MqttUrl, check_station};
 use crate::outputs::mqtt::{Backlog, Link, Message};
 use crate::outputs::terminal::{Outcome, Stop, note};
 use foxhunt_bridge::BridgeConfig;
 use foxhunt_bridge::bridge::BearingMeasurement;
-use foxhunt_bridge::geo::LocalFrame;
-use foxhunt_bridge::nmea::LatLon;
 use std::path::PathBuf;
-use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
-
-const DAY_MS: i64 = 86_400_000;
+use std::time::{Duration, Instant};
 
 /// Options of `foxhunt publish`.
 #[derive(Debug, clap::Args)]
@@ -100,132 +97,16 @@ fn input(a: &Args) -> Result<Input, Stop> {
     }
 }
 
-/// Midnight UTC of `YYYY-MM-DD`, ms since 1970.
-fn parse_date(text: &str) -> Result<i64, String> {
-    let bad = || format!("--date wants YYYY-MM-DD, not `{text}`");
-    let mut parts = text.split('-');
-    let (Some(y), Some(m), Some(d), None) =
-        (parts.next(), parts.next(), parts.next(), parts.next())
-    else {
-        return Err(bad());
-    };
-    let year: i32 = y.parse().map_err(|_| bad())?;
-    let month: u8 = m.parse().map_err(|_| bad())?;
-    let day: u8 = d.parse().map_err(|_| bad())?;
-    let month = time::Month::try_from(month).map_err(|_| bad())?;
-    time::Date::from_calendar_date(year, month, day)
-        .map(|d| d.midnight().assume_utc().unix_timestamp() * 1000)
-        .map_err(|_| bad())
-}
-
-/// Midnight UTC of the day a capture's first dated record names: a KrakenSDR record's epoch,
-/// else an RMC sentence's date (`ddmmyy`). Reads the first megabyte at most.
-fn capture_day(sources: &[Source]) -> Option<i64> {
-    use foxhunt_bridge::Frame;
-    let mut rx = foxhunt_bridge::bridge::Receiver::<0, 1>::new(BridgeConfig::default(), []);
-    let mut day = None;
-    let mut read = 0usize;
-    let _ = stream(&sources[..1], |b| {
-        if day.is_some() || read > 1 << 20 {
-            return;
-        }
-        read += b.len();
-        rx.demux.feed(b, &mut |f| {
-            if day.is_some() {
-                return;
-            }
-            let epoch = match &f {
-                Frame::KrakenXml(r) => r.time_ms.map(|t| t as i64),
-                Frame::KrakenCsv(k) => Some(k.record.epoch_ms as i64),
-                Frame::Nmea(text) => rmc_day(text),
-                _ => None,
-            };
-            day = epoch.filter(|t| *t > 0).map(|t| t - t.rem_euclid(DAY_MS));
-        });
-    });
-    day
-}
-
-/// Midnight UTC of an RMC sentence's date.
-fn rmc_day(body: &str) -> Option<i64> {
-    let fields: Vec<&str> = body.split(',').collect();
-    if !fields.first()?.ends_with("RMC") {
-        return None;
-    }
-    let d = fields.get(9)?;
-    if d.len() != 6 || !d.bytes().all(|b| b.is_ascii_digit()) {
-        return None;
-    }
-    let n = |i: usize| d[i..i + 2].parse::<u8>().ok();
-    let year = 2000 + i32::from(n(4)?);
-    let month = time::Month::try_from(n(2)?).ok()?;
-    let date = time::Date::from_calendar_date(year, month, n(0)?).ok()?;
-    Some(date.midnight().assume_utc().unix_timestamp() * 1000)
-}
-
-/// Now, ms since 1970.
-fn now_ms() -> i64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map_or(0, |d| d.as_millis() as i64)
-}
-
-/// The true azimuth at `at` (degrees clockwise from north there) whose direction in `frame`
-/// is `local_deg`: the inverse of [`LocalFrame::azimuth_to_local`], by a few fixed-point
-/// steps (the two differ by the meridians' convergence, a fraction of a degree).
-fn true_azimuth(frame: &LocalFrame, at: LatLon, local_deg: f64) -> Option<f64> {
-    let wrap = |a: f64| a.rem_euclid(360.0);
-    let mut a = local_deg;
-    for _ in 0..4 {
-        let l = frame.azimuth_to_local(at, a).ok()?;
-        let d = (l - local_deg + 540.0).rem_euclid(360.0) - 180.0;
-        a = wrap(a - d);
-    }
-    Some(if a >= 360.0 { 0.0 } else { a })
-}
-
-/// Turns the bridge's bearings into messages.
+/// Turns the bridge's bearings into messages on their topics.
 struct Messages<'a> {
     url: &'a MqttUrl,
-    station: Option<&'a str>,
-    /// Midnight UTC of the bridge clock's day 0.
-    day0_ms: i64,
+    stamper: Stamper,
 }
 
 impl Messages<'_> {
     fn message(&self, dec: &Decoder, m: &BearingMeasurement) -> Result<Message, String> {
-        let d = &dec.decoded;
-        let frame = d
-            .frame
-            .ok_or_else(|| "a bearing before the local frame".to_string())?;
-        let info = d
-            .stations
-            .get(usize::from(m.station))
-            .ok_or_else(|| "a bearing of an unknown station".to_string())?;
-        let station = match (info.named, self.station) {
-            (false, Some(s)) => s.to_string(),
-            _ => info.id.clone(),
-        };
-        check_station(&station)?;
-        let v = m.bearing.vehicle;
-        let at = frame
-            .to_geodetic([f64::from(v[0]), f64::from(v[1])])
-            .map_err(|_| "a bearing's position outside the frame".to_string())?;
-        // The core's angle is mathematical (from east, anticlockwise); north-clockwise here.
-        let local_deg = (90.0 - f64::from(m.bearing.theta).to_degrees()).rem_euclid(360.0);
-        let bearing_deg = true_azimuth(&frame, at, local_deg)
-            .ok_or_else(|| "a bearing that cannot be carried to true north".to_string())?;
-        let msg = BearingMessage {
-            station,
-            time_ms: self.day0_ms + m.time_ms,
-            lat: at.lat,
-            lon: at.lon,
-            bearing_deg,
-            sigma_deg: f64::from(m.bearing.sigma).to_degrees(),
-            freq_mhz: (m.freq_mhz > 0.0).then_some(m.freq_mhz),
-            quality: m.quality,
-            kind: kind_name(m.kind).to_string(),
-        };
+        let msg = self.stamper.message(dec, m)?;
+        check_station(&msg.station)?;
         msg.check()?;
         Ok(Message {
             topic: self.url.bearing_topic(&msg.channel(), &msg.station),
@@ -299,11 +180,11 @@ pub fn run(a: &Args) -> Outcome {
         (_, Some(d)) => d,
         (Input::Files(s), None) => capture_day(s).unwrap_or_else(|| {
             note("no date in the capture: its times are counted from today (give --date)");
-            now_ms() - now_ms().rem_euclid(DAY_MS)
+            today_ms()
         }),
         // A live line's times of day are today's, or yesterday's just after midnight: the
         // day that puts the first bearing nearest now (taken below, at the first bearing).
-        (Input::Live(_), None) => now_ms() - now_ms().rem_euclid(DAY_MS),
+        (Input::Live(_), None) => today_ms(),
     };
     let client_id = a.client_id.clone().unwrap_or_else(|| match &a.station {
         Some(s) => format!("foxhunt-publish-{s}"),
@@ -321,8 +202,11 @@ pub fn run(a: &Args) -> Outcome {
     let link = Link::start(&url, &client_id, backlog)?;
     let mut messages = Messages {
         url: &url,
-        station: a.station.as_deref(),
-        day0_ms,
+        stamper: Stamper {
+            station: a.station.clone(),
+            day0_ms,
+            dated: a.date.is_some(),
+        },
     };
     let mut pace = a.pace.map(|speed| Pace { speed, start: None });
     let mut dec = Decoder::new(BridgeConfig::default(), false);
@@ -358,8 +242,7 @@ pub fn run(a: &Args) -> Outcome {
                     dec.begin_input(u.base.trim_start_matches("http://"))?;
                 }
             }
-            let mut line = reader(&source, None)?;
-            let mut dated = a.date.is_some();
+            let mut line = reader(&source, None, None)?;
             loop {
                 let ended = line
                     .take(&mut dec, quiet)
@@ -367,15 +250,8 @@ pub fn run(a: &Args) -> Outcome {
                 if ended {
                     dec.end();
                 }
-                if !dated && let Some(m) = dec.decoded.measurements.first() {
-                    // The day that puts the first bearing nearest now.
-                    let now = now_ms();
-                    messages.day0_ms = [-DAY_MS, 0, DAY_MS]
-                        .map(|k| day0_ms + k)
-                        .into_iter()
-                        .min_by_key(|d| (d + m.time_ms - now).abs())
-                        .unwrap_or(day0_ms);
-                    dated = true;
+                if let Some(m) = dec.decoded.measurements.first() {
+                    messages.stamper.date_live(m.time_ms);
                 }
                 drain(&mut dec, &messages, &link, &mut None)?;
                 if ended {
@@ -399,42 +275,4 @@ pub fn run(a: &Args) -> Outcome {
         )));
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_true_azimuth_is_carried_back_from_the_frame() {
-        let origin = LatLon {
-            lat: 47.0,
-            lon: 8.0,
-        };
-        let frame = LocalFrame::new(origin, 0.0).expect("frame");
-        for (de, dn) in [(0.0, 0.0), (20_000.0, 5_000.0), (-15_000.0, -30_000.0)] {
-            let at = frame.to_geodetic([de, dn]).expect("point");
-            for k in 0..72 {
-                let truth = f64::from(k) * 5.0 + 0.123;
-                let local = frame.azimuth_to_local(at, truth).expect("local");
-                let back = true_azimuth(&frame, at, local).expect("true");
-                let d = (back - truth + 540.0).rem_euclid(360.0) - 180.0;
-                assert!(d.abs() < 1e-9, "{de},{dn} {truth}: {back}");
-            }
-        }
-    }
-
-    #[test]
-    fn dates() {
-        assert_eq!(parse_date("2026-06-01"), Ok(1_780_272_000_000));
-        for bad in ["2026-13-01", "2026-02-30", "26-1", "2026-01-01-01", "x"] {
-            assert!(parse_date(bad).is_err(), "{bad}");
-        }
-        assert_eq!(
-            rmc_day("GPRMC,100000.00,A,4700.000,N,00800.000,E,0.0,0.0,010626,,,A"),
-            Some(1_780_272_000_000)
-        );
-        assert_eq!(rmc_day("GPGGA,100000.00,4700.000,N"), None);
-        assert_eq!(rmc_day("GPRMC,1,A,,,,,,,01x626"), None);
-    }
 }

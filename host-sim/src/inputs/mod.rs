@@ -7,6 +7,7 @@ pub mod capture;
 pub mod files;
 pub mod gpsd;
 pub mod kraken_http;
+pub mod messages;
 pub mod mqtt;
 pub mod osm_pbf;
 pub mod roads;

@@ -327,11 +327,13 @@ impl Subscription {
     /// Connect as `client_id` (an error now is the command's), subscribe to every bearing
     /// under the prefix, and start the thread that
     /// hands the new bearings' records to `take` in batches (its flag: it may block until
-    /// the fusing side has room).
+    /// the fusing side has room). Each new bearing goes to `keep` first, before the broker
+    /// is told it arrived (a history that stores it; false: it had it already, a copy).
     pub fn start(
         url: &MqttUrl,
         client_id: &str,
         mut take: impl FnMut(Vec<KrakenXml>, bool) -> Handed + Send + 'static,
+        mut keep: impl FnMut(&BearingMessage) -> bool + Send + 'static,
         note: fn(&str),
     ) -> Result<Self, String> {
         let mut options = url.options(client_id);
@@ -384,7 +386,7 @@ impl Subscription {
                     match event {
                         Ok(Event::Incoming(Packet::Publish(p))) => {
                             match BearingMessage::from_payload(&p.payload) {
-                                Ok(m) if seen.first_time(bearing_key(&m)) => {
+                                Ok(m) if seen.first_time(bearing_key(&m)) && keep(&m) => {
                                     c.bearings.fetch_add(1, Ordering::Relaxed);
                                     batch.push(m.record());
                                 }

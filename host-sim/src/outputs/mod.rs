@@ -5,6 +5,7 @@
 pub mod cot;
 pub mod files;
 pub mod frames;
+pub mod history;
 pub mod json;
 pub mod maps;
 pub mod mqtt;

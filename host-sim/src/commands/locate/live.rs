@@ -25,6 +25,7 @@ use crate::inputs::kraken_http::KrakenUrl;
 use crate::inputs::mqtt::{Handed, MqttUrl, Subscription, channel_name};
 use crate::locate::locate_guided;
 use crate::outputs::cot::{self, CotSender, CotUrl};
+use crate::outputs::history::recorder::Recorder;
 use crate::outputs::terminal::{Out, Stop, note};
 use foxhunt_bridge::BridgeConfig;
 use foxhunt_bridge::Frame;
@@ -74,6 +75,8 @@ pub struct LiveOptions {
     pub keep_track: bool,
     /// Send every fix to TAK.
     pub cot: Option<CotUrl>,
+    /// Keep every bearing and update there, and resume from what it holds.
+    pub history: Option<Recorder>,
 }
 
 /// A read's outcome, sent from the reader thread.
@@ -149,8 +152,13 @@ pub struct LiveLine {
     pub mqtt: Option<Subscription>,
 }
 
-/// Start the threads that read the line (and gpsd).
-pub fn reader(source: &LiveSource, gpsd_at: Option<&GpsdAddress>) -> Result<LiveLine, String> {
+/// Start the threads that read the line (and gpsd); the broker's bearings go to `history`
+/// before they are acknowledged.
+pub fn reader(
+    source: &LiveSource,
+    gpsd_at: Option<&GpsdAddress>,
+    history: Option<Recorder>,
+) -> Result<LiveLine, String> {
     let (tx, rx) = mpsc::sync_channel::<Chunk>(16);
     let line = |rx, mqtt| LiveLine {
         rx,
@@ -191,6 +199,7 @@ pub fn reader(source: &LiveSource, gpsd_at: Option<&GpsdAddress>) -> Result<Live
                         Err(_) => Handed::Closed,
                     },
                 },
+                move |m| history.as_ref().is_none_or(|h| h.keep(m)),
                 note,
             )?;
             return Ok(line(rx, Some(sub)));
@@ -281,7 +290,6 @@ pub struct LiveEnd {
 /// (why there is no fix). What was decoded, and whether the last update had a fix.
 pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd, Stop> {
     o.locate.check()?;
-    let mut line = reader(&o.source, o.gpsd.as_ref())?;
     let mut dec = Decoder::new(BridgeConfig::default(), o.keep_track);
     // Several KrakenSDRs: each URL an input, so a unit without a STATION_ID is a station of
     // its own.
@@ -293,6 +301,17 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
         }
     }
     o.locate.survey(&mut dec);
+    // The history's bearings first, before the line starts: a bearing the broker delivers now
+    // is stored and handed on once, after them. The broker's messages are stored as they
+    // come, every other source's bearings from the decoder.
+    let mut stamper = None;
+    if let Some(h) = &o.history {
+        h.resume(&mut dec)?;
+        if !matches!(o.source, LiveSource::Mqtt { .. }) {
+            stamper = Some(h.stamper(&mut dec));
+        }
+    }
+    let mut line = reader(&o.source, o.gpsd.as_ref(), o.history.clone())?;
     let mut tak = o.cot.clone().map(CotSender::new);
     let mut reported = (0usize, 0u32);
     let mut ended = false;
@@ -303,6 +322,9 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
         if ended {
             // Bearings still waiting for a later fix are placed with the fixes there are.
             dec.end();
+        }
+        if let (Some(h), Some(stamper)) = (&o.history, stamper.as_mut()) {
+            h.keep_decoded(stamper, &mut dec);
         }
         // New bearings, or a new fix sentence of a DF unit (its user port carries no bearings).
         let n = (dec.decoded.observations.len(), dec.decoded.unit.fixes);
@@ -331,6 +353,9 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
                     let json = serde_json::to_string(e).map_err(|e| e.to_string())?;
                     sub.publish_fix(&channel_name(e.freq_mhz.map(f64::from)), json);
                 }
+            }
+            if let Some(h) = &o.history {
+                h.keep_update(&located);
             }
             last = Some(located.err().map(|e| e.error));
             out.line(&text)?;

@@ -16,6 +16,8 @@ use crate::locate::report::Located;
 use crate::locate::{locate, locate_guided};
 use crate::outputs::cot::{self, CotSender, CotUrl};
 use crate::outputs::files::Outputs;
+use crate::outputs::history::recorder::{Recorder, replay};
+use crate::outputs::history::{Window, parse_time};
 use crate::outputs::maps;
 use crate::outputs::terminal::{Out, Outcome, Stop, note};
 use foxhunt_bridge::BridgeConfig;
@@ -160,6 +162,22 @@ pub struct Args {
     #[arg(long, value_name = "URL", conflicts_with = "calibrate",
           value_parser = |s: &str| CotUrl::parse(s))]
     pub cot: Option<CotUrl>,
+    /// Keep the run's history in FILE, an SQLite database (created if absent;
+    /// docs/src/history.md): every bearing (once per channel, station and time) and every
+    /// update's fix or why there is none. Live, a worker started again on FILE resumes its
+    /// channels from the bearings there. With no CAPTURE or live source: replay FILE's
+    /// bearings (--since, --until) and give their fix, FILE only read. A file that is not a
+    /// foxhunt history of this schema: one line, exit status 2, the file untouched; one that
+    /// another program has locked or another worker writes: exit status 1.
+    #[arg(long, value_name = "FILE", conflicts_with = "calibrate")]
+    pub db: Option<PathBuf>,
+    /// Replay only the bearings taken at or after T: RFC 3339 (2026-06-01T10:00:00Z) or ms
+    /// since 1970 UTC.
+    #[arg(long, value_name = "T", requires = "db", value_parser = parse_time)]
+    pub since: Option<i64>,
+    /// Replay only the bearings taken before T (RFC 3339 or ms since 1970 UTC).
+    #[arg(long, value_name = "T", requires = "db", value_parser = parse_time)]
+    pub until: Option<i64>,
 }
 
 /// The network `--stations` and `--reference` describe, if any.
@@ -204,6 +222,8 @@ enum Input {
     Kraken(Vec<KrakenUrl>, Option<GpsdAddress>),
     /// An MQTT broker's bearings.
     Mqtt(MqttUrl),
+    /// A history's bearings.
+    History(PathBuf, Window),
 }
 
 fn input(a: &Args) -> Result<Input, Stop> {
@@ -213,6 +233,28 @@ fn input(a: &Args) -> Result<Input, Stop> {
         .map(GpsdAddress::parse)
         .transpose()
         .map_err(Stop::Usage)?;
+    let source = !a.captures.is_empty()
+        || a.baud.is_some()
+        || !a.kraken.is_empty()
+        || a.mqtt.is_some()
+        || gpsd.is_some();
+    if let (Some(db), false) = (&a.db, source) {
+        let window = Window {
+            since_ms: a.since,
+            until_ms: a.until,
+        };
+        if let (Some(s), Some(u)) = (a.since, a.until)
+            && s >= u
+        {
+            return Err(Stop::usage("--since must come before --until"));
+        }
+        return Ok(Input::History(db.clone(), window));
+    }
+    if a.since.is_some() || a.until.is_some() {
+        return Err(Stop::usage(
+            "--since and --until replay a history: give --db FILE and no CAPTURE or live source",
+        ));
+    }
     if let Some(url) = &a.mqtt {
         if !a.captures.is_empty() || a.baud.is_some() || !a.kraken.is_empty() || gpsd.is_some() {
             return Err(Stop::usage(
@@ -407,6 +449,8 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
         inputs.extend(a.calibration.as_deref());
     }
     inputs.extend(a.stations.as_deref());
+    // The history is read (a replay) or written only as a history.
+    inputs.extend(a.db.as_deref());
     let outputs = Outputs::new(inputs, false);
     let paths = map_paths(a);
     for p in paths.iter().flatten() {
@@ -417,6 +461,11 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
     }
     let keep_track = paths.iter().any(Option::is_some);
     let mut guide = a.guidance.guide()?;
+    // The history this run writes (a replay only reads its own).
+    let history = match &a.db {
+        Some(db) if !matches!(input, Input::History(..)) => Some(Recorder::open(db)?),
+        _ => None,
+    };
     let decoded = match input {
         Input::Sample => {
             let mut dec = Decoder::new(BridgeConfig::default(), keep_track);
@@ -426,6 +475,9 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
         }
         Input::Files(sources) => {
             let mut dec = Decoder::new(BridgeConfig::default(), keep_track);
+            // The bearings to the history on the capture's day.
+            let day = || crate::inputs::messages::capture_day(&sources);
+            let mut stamper = history.as_ref().map(|h| (h, stamp(h, &mut dec, day())));
             // Each file is an input of its own: a unit whose records name no station is one
             // station per file.
             for (s, path) in sources.iter().zip(&a.captures) {
@@ -433,8 +485,23 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
                 dec.begin_input(&name.to_string_lossy())?;
                 // Now this input's unnamed units have their labels.
                 options.survey(&mut dec);
-                stream(std::slice::from_ref(s), |b| dec.feed(b))?;
+                stream(std::slice::from_ref(s), |b| {
+                    dec.feed(b);
+                    if let Some((h, s)) = &mut stamper {
+                        h.keep_decoded(s, &mut dec);
+                    }
+                })?;
             }
+            dec.end();
+            if let Some((h, s)) = &mut stamper {
+                h.keep_decoded(s, &mut dec);
+            }
+            dec.finish()
+        }
+        Input::History(db, window) => {
+            let mut dec = Decoder::new(BridgeConfig::default(), keep_track);
+            options.survey(&mut dec);
+            replay(&db, window, &mut dec)?;
             dec.finish()
         }
         Input::Live(_) | Input::Gpsd(..) | Input::Kraken(..) | Input::Mqtt(_) => {
@@ -449,7 +516,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
                     None,
                 ),
                 Input::Live(source) => (source, None),
-                Input::Sample | Input::Files(_) => (LiveSource::Stdin, None),
+                Input::Sample | Input::Files(_) | Input::History(..) => (LiveSource::Stdin, None),
             };
             let o = LiveOptions {
                 source,
@@ -459,6 +526,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
                 json: a.json,
                 keep_track,
                 cot: a.cot.clone(),
+                history: history.clone(),
             };
             let end = live::run(&o, &mut guide, out)?;
             // The live updates were the output; a final fix goes only to the maps.
@@ -497,6 +565,9 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
         return Ok(());
     }
     let located = locate_guided(&decoded, &options, &mut guide);
+    if let Some(h) = &history {
+        h.keep_update(&located);
+    }
     let result = match located {
         Ok(l) => {
             write_maps(&l, &decoded, &paths, &outputs)?;
@@ -536,6 +607,18 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
     out.flush()?;
     finish(a, &decoded, started);
     result
+}
+
+/// The stamper of a recorded capture's bearings going to `h`: on the capture's `day`, today's
+/// when it names none.
+fn stamp(h: &Recorder, dec: &mut Decoder, day: Option<i64>) -> crate::inputs::messages::Stamper {
+    let mut s = h.stamper(dec);
+    s.dated = true;
+    match day {
+        Some(d) => s.day0_ms = d,
+        None => note("history: no date in the capture, its times are counted from today"),
+    }
+    s
 }
 
 fn write_maps(
