@@ -120,9 +120,9 @@ mod tests {
         for c in DeviceClass::ALL {
             assert_eq!(DeviceClass::from_name(c.name()), Some(c));
             let n = c.noise();
-            // The typical noise lies well inside the ceiling, and the floor is a fraction of
-            // the noise a single bearing has.
-            assert!(n.noise.is_none_or(|s| 2.0 * s <= n.ceiling), "{c:?}");
+            // The ceiling leaves room above the typical noise (a unit half again as noisy as
+            // its class is still a fix), and the floor is a fraction of a bearing's noise.
+            assert!(n.noise.is_none_or(|s| 1.5 * s <= n.ceiling), "{c:?}");
             assert!(n.unmodelled > 0.0 && n.unmodelled < n.ceiling, "{c:?}");
         }
         assert_eq!(DeviceClass::from_name("nonsense"), None);
