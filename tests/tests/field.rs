@@ -585,3 +585,167 @@ fn field_drives_written_as_bytes_locate_as_the_bearings_do() {
         }
     }
 }
+
+/// Share of runs (of `drives`) with an emitter, and of those the share whose ellipse holds the
+/// truth.
+fn found_and_held(drives: impl Iterator<Item = (FieldDrive, u64)>) -> (usize, usize, usize) {
+    let config = LocateConfig::default();
+    let (mut runs, mut found, mut held) = (0, 0, 0);
+    for (d, seed) in drives {
+        let r = run_locate(&d, &config, BiasPrior::default(), seed).ok();
+        let emitters = r.as_ref().map_or(0, |r| r.emitters().len());
+        runs += 1;
+        found += usize::from(emitters > 0);
+        if let Some(j) = judge(&d, r.as_ref().map(|r| &r.report), BiasPrior::default()).first() {
+            held += usize::from(j.covered);
+        }
+    }
+    (runs, found, held)
+}
+
+#[test]
+fn an_unmodelled_error_is_what_holds_the_truth_under_a_systematic_error() {
+    // systematic-0.2-1deg: a calibrated unit whose offset has since moved by 0.2-1 degree,
+    // 1800 bearings. Its honesty with the stated unmodelled error is asserted with every
+    // condition's; here the same runs with the floor taken out (the stations file stating 0)
+    // show what it is for: the ellipse shrinks to the noise's 3 / sqrt(1800) degrees and the
+    // truth, moved by r times the residue, lies outside in most runs (observed: 27.3 %
+    // coverage, 94.5 % with it). The bar, under 50 %, is far from both.
+    let with = &summary(Condition::Systematic).per_emitter[0];
+    let drives = (0..RUNS).map(|run| {
+        let mut d = simulate(Condition::Systematic, run);
+        for s in &mut d.stations {
+            s.unmodelled = Some(0.0);
+        }
+        (d, run as u64)
+    });
+    let (runs, found, held) = found_and_held(drives);
+    let without = held as f64 / found.max(1) as f64;
+    println!(
+        "systematic-0.2-1deg: coverage {:.1} % with the unmodelled error stated, {:.1} % \
+         without ({found} fixes of {runs} runs)",
+        100.0 * with.coverage(),
+        100.0 * without
+    );
+    assert!(without < 0.5, "without the floor: {:.1} %", 100.0 * without);
+    assert!((0.90..=0.98).contains(&with.coverage()), "{}", shown());
+}
+
+/// A drive of `n` bearings along the U of `noise` (stated as the indoor-aoa class's), the
+/// offset drawn from the default prior, the stations file stating the class; `bearing`
+/// makes each bearing from the vehicle's position, heading and the true bearing.
+fn aoa_drive(
+    n: usize,
+    run: usize,
+    bearing: impl Fn([f32; 2], f32, f32, &mut XorShiftRng) -> f32,
+) -> FieldDrive {
+    use foxhunt_core::fix::device::DeviceClass;
+    use foxhunt_sim::runs::field::{StationTruth, Truth, u_route};
+    let mut rng = XorShiftRng::seed_from_u64(0xA0A0 + run as u64 * 7919 + n as u64);
+    let class = DeviceClass::IndoorAoa.noise();
+    let stated = class.noise.expect("the class states its noise");
+    let emitter = [0.0f32, 1500.0];
+    let offset = BiasPrior::default().sd * random::normal(&mut rng);
+    let route = u_route(n.max(2));
+    let observations: Vec<Observation> = route
+        .iter()
+        .enumerate()
+        .take(n)
+        .map(|(k, v)| {
+            let next = route[(k + 1).min(route.len() - 1)];
+            let before = route[k.saturating_sub(1)];
+            let heading = (next[1] - before[1]).atan2(next[0] - before[0]);
+            let truth = predicted(&emitter, v);
+            let theta = wrap(bearing(*v, heading, truth, &mut rng) + offset);
+            Observation::new(
+                Bearing {
+                    vehicle: *v,
+                    theta,
+                    sigma: stated,
+                },
+                k as f32,
+            )
+        })
+        .collect();
+    FieldDrive {
+        observations,
+        emitters: vec![Truth {
+            position: emitter,
+            freq_mhz: None,
+        }],
+        ghost: None,
+        stations: vec![StationTruth {
+            id: "aoa".into(),
+            fixed: false,
+            offset,
+            sigma: stated,
+            prior: BiasPrior::default(),
+            class: Some(DeviceClass::IndoorAoa),
+            unmodelled: None,
+        }],
+        bias: offset,
+        sigma: stated,
+    }
+}
+
+#[test]
+fn a_noisy_class_is_a_fix_with_enough_bearings_and_pure_noise_is_not() {
+    // A unit of the indoor-aoa class (ceiling 25 degrees) with 15 and 20 degree noise along
+    // the U, 10 to 1000 bearings, 200 runs a cell: a fix once enough bearings back it (the
+    // chance check is what asks for enough: a cluster of a few 20 degree bearings is what
+    // luck gives), its ellipse F-scaled. Beside it the same class's pure noise, bearings
+    // uniform on the circle or the unit's own boresight (straight ahead, a unit locked on
+    // nothing) with its noise: no emitter in >= 95 % of runs at every n. 200 runs give a
+    // coverage to +-1.5 %: the bar 90-98 % is three sds either side of 95 %.
+    const CELL: usize = 200;
+    let mut table = Vec::new();
+    for noise in [15.0f32, 20.0] {
+        for n in [10usize, 20, 50, 200, 1000] {
+            let drives = (0..CELL).map(|run| {
+                let d = aoa_drive(n, run, |_, _, truth, rng| {
+                    truth + noise * DEG * random::normal(rng)
+                });
+                (d, run as u64)
+            });
+            let (runs, found, held) = found_and_held(drives);
+            table.push(format!(
+                "{noise} deg, n {n}: a fix in {found} of {runs}, its ellipse holds the truth in \
+                 {held}"
+            ));
+            let coverage = held as f64 / found.max(1) as f64;
+            if n < 20 {
+                // Too few to back a fix at this noise: the chance check passes only a lucky
+                // few whose scatter happened to be small (10 bearings of 15 degrees: 39 fixes
+                // in 200 runs, 27 holding the truth; of 20 degrees: 10, 6), and their
+                // ellipses are too small with them: a shortfall the book states.
+                assert!(found * 4 <= runs, "{table:#?}");
+            } else {
+                // Enough bearings: a fix in nearly every run (20 bearings of 20 degrees: in
+                // 183 of 200, the rest refused by the chance check), honest.
+                let share = if n >= 50 { 95 } else { 85 };
+                assert!(found * 100 >= runs * share, "{table:#?}");
+                assert!((0.90..=0.98).contains(&coverage), "{table:#?}");
+            }
+        }
+    }
+    for (what, uniform) in [("uniform", true), ("boresight", false)] {
+        for n in [10usize, 50, 200, 1000] {
+            let drives = (0..CELL).map(|run| {
+                let d = aoa_drive(n, run, |_, heading, _, rng| {
+                    if uniform {
+                        random::uniform_in(rng, -std::f32::consts::PI, std::f32::consts::PI)
+                    } else {
+                        heading + 13.0 * DEG * random::normal(rng)
+                    }
+                });
+                (d, run as u64)
+            });
+            let (runs, found, _) = found_and_held(drives);
+            table.push(format!(
+                "pure noise ({what}), n {n}: a fix in {found} of {runs}"
+            ));
+            assert!(found * 20 <= runs, "{table:#?}");
+        }
+    }
+    println!("{table:#?}");
+}

@@ -5,6 +5,7 @@ pub mod bias;
 pub mod channel;
 pub mod consistency;
 pub mod crlb;
+pub mod device;
 pub mod ellipse;
 pub mod evidence;
 pub mod init;

@@ -104,15 +104,23 @@ impl std::ops::Deref for PipelineRun {
     }
 }
 
-/// Each station's offset prior: its own where one is known (a stations file, a reference
-/// transmitter's calibration), else the default (the `--calibration` file's, or the 6-degree
-/// one of an uncalibrated unit).
+/// What is known of each station before the drive: its offset prior (its own where one is
+/// known: a stations file, a reference transmitter's calibration; else the default: the
+/// `--calibration` file's, or the 6-degree one of an uncalibrated unit), its unmodelled
+/// systematic error, and the noise ceiling of the device classes stated.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Priors {
     /// The prior of every station without its own.
     pub default: BiasPrior,
     /// Station index to its own prior.
     pub stations: Vec<Option<BiasPrior>>,
+    /// Sd of the unmodelled systematic error of every station without its own, radians.
+    pub default_unmodelled: f32,
+    /// Station index to its own unmodelled error's sd, radians.
+    pub unmodelled: Vec<Option<f32>>,
+    /// The widest noise ceiling of the stations' stated device classes, radians (`None`: no
+    /// class stated, the configuration's holds).
+    pub ceiling: Option<f32>,
 }
 
 impl Priors {
@@ -120,7 +128,7 @@ impl Priors {
     pub fn same(prior: BiasPrior) -> Self {
         Self {
             default: prior,
-            stations: Vec::new(),
+            ..Self::default()
         }
     }
 
@@ -132,10 +140,33 @@ impl Priors {
             .flatten()
             .unwrap_or(self.default)
     }
+
+    /// Station `s`'s unmodelled error's sd, radians.
+    pub fn unmodelled_of(&self, s: usize) -> f32 {
+        self.unmodelled
+            .get(s)
+            .copied()
+            .flatten()
+            .unwrap_or(self.default_unmodelled)
+    }
+
+    /// Station `s`'s row of the station table: its prior and its unmodelled error.
+    pub fn row(&self, s: usize) -> StationSlot {
+        StationSlot::new(self.of(s)).with_unmodelled(self.unmodelled_of(s))
+    }
+
+    /// `config` with the stated classes' ceiling, if any.
+    pub fn config(&self, config: &LocateConfig) -> LocateConfig {
+        LocateConfig {
+            max_sigma: self.ceiling.unwrap_or(config.max_sigma),
+            ..*config
+        }
+    }
 }
 
 /// Run the core's field pipeline on `observations` with working storage from the heap: one
-/// station row per station the observations name, with its prior from `priors`.
+/// station row per station the observations name, with its prior and unmodelled error from
+/// `priors`, and the stated device classes' noise ceiling ([`Priors::config`]).
 pub fn pipeline(
     observations: &[Observation],
     config: &LocateConfig,
@@ -153,9 +184,7 @@ pub fn pipeline(
     let mut scratch = vec![Item::EMPTY; n];
     let mut order = vec![0u32; n];
     let mut tags = vec![0u8; n];
-    let mut table: Vec<StationSlot> = (0..stations)
-        .map(|s| StationSlot::new(priors.of(s)))
-        .collect();
+    let mut table: Vec<StationSlot> = (0..stations).map(|s| priors.row(s)).collect();
     // Room for every channel's emitter to list every station.
     let mut offsets = vec![StationOffset::EMPTY; stations * 16];
     let work = Buffers::new(
@@ -167,7 +196,7 @@ pub fn pipeline(
         &mut offsets,
     );
     let mut rng = XorShiftRng::seed_from_u64(seed);
-    let report = locate::<16, 16, _>(observations, config, work, &mut rng)?;
+    let report = locate::<16, 16, _>(observations, &priors.config(config), work, &mut rng)?;
     Ok(PipelineRun { report, offsets })
 }
 

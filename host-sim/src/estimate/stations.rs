@@ -15,6 +15,7 @@ use super::Priors;
 use crate::inputs::stations::{Network, PriorFrom};
 use foxhunt_core::fix::bias::{BiasPrior, Calibration, calibrate};
 use foxhunt_core::fix::channel;
+use foxhunt_core::fix::device::class_noise;
 use foxhunt_core::fix::locate::Observation;
 use foxhunt_core::model::bearing::{Bearing, wrap};
 use serde::Serialize;
@@ -55,7 +56,8 @@ pub struct ReferenceFix {
     pub calibration: Calibration,
 }
 
-/// Each station's prior, where it came from, and its noise (radians) if the file states one.
+/// Each station's prior and unmodelled error (with the stated classes' ceiling), where the
+/// prior came from, and its noise (radians) if the file or its class states one.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct StationSetup {
     /// The priors.
@@ -100,10 +102,26 @@ pub fn station_setup<'a>(
         };
         setup.priors.stations.push(Some(prior));
         setup.origins.push(from);
+        // Its device class (its own, else the file's default) gives what the file does not
+        // state: the noise, the unmodelled error; the widest ceiling among the classes holds.
+        let class = spec
+            .and_then(|s| s.antenna)
+            .or(network.and_then(|n| n.default_antenna));
+        let of_class = class_noise(class);
         setup.noise.push(
             spec.and_then(|s| s.noise)
-                .or(network.and_then(|n| n.default_noise)),
+                .or(network.and_then(|n| n.default_noise))
+                .or(of_class.noise),
         );
+        setup.priors.unmodelled.push(Some(
+            spec.and_then(|s| s.unmodelled)
+                .or(network.and_then(|n| n.default_unmodelled))
+                .unwrap_or(of_class.unmodelled),
+        ));
+        if class.is_some() {
+            let widest = setup.priors.ceiling.unwrap_or(0.0).max(of_class.ceiling);
+            setup.priors.ceiling = Some(widest);
+        }
     }
     setup
 }

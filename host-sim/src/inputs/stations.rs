@@ -5,6 +5,7 @@
 
 use foxhunt_bridge::nmea::LatLon;
 use foxhunt_core::fix::bias::{BiasPrior, DEFAULT_BIAS_SD};
+use foxhunt_core::fix::device::DeviceClass;
 use serde::Deserialize;
 use std::collections::HashSet;
 use std::io::Read;
@@ -21,22 +22,27 @@ pub const MAX_REFERENCES: usize = 64;
 /// could never match a record.
 pub const MAX_ID_BYTES: usize = foxhunt_bridge::kraken::STATION_LEN;
 
-/// What kind of antenna a station has: shown in the report, it does not change the fix.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Antenna {
-    /// A uniform circular array (KrakenSDR's usual five elements).
-    Uca,
-    /// A uniform linear array (front and back are mirror images).
-    Ula,
-    /// A pseudo-Doppler array.
-    Doppler,
-    /// An Adcock or Watson-Watt array.
-    Adcock,
-    /// A rotated directional antenna (a Yagi).
-    Yagi,
-    /// Something else.
-    Other,
+/// A station's device class by its name in the file (`antenna = "uca"`, ...).
+fn class_of(name: Option<&str>, what: &str) -> Result<Option<DeviceClass>, String> {
+    let Some(name) = name else { return Ok(None) };
+    DeviceClass::from_name(name).map(Some).ok_or_else(|| {
+        let names: Vec<&str> = DeviceClass::ALL.iter().map(|c| c.name()).collect();
+        format!(
+            "{what}: antenna must be one of {}, not `{name}`",
+            names.join(", ")
+        )
+    })
+}
+
+/// An unmodelled error's sd from the key (degrees), checked.
+fn unmodelled_of(sd: Option<f32>, what: &str) -> Result<Option<f32>, String> {
+    match sd {
+        None => Ok(None),
+        Some(d) if (0.0..=45.0).contains(&d) => Ok(Some(d.to_radians())),
+        Some(d) => Err(format!(
+            "{what}: unmodelled_deg must lie in [0, 45] degrees, not {d}"
+        )),
+    }
 }
 
 /// One station as the file describes it (the TOML keys).
@@ -49,16 +55,19 @@ struct StationEntry {
     offset_sd_deg: Option<f32>,
     calibration_file: Option<String>,
     noise_deg: Option<f32>,
-    antenna: Option<Antenna>,
+    antenna: Option<String>,
+    unmodelled_deg: Option<f32>,
 }
 
 /// What applies to every station the file does not list.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Default)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 struct DefaultEntry {
     offset_deg: Option<f32>,
     offset_sd_deg: Option<f32>,
     noise_deg: Option<f32>,
+    antenna: Option<String>,
+    unmodelled_deg: Option<f32>,
 }
 
 /// A reference transmitter as the file describes it.
@@ -105,10 +114,12 @@ pub struct StationSpec {
     pub prior: BiasPrior,
     /// Where the prior came from.
     pub from: PriorFrom,
-    /// Its bearing noise, radians (replaces the bearings' own sigma).
+    /// Its bearing noise, radians (replaces the bearings' own sigma; else its class's).
     pub noise: Option<f32>,
-    /// Its antenna.
-    pub antenna: Option<Antenna>,
+    /// Its device class (the file's `antenna`): its noise, ceiling and floor.
+    pub antenna: Option<DeviceClass>,
+    /// Sd of its unmodelled systematic error, radians (else its class's).
+    pub unmodelled: Option<f32>,
 }
 
 /// A reference transmitter: a known emitter whose bearings calibrate the stations.
@@ -132,6 +143,10 @@ pub struct Network {
     pub default_prior: Option<BiasPrior>,
     /// Noise of a station the file does not list, radians.
     pub default_noise: Option<f32>,
+    /// Device class of a station the file does not list.
+    pub default_antenna: Option<DeviceClass>,
+    /// Unmodelled error's sd of a station the file does not list, radians.
+    pub default_unmodelled: Option<f32>,
     /// The reference transmitters.
     pub references: Vec<Reference>,
 }
@@ -283,7 +298,8 @@ impl Network {
                 prior,
                 from,
                 noise: noise_of(s.noise_deg, &what)?,
-                antenna: s.antenna,
+                antenna: class_of(s.antenna.as_deref(), &what)?,
+                unmodelled: unmodelled_of(s.unmodelled_deg, &what)?,
             });
         }
         let mut references = Vec::with_capacity(t.reference.len());
@@ -311,6 +327,8 @@ impl Network {
             stations,
             default_prior: prior_of(t.default.offset_deg, t.default.offset_sd_deg, "default")?,
             default_noise: noise_of(t.default.noise_deg, "default")?,
+            default_antenna: class_of(t.default.antenna.as_deref(), "default")?,
+            default_unmodelled: unmodelled_of(t.default.unmodelled_deg, "default")?,
             references,
         })
     }
@@ -335,13 +353,26 @@ impl Network {
         use std::fmt::Write;
         let mut out = String::new();
         let deg = |r: f32| r.to_degrees();
+        let mut default = String::new();
         if let Some(p) = self.default_prior {
             let _ = writeln!(
-                out,
-                "[default]\noffset_deg = {}\noffset_sd_deg = {}\n",
+                default,
+                "offset_deg = {}\noffset_sd_deg = {}",
                 deg(p.mean),
                 deg(p.sd)
             );
+        }
+        if let Some(n) = self.default_noise {
+            let _ = writeln!(default, "noise_deg = {:.3}", deg(n));
+        }
+        if let Some(a) = self.default_antenna {
+            let _ = writeln!(default, "antenna = {:?}", a.name());
+        }
+        if let Some(u) = self.default_unmodelled {
+            let _ = writeln!(default, "unmodelled_deg = {}", deg(u));
+        }
+        if !default.is_empty() {
+            let _ = writeln!(out, "[default]\n{default}");
         }
         for s in &self.stations {
             let _ = writeln!(out, "[[station]]\nid = {:?}", s.id);
@@ -358,11 +389,10 @@ impl Network {
                 let _ = writeln!(out, "noise_deg = {:.3}", deg(n));
             }
             if let Some(a) = s.antenna {
-                let name = serde_json::to_value(a)
-                    .ok()
-                    .and_then(|v| v.as_str().map(str::to_string))
-                    .unwrap_or_default();
-                let _ = writeln!(out, "antenna = {name:?}");
+                let _ = writeln!(out, "antenna = {:?}", a.name());
+            }
+            if let Some(u) = s.unmodelled {
+                let _ = writeln!(out, "unmodelled_deg = {}", deg(u));
             }
             out.push('\n');
         }
@@ -403,13 +433,21 @@ antenna = "uca"
 [[station]]
 id = "car-1"
 
+[[station]]
+id = "hall"
+antenna = "indoor-aoa"
+unmodelled_deg = 0.5
+
 [[reference]]
 name = "tower"
 position = [47.05, 8.03]
 freq_mhz = 145.5
 "#;
         let n = parse(text).expect("a network");
-        assert_eq!(n.stations.len(), 2);
+        assert_eq!(n.stations.len(), 3);
+        let hall = n.station("hall").expect("hall");
+        assert_eq!(hall.antenna, Some(DeviceClass::IndoorAoa));
+        assert!((hall.unmodelled.unwrap_or(0.0).to_degrees() - 0.5).abs() < 1e-5);
         let north = n.station("north").expect("north");
         assert_eq!(north.from, PriorFrom::StationsFile);
         assert!((north.prior.sd.to_degrees() - 3.0).abs() < 1e-5);
@@ -419,7 +457,8 @@ freq_mhz = 145.5
         assert!((car.prior.sd.to_degrees() - 4.0).abs() < 1e-5);
         assert_eq!(n.references[0].freq_mhz, 145.5);
         let again = parse(&n.to_toml()).expect("its own text");
-        assert_eq!(again.stations.len(), 2);
+        assert_eq!(again.stations.len(), 3);
+        assert_eq!(again.station("hall"), n.station("hall"));
         assert_eq!(again.references, n.references);
     }
 
@@ -442,6 +481,12 @@ freq_mhz = 145.5
             ),
             ("[[station]]\nid = \"a\"\nnoise_deg = 0.0", "noise_deg"),
             ("[[station]]\nid = \"a\"\ncolour = 1", "unknown field"),
+            ("[[station]]\nid = \"a\"\nantenna = \"dish\"", "indoor-aoa"),
+            (
+                "[[station]]\nid = \"a\"\nunmodelled_deg = -1.0",
+                "unmodelled_deg",
+            ),
+            ("[default]\nantenna = \"dish\"", "antenna"),
             (
                 "[[reference]]\nposition = [47.0, 8.0]\nfreq_mhz = -1.0",
                 "freq_mhz",

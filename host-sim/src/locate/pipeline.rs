@@ -160,7 +160,12 @@ pub(crate) fn located_by_pipeline(
                     _ => None,
                 };
                 let text = geometry.unwrap_or_else(|| {
-                    no_emitter(why, c.bearings, &bearings, o.config().max_sigma)
+                    no_emitter(
+                        why,
+                        c.bearings,
+                        &bearings,
+                        setup.priors.config(&o.config()).max_sigma,
+                    )
                 });
                 why_none.get_or_insert(text.clone());
                 text

@@ -3,7 +3,7 @@
 
 use crate::estimate::stations::{PriorOrigin, ReferenceFix, StationSetup};
 use crate::inputs::capture::Decoded;
-use crate::inputs::stations::{Antenna, Network, Reference};
+use crate::inputs::stations::{Network, Reference};
 use foxhunt_core::fix::locate::StationOffset;
 use serde::Serialize;
 use std::fmt::Write;
@@ -41,8 +41,10 @@ pub struct StationReport {
     pub bearings: u32,
     /// Its noise as the stations file states it, degrees.
     pub noise_deg: Option<f32>,
-    /// Its antenna as the stations file states it.
-    pub antenna: Option<Antenna>,
+    /// Its device class as the stations file states it.
+    pub antenna: Option<&'static str>,
+    /// Sd of its unmodelled systematic error (its class's or the file's), degrees.
+    pub unmodelled_deg: f32,
     /// The prior its offset had, degrees, and where that came from.
     pub prior_deg: f32,
     /// The prior's standard deviation, degrees.
@@ -119,7 +121,11 @@ pub fn station_reports(
                 lon: s.position.map(|p| p.lon),
                 bearings: s.bearings,
                 noise_deg: setup.noise.get(i).copied().flatten().map(f32::to_degrees),
-                antenna: spec.and_then(|s| s.antenna),
+                antenna: spec
+                    .and_then(|s| s.antenna)
+                    .or(network.and_then(|n| n.default_antenna))
+                    .map(|c| c.name()),
+                unmodelled_deg: setup.priors.unmodelled_of(i).to_degrees(),
                 prior_deg: prior.mean.to_degrees(),
                 prior_sd_deg: prior.sd.to_degrees(),
                 prior_from: from,

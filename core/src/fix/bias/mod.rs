@@ -12,7 +12,10 @@
 //!
 //! Each offset has a Gaussian prior: by default mean 0 and sd [`DEFAULT_BIAS_SD`] (6 degrees,
 //! so the 1-12 degrees real units show lie within two sd); sd 0 is a calibrated station (the
-//! offset is fixed at the prior's mean); an infinite sd is no prior at all. A station that
+//! offset is fixed at the prior's mean); an infinite sd is no prior at all. A station's
+//! unmodelled systematic error (its device class's, [`crate::fix::device`]) adds its variance
+//! to the prior's ([`StationSlot::with_unmodelled`]): an error common to its bearings is its
+//! offset's uncertainty, which no number of bearings averages away. A station that
 //! cannot tell its offset from a cross-range shift (a straight road, a short arc:
 //! docs/src/field.md's inscribed-angle argument; a fixed station, which sees the emitter from
 //! one direction only: docs/src/networks.md) leans on its prior, and the position covariance,

@@ -19,6 +19,7 @@
 //!   shows the prior's share.
 
 use super::BiasPrior;
+use crate::error::{Error, check_finite};
 
 /// One station's row of the table a fix works in (see the module doc). The caller gives each
 /// row its prior ([`StationSlot::new`]) and reads the fit's offset back
@@ -29,6 +30,9 @@ pub struct StationSlot {
     given: BiasPrior,
     /// The prior in force (a channel's later sources see the emitter's estimate).
     pub(super) in_force: BiasPrior,
+    /// Sd of the station's unmodelled systematic error, radians (0: none; already in the
+    /// priors' sds).
+    unmodelled: f32,
     /// The last fit's offset, radians.
     pub(super) bias: f32,
     /// Its standard deviation, radians.
@@ -70,6 +74,7 @@ impl StationSlot {
         Self {
             given: prior,
             in_force: prior,
+            unmodelled: 0.0,
             bias: prior.mean,
             sd: prior.sd,
             used: 0,
@@ -88,7 +93,45 @@ impl StationSlot {
         }
     }
 
-    /// The prior the caller gave.
+    /// The same row with an unmodelled systematic error of sd `sd` (radians) on its bearings:
+    /// an error common to the station's bearings (geodesy, mounting, a calibration's residue)
+    /// that no number of them averages away. Its variance is added to the offset prior's (the
+    /// prior given and in force): indistinguishable from the offset, it is the offset's
+    /// uncertainty, so the position covariance carries its share as it carries the prior's
+    /// (exactly, for a station whose bearings cannot show its offset: a fixed station, a
+    /// calibrated unit on a straight road; a vehicle whose drive measures its offset takes a
+    /// common error up there, where it costs the position nothing). A calibrated prior
+    /// becomes a free offset with this sd; no prior stays no prior.
+    pub fn with_unmodelled(self, sd: f32) -> Self {
+        let widen = |p: BiasPrior| BiasPrior {
+            mean: p.mean,
+            sd: libm::hypotf(p.sd, sd),
+        };
+        let mut row = Self::new(widen(self.given));
+        row.in_force = widen(self.in_force);
+        row.unmodelled = sd;
+        row
+    }
+
+    /// Sd of the station's unmodelled systematic error, radians.
+    pub fn unmodelled(&self) -> f32 {
+        self.unmodelled
+    }
+
+    /// `Ok` when the prior is usable ([`BiasPrior::check`]) and the unmodelled error's sd is
+    /// finite and >= 0.
+    pub fn check(&self) -> Result<(), Error> {
+        self.given.check()?;
+        check_finite(&[self.unmodelled])?;
+        if self.unmodelled >= 0.0 {
+            Ok(())
+        } else {
+            Err(Error::OutOfRange)
+        }
+    }
+
+    /// The prior the caller gave (its unmodelled error's variance added,
+    /// [`StationSlot::with_unmodelled`]).
     pub fn prior(&self) -> BiasPrior {
         self.given
     }
@@ -105,7 +148,9 @@ impl StationSlot {
 
     /// Back to the caller's prior, the last fit forgotten.
     pub fn reset(&mut self) {
+        let unmodelled = self.unmodelled;
         *self = Self::new(self.given);
+        self.unmodelled = unmodelled;
     }
 
     /// The last fit's offset and its sd, radians (the prior's where the station took no part).

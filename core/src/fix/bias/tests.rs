@@ -387,3 +387,109 @@ fn the_circle_finds_a_large_offset_and_leaves_the_fit_as_it_was() {
     assert!((after.0 - before.0).abs() < 1e-3 && (after.1 - before.1).abs() < 1e-3);
     assert_eq!(table[0].prior_in_force(), free);
 }
+
+#[test]
+fn an_unmodelled_error_is_a_floor_however_many_bearings() {
+    // A calibrated unit (offset known exactly) on a straight road, y = 0 and x in [0, 1500],
+    // 3 km from the emitter: without an unmodelled error the bound shrinks as 1 / sqrt(N);
+    // with 0.5 degrees it stays above r * 0.5 degrees across the line of bearing (26 m at
+    // 3 km), however many bearings: the station's error times the range.
+    const MOST: usize = 10_000;
+    let e = [750.0f32, 3000.0];
+    let floor = 0.5 * DEG;
+    let r = 3000.0;
+    let mut last = f32::INFINITY;
+    for n in [100usize, 1000, MOST] {
+        let road: [Bearing; MOST] = core::array::from_fn(|k| {
+            let v = [1500.0 * k.min(n - 1) as f32 / (n - 1) as f32, 0.0];
+            Bearing {
+                vehicle: v,
+                theta: predicted(&e, &v),
+                sigma: 3.0 * DEG,
+            }
+        });
+        let bearings = &road[..n];
+        let plain = crlb(&e, bearings, BiasPrior::calibrated(0.0)).unwrap();
+        let row = StationSlot::new(BiasPrior::calibrated(0.0)).with_unmodelled(floor);
+        let with = crlb_stations(&e, bearings, &mut [row]).unwrap();
+        // Across the line of bearing from the road's middle: x.
+        let across = libm::sqrtf(with.covariance[0][0]);
+        assert!(across >= 0.95 * r * floor, "n {n}: {across} m");
+        assert!(with.rmse <= last, "n {n}: the bound grows");
+        last = with.rmse;
+        if n == MOST {
+            // The noise's share across is 3 / sqrt(1e4) degrees at 3 km (1.6 m); the floor's
+            // is not gone.
+            assert!(
+                libm::sqrtf(plain.covariance[0][0]) < 0.1 * r * floor,
+                "{plain:?}"
+            );
+            assert!(across <= 1.1 * r * floor, "{across}");
+        }
+    }
+}
+
+#[test]
+fn an_unmodelled_error_is_the_offset_priors_share() {
+    // One concept: an unmodelled error of sd s on a station is its offset prior's variance
+    // plus s^2: a calibrated station with s is the station with the prior 0 +- s, a prior
+    // of sd t with s is the prior sqrt(t^2 + s^2), no prior stays none.
+    let s = 0.7 * DEG;
+    let row = StationSlot::new(BiasPrior::calibrated(0.3)).with_unmodelled(s);
+    assert_eq!(row.prior(), BiasPrior { mean: 0.3, sd: s });
+    assert_eq!(row.prior_in_force(), row.prior());
+    assert_eq!(row.unmodelled(), s);
+    let wide = StationSlot::new(BiasPrior {
+        mean: 0.0,
+        sd: 3.0 * DEG,
+    })
+    .with_unmodelled(s);
+    assert!((wide.prior().sd - libm::hypotf(3.0 * DEG, s)).abs() < 1e-7);
+    let none = StationSlot::new(BiasPrior {
+        mean: 0.0,
+        sd: f32::INFINITY,
+    })
+    .with_unmodelled(s);
+    assert!(none.prior().sd.is_infinite());
+    // A row back to its caller's prior keeps the error, counted once.
+    let mut again = row;
+    again.set_prior_in_force(BiasPrior::calibrated(0.0));
+    again.reset();
+    assert_eq!(again, row);
+    // Fixed stations: three masts with calibrated offsets and an unmodelled error give the
+    // bound of three masts whose offset priors have that sd.
+    let e = [0.0f32, 0.0];
+    let masts = [[6000.0f32, 0.0], [-3000.0, 5000.0], [-3000.0, -5500.0]];
+    struct Seen(Bearing, usize);
+    impl Sighting for Seen {
+        fn bearing(&self) -> &Bearing {
+            &self.0
+        }
+        fn station(&self) -> usize {
+            self.1
+        }
+    }
+    let seen: [Seen; 600] = core::array::from_fn(|k| {
+        let m = masts[k % 3];
+        let b = Bearing {
+            vehicle: m,
+            theta: predicted(&e, &m),
+            sigma: 2.0 * DEG,
+        };
+        Seen(b, k % 3)
+    });
+    let mut floored = [StationSlot::new(BiasPrior::calibrated(0.0)).with_unmodelled(s); 3];
+    let mut priored = [StationSlot::new(BiasPrior { mean: 0.0, sd: s }); 3];
+    let a = crlb_stations(&e, &seen, &mut floored).unwrap();
+    let b = crlb_stations(&e, &seen, &mut priored).unwrap();
+    assert_eq!(a.covariance, b.covariance);
+}
+
+#[test]
+fn a_bad_unmodelled_error_is_refused() {
+    for bad in [-0.1f32, f32::NAN, f32::INFINITY] {
+        let row = StationSlot::new(BiasPrior::default()).with_unmodelled(bad);
+        assert!(row.check().is_err(), "{bad}");
+    }
+    assert!(StationSlot::default().with_unmodelled(0.0).check().is_ok());
+}

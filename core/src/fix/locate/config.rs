@@ -25,7 +25,9 @@ pub struct LocateConfig {
     pub channel_width_mhz: f32,
     /// Probability inside the reported ellipses.
     pub confidence: f32,
-    /// Estimated noise above this (radians) means no consistent emitter.
+    /// Estimated noise above this (radians) means no consistent emitter: the stations' device
+    /// class's ceiling ([`ClassNoise::ceiling`](crate::fix::device::ClassNoise::ceiling); the
+    /// widest where several classes share a channel), by default an unstated class's.
     pub max_sigma: f32,
     /// A cluster is a source only if luck would line up as many bearings with a chance below
     /// this.
@@ -49,7 +51,7 @@ impl Default for LocateConfig {
             noise: NoiseModel::Estimated,
             channel_width_mhz: 0.05,
             confidence: 0.95,
-            max_sigma: 10.0 * core::f32::consts::PI / 180.0,
+            max_sigma: crate::fix::device::UNSTATED.ceiling,
             significance: 0.01,
             consistency: 1e-3,
             max_sources_per_channel: 4,

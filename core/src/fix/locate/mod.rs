@@ -126,7 +126,7 @@ pub fn locate<const C: usize, const O: usize, R: Rng + ?Sized>(
         offsets,
     } = work;
     for s in stations.iter() {
-        s.prior().check()?;
+        s.check()?;
     }
     let mut report = Report::<C, O>::new();
     let rej = &mut report.rejected;

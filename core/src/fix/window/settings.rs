@@ -33,7 +33,8 @@ pub struct WindowConfig {
     pub max_age_ms: u32,
     /// The noise model.
     pub noise: Noise,
-    /// An estimated noise above this (radians) makes the fix "noisy", not valid.
+    /// An estimated noise above this (radians) makes the fix "noisy", not valid (by default
+    /// the ceiling of a unit of unstated class, [`crate::fix::device::UNSTATED`]).
     pub max_sigma: f32,
 }
 
@@ -43,7 +44,7 @@ impl Default for WindowConfig {
             window: 120,
             max_age_ms: 300_000,
             noise: Noise::Estimated(2.0 * DEG),
-            max_sigma: 10.0 * DEG,
+            max_sigma: crate::fix::device::UNSTATED.ceiling,
         }
     }
 }

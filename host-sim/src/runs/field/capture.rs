@@ -30,6 +30,15 @@ pub fn capture(
         ));
     }
     let d = simulate(condition, run);
+    if !d.stations.is_empty() {
+        // A calibration and a device class are a stations file's, which a capture of
+        // `$PFOXB` sentences does not carry.
+        return Err(format!(
+            "`{}` needs its stations' calibration and device class and is not written as a \
+             capture",
+            condition.name()
+        ));
+    }
     let start = d
         .observations
         .first()

@@ -67,7 +67,7 @@ pub fn bound_at(d: &FieldDrive, t: &Truth, prior: BiasPrior) -> f32 {
         .map(|o| usize::from(o.station) + 1)
         .max()
         .unwrap_or(0);
-    let mut table: Vec<StationSlot> = (0..n).map(|s| StationSlot::new(priors.of(s))).collect();
+    let mut table: Vec<StationSlot> = (0..n).map(|s| priors.row(s)).collect();
     bias::crlb_stations(&t.position, &geometry, &mut table)
         .map(|b| b.rmse)
         .unwrap_or(f32::INFINITY)

@@ -35,6 +35,7 @@ pub use judge::{
 
 use crate::estimate::Priors;
 use foxhunt_core::fix::bias::BiasPrior;
+use foxhunt_core::fix::device::{DeviceClass, class_noise};
 use foxhunt_core::fix::locate::Observation;
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
@@ -92,11 +93,21 @@ pub enum Condition {
     /// reporting 5 times a second the running mean of its last 10 raw bearings (8 degrees
     /// each), the emitter 8 km off, the offset drawn from the default prior each run.
     OpenCorrelatedCurved,
+    /// A calibrated pseudo-Doppler unit (its offset known to 0.05 degrees) whose true offset
+    /// has moved since by an unmodelled error of sd 0.2 to 1 degree (run r: 0.2 + 0.2 (r % 5),
+    /// stated in its stations file): 1800 bearings of 3 degrees along 1.5 km of straight road,
+    /// the emitter 3 km broadside.
+    Systematic,
+    /// Four fixed arrays of the indoor angle-of-arrival class at the corners of a 2 x 1.5 km
+    /// site, the emitter inside: 15 degree noise quantised to 2 degrees, 37 reports a second
+    /// each for 30 s (4440 bearings), each array's offset drawn from the default prior and its
+    /// unmodelled error from its class (2 degrees); the stations file states the class.
+    AoaArray15,
 }
 
 impl Condition {
     /// Every condition, in report order.
-    pub const ALL: [Condition; 18] = [
+    pub const ALL: [Condition; 20] = [
         Condition::Bias2,
         Condition::Bias4,
         Condition::Bias4Short,
@@ -115,6 +126,8 @@ impl Condition {
         Condition::AoaDrive,
         Condition::OpenNoisyFew,
         Condition::OpenCorrelatedCurved,
+        Condition::Systematic,
+        Condition::AoaArray15,
     ];
 
     /// The conditions made to leave the range open: judged by their regions too (a region
@@ -144,6 +157,8 @@ impl Condition {
             Condition::AoaDrive => "aoa-drive",
             Condition::OpenNoisyFew => "open-15deg-few",
             Condition::OpenCorrelatedCurved => "open-5hz-curved",
+            Condition::Systematic => "systematic-0.2-1deg",
+            Condition::AoaArray15 => "aoa-array-15deg",
         }
     }
 }
@@ -170,6 +185,10 @@ pub struct StationTruth {
     pub sigma: f32,
     /// The offset prior its stations file states.
     pub prior: BiasPrior,
+    /// The device class its stations file states (`None`: unstated).
+    pub class: Option<DeviceClass>,
+    /// Sd of the unmodelled error its stations file states, radians (`None`: its class's).
+    pub unmodelled: Option<f32>,
 }
 
 /// The observations of one run and what made them.
@@ -191,11 +210,21 @@ pub struct FieldDrive {
 }
 
 impl FieldDrive {
-    /// Each station's prior: the drive's own where it states them, else `default`.
+    /// What its stations file says of each station (as `locate --stations` reads it): the
+    /// drive's own prior where it states one, else `default`; each station's unmodelled error
+    /// (its own, else its class's) and the stated classes' ceiling.
     pub fn priors(&self, default: BiasPrior) -> Priors {
+        let classes = self.stations.iter().filter_map(|s| s.class);
         Priors {
             default,
             stations: self.stations.iter().map(|s| Some(s.prior)).collect(),
+            unmodelled: self
+                .stations
+                .iter()
+                .map(|s| Some(s.unmodelled.unwrap_or(class_noise(s.class).unmodelled)))
+                .collect(),
+            ceiling: classes.map(|c| c.noise().ceiling).reduce(f32::max),
+            ..Priors::default()
         }
     }
 }

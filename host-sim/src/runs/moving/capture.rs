@@ -81,7 +81,7 @@ pub fn capture(
     for (s, st) in scenario.stations.iter().enumerate() {
         let _ = writeln!(
             stations,
-            "[[station]]\nid = {:?}\noffset_deg = 0\noffset_sd_deg = {}\nnoise_deg = {:.3}\nantenna = \"uca\"\n",
+            "[[station]]\nid = {:?}\noffset_deg = 0\noffset_sd_deg = {}\nnoise_deg = {:.3}\nantenna = \"uca\"\nunmodelled_deg = 0\n",
             id(s, &st.route),
             scenario.offset_sd.to_degrees(),
             st.sigma.to_degrees()

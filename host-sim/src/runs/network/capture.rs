@@ -55,7 +55,7 @@ pub fn capture(
     for st in &n.drive.stations {
         let _ = writeln!(
             toml,
-            "[[station]]\nid = {:?}\noffset_deg = {}\noffset_sd_deg = {}\nnoise_deg = {:.3}\nantenna = \"uca\"\n",
+            "[[station]]\nid = {:?}\noffset_deg = {}\noffset_sd_deg = {}\nnoise_deg = {:.3}\nantenna = \"uca\"\nunmodelled_deg = 0\n",
             st.id,
             st.prior.mean.to_degrees(),
             st.prior.sd.to_degrees(),

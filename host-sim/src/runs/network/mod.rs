@@ -27,6 +27,7 @@ pub use capture::{START_MS, capture};
 use crate::estimate::stations::LocalReference;
 use crate::runs::field::{FieldDrive, StationTruth, Truth};
 use foxhunt_core::fix::bias::BiasPrior;
+use foxhunt_core::fix::device::DeviceClass;
 use foxhunt_core::fix::locate::Observation;
 use foxhunt_core::model::bearing::{Bearing, predicted, wrap};
 use foxhunt_core::random;
@@ -130,6 +131,10 @@ fn draw_station(id: String, fixed: bool, rng: &mut XorShiftRng) -> StationTruth 
             mean: 0.0,
             sd: OFFSET_SD,
         },
+        // KrakenSDR arrays, simulated without an unmodelled error (their stations file says
+        // so).
+        class: Some(DeviceClass::Uca),
+        unmodelled: Some(0.0),
     }
 }
 
