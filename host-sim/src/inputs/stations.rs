@@ -501,7 +501,14 @@ freq_mhz = 145.5
         }
         assert!(parse_reference("47.0,8.0@145.5").is_ok());
         // A value holding a line break is echoed escaped: the error stays one line.
-        for bad in ["47.0,8.0", "47.0@145", "95,8@1", "47,8@0", "47,8@x", "47,8@1\nx"] {
+        for bad in [
+            "47.0,8.0",
+            "47.0@145",
+            "95,8@1",
+            "47,8@0",
+            "47,8@x",
+            "47,8@1\nx",
+        ] {
             let e = parse_reference(bad).expect_err(bad);
             assert!(!e.contains('\n'), "{bad:?}: {e}");
         }
