@@ -3,6 +3,7 @@
 use crate::inputs::capture::Decoded;
 use crate::locate::report::RegionReport;
 use foxhunt_core::fix::locate::NoEmitter;
+use foxhunt_core::fix::locate::motion::Motion;
 use foxhunt_core::{Bearing, Error};
 
 /// Why a capture gives no position for the vehicle, in words a user can act on.
@@ -229,7 +230,27 @@ pub(crate) fn no_emitter(why: NoEmitter, n: u32, bearings: &[Bearing], max_sigma
         ),
         NoEmitter::Geometry(e) => format!("no consistent emitter: {}", explain(e, bearings)),
         NoEmitter::OffsetBeyondPrior(b) => offset_beyond(&b),
+        NoEmitter::Moving(m) => moving(&m),
     }
+}
+
+/// [`NoEmitter::Moving`] in words: what the check saw, and where to go instead.
+pub(crate) fn moving(m: &Motion) -> String {
+    let spread = |c: &[[f32; 2]; 2]| (c[0][0] + c[1][1]).max(0.0).sqrt();
+    format!(
+        "no fix: the emitter moves: use `foxhunt track` (the early bearings ({:.0}-{:.0} s) \
+         meet {} from the late ones ({:.0}-{:.0} s), {:.0} sd apart for their noise and the \
+         stations' offsets (+-{} and +-{} rms); a still emitter does that with p = {:.1e})",
+        m.early.time_span[0],
+        m.early.time_span[1],
+        distance_words(m.apart_m),
+        m.late.time_span[0],
+        m.late.time_span[1],
+        m.apart_sd,
+        distance_words(spread(&m.early.covariance)),
+        distance_words(spread(&m.late.covariance)),
+        m.p_value
+    )
 }
 
 /// [`NoEmitter::OffsetBeyondPrior`] in words (degrees as the reports give offsets).

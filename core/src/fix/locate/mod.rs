@@ -63,6 +63,7 @@
 //! ```
 
 mod config;
+pub mod motion;
 mod region;
 mod report;
 mod sequential;

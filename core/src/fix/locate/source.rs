@@ -585,5 +585,6 @@ fn as_reported(
             first.map(|i| i.obs.time_s).unwrap_or(0.0),
             last.map(|i| i.obs.time_s).unwrap_or(0.0),
         ],
+        motion_p: None,
     }
 }
