@@ -78,7 +78,9 @@ fn an_emitter_that_moves_is_named_not_fixed() {
                 failed.push(format!("{name} stands still: moving in {moving} runs"));
             }
         } else if moving * 10 < 9 * MOVING_RUNS {
-            failed.push(format!("{name}: moving in {moving} of {MOVING_RUNS} runs only"));
+            failed.push(format!(
+                "{name}: moving in {moving} of {MOVING_RUNS} runs only"
+            ));
         }
     }
     assert!(failed.is_empty(), "{}", failed.join("; "));
