@@ -12,8 +12,8 @@
 //! - `move-fixed-hover` stands still: it is a false-alarm run like the field's; reported, and
 //!   held to the same bar.
 //! - Still emitters (every field and network condition): "moving" in at most 2 % of the runs
-//!   (the promise). The check's own level is 0.1 %, so over 100 runs a condition expects 0.1
-//!   false alarms and 2 (P = 0.005 under that level) means the check is miscalibrated there.
+//!   (the promise). The check's own level is 0.001 %, so over 100 runs a condition expects
+//!   0.001 false alarms: 2 means the check is miscalibrated there.
 //!   Measured 0 everywhere; the share of fixes with p < 0.05 (0-9 %) is printed to show the
 //!   p-values are about uniform on still emitters, not merely tiny on moving ones.
 

@@ -261,7 +261,7 @@ pub(crate) fn moving(m: &Motion) -> String {
         format!("p = {:.1e}", m.p_value)
     };
     format!(
-        "no fix: the emitter moves: use `foxhunt track` (the early bearings, {:.0}-{:.0} s, \
+        "the emitter moves: use `foxhunt track` (the early bearings, {:.0}-{:.0} s, \
          meet {} from the late ones, {:.0}-{:.0} s: {:.0} sd apart, their noise and the \
          stations' offsets counted; an emitter that stands still does that with {p})",
         m.early.time_span[0],

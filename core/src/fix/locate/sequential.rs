@@ -3,10 +3,9 @@
 //! later ones (a reflection, a second transmitter) other sources.
 
 use super::super::bias::{BiasPrior, StationSlot};
-use super::super::noise::median_sigma;
 use super::motion::{self, MIN_SPAN_BEARINGS, Motion, MotionNoise, SEGMENTS, Split};
 use super::region::direction_only;
-use super::source::{Found, as_region, find_source};
+use super::source::{Found, as_region, find_source, noise_scale};
 use super::{
     ChannelFreq, ChannelOutcome, Item, LocateConfig, NoEmitter, OtherReason, OtherSource, Region,
     Report, Source, StationOffset,
@@ -189,15 +188,14 @@ fn moving_by_spans<R: Rng + ?Sized>(
         };
         // The span as [others | its source's bearings].
         let others = remove_kept(&mut run[a..b], &scratch[..kept]);
+        if others + kept != b - a {
+            every = false;
+            break;
+        }
         run[a + others..b].copy_from_slice(&scratch[..kept]);
         members[k] = (a + others, b);
         starts[k] = source.position;
-        let median = median_sigma(&run[a + others..b]);
-        let scale = if median > 0.0 {
-            source.sigma / median
-        } else {
-            1.0
-        };
+        let scale = noise_scale(&source, &run[a + others..b]);
         scale2_dof += scale * scale * source.dof.max(0.0);
         dof += source.dof.max(0.0);
         used += source.used as f32;
@@ -225,13 +223,8 @@ fn moving_by_spans<R: Rng + ?Sized>(
 /// The motion check ([`motion::check`]) on a source's bearings `members`, at its noise, the
 /// stations' offsets started from its fit.
 fn motion_of(source: &Source, members: &[Item], stations: &[StationSlot]) -> Option<Motion> {
-    let median = median_sigma(members);
     let noise = MotionNoise {
-        scale: if median > 0.0 {
-            source.sigma / median
-        } else {
-            1.0
-        },
+        scale: noise_scale(source, members),
         tau: if source.effective > 0.0 {
             (source.used as f32 / source.effective).max(1.0)
         } else {
