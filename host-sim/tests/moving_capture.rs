@@ -147,3 +147,47 @@ fn a_simulated_drone_s_records_track_as_well_as_its_measurements() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `locate` on a moving drone's records says it moves: exit status 1 (no fix), `reason:
+/// "moving"` in `--json` with the early and late spans kilometres apart, no advice; on the
+/// hovering drone's records, a fix (docs/src/field.md, "An emitter that moves").
+#[test]
+fn locate_on_a_drone_s_records_says_it_moves() {
+    let dir = std::env::temp_dir().join(format!("foxhunt-move-locate-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("scratch");
+    for (name, moves) in [("move-fixed-straight", true), ("move-fixed-hover", false)] {
+        let out = dir.join(format!("{name}.xml"));
+        let path = out.to_str().expect("path");
+        let sim = foxhunt(&["simulate", "--condition", name, "--out", path, "--force"]);
+        assert!(
+            sim.status.success(),
+            "{}",
+            String::from_utf8_lossy(&sim.stderr)
+        );
+        let stations = out.with_extension("stations.toml");
+        let stations = stations.to_str().expect("path");
+        let l = foxhunt(&["locate", path, "--stations", stations, "--json"]);
+        let v: Value = serde_json::from_slice(&l.stdout).expect("one JSON object");
+        if moves {
+            assert_eq!(l.status.code(), Some(1), "{v}");
+            assert_eq!(v["reason"], "moving", "{v}");
+            assert!(
+                v["motion"]["apart_m"].as_f64().expect("apart") > 2000.0,
+                "{v}"
+            );
+            assert_eq!(v["channels"][0]["reason"], "moving", "{v}");
+            assert!(v["advice"].is_null(), "{v}");
+            assert!(
+                v["error"]
+                    .as_str()
+                    .expect("error")
+                    .contains("foxhunt track"),
+                "{v}"
+            );
+        } else {
+            assert_eq!(l.status.code(), Some(0), "{v}");
+            assert_eq!(v["emitters"].as_array().map(Vec::len), Some(1), "{v}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -2,7 +2,8 @@
 
 use crate::inputs::capture::Decoded;
 use crate::locate::report::RegionReport;
-use foxhunt_core::fix::locate::NoEmitter;
+use foxhunt_core::fix::locate::motion::Motion;
+use foxhunt_core::fix::locate::{ChannelOutcome, NoEmitter};
 use foxhunt_core::{Bearing, Error};
 
 /// Why a capture gives no position for the vehicle, in words a user can act on.
@@ -229,7 +230,47 @@ pub(crate) fn no_emitter(why: NoEmitter, n: u32, bearings: &[Bearing], max_sigma
         ),
         NoEmitter::Geometry(e) => format!("no consistent emitter: {}", explain(e, bearings)),
         NoEmitter::OffsetBeyondPrior(b) => offset_beyond(&b),
+        NoEmitter::Moving(m) => moving(&m),
     }
+}
+
+/// The reason code of an emitter that moves ([`reason_code`]).
+pub const MOVING: &str = "moving";
+
+/// Why a channel has no emitter, as the `--json` reports' code (`None` for an emitter).
+pub fn reason_code(outcome: ChannelOutcome) -> Option<&'static str> {
+    Some(match outcome {
+        ChannelOutcome::Emitter(_) => return None,
+        ChannelOutcome::Region(_) => "open_range",
+        ChannelOutcome::NoConsistentEmitter(why) => match why {
+            NoEmitter::Moving(_) => MOVING,
+            NoEmitter::NoConsensus => "no_consensus",
+            NoEmitter::TooNoisy => "too_noisy",
+            NoEmitter::TooFew => "too_few",
+            NoEmitter::Geometry(_) => "geometry",
+            NoEmitter::OffsetBeyondPrior(_) => "offset_beyond_prior",
+        },
+    })
+}
+
+/// [`NoEmitter::Moving`] in words: what the check saw, and where to go instead.
+pub(crate) fn moving(m: &Motion) -> String {
+    let p = if m.p_value < 1e-6 {
+        "p < 1e-6".to_string()
+    } else {
+        format!("p = {:.1e}", m.p_value)
+    };
+    format!(
+        "the emitter moves: use `foxhunt track` (the early bearings, {:.0}-{:.0} s, \
+         meet {} from the late ones, {:.0}-{:.0} s: {:.0} sd apart, their noise and the \
+         stations' offsets counted; an emitter that stands still does that with {p})",
+        m.early.time_span[0],
+        m.early.time_span[1],
+        distance_words(m.apart_m),
+        m.late.time_span[0],
+        m.late.time_span[1],
+        m.apart_sd,
+    )
 }
 
 /// [`NoEmitter::OffsetBeyondPrior`] in words (degrees as the reports give offsets).

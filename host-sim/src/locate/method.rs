@@ -167,6 +167,8 @@ pub(crate) fn located_by(
         bearings: bearings.len() as u32,
         outcome: "emitter".into(),
         region: None,
+        reason: None,
+        motion: None,
     };
     let drawn = vec![Drawn {
         position: s.position,

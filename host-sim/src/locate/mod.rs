@@ -40,6 +40,10 @@ pub struct Unlocated {
     pub error: String,
     /// The report of the channels (no emitter, a region in at least one).
     pub located: Option<Box<Located>>,
+    /// Why, as a code ([`ChannelSummary::reason`]), when the field pipeline ran.
+    pub reason: Option<&'static str>,
+    /// Every channel, when the field pipeline ran and no channel has a region.
+    pub channels: Vec<ChannelSummary>,
 }
 
 impl From<String> for Unlocated {
@@ -47,6 +51,8 @@ impl From<String> for Unlocated {
         Self {
             error,
             located: None,
+            reason: None,
+            channels: Vec::new(),
         }
     }
 }
@@ -119,6 +125,8 @@ pub fn locate_answer(d: &Decoded, o: &LocateOptions) -> Result<Located, Unlocate
         Some(error) if located.report.emitters.is_empty() => Err(Unlocated {
             error,
             located: Some(Box::new(located)),
+            reason: Some("open_range"),
+            channels: Vec::new(),
         }),
         _ => Ok(located),
     }
@@ -224,8 +232,22 @@ pub fn locate_guided(
             }
             Ok(l)
         }
-        Err(Unlocated { error, mut located }) => {
-            let advice = located_advice(guide, d, &[], o);
+        Err(Unlocated {
+            error,
+            mut located,
+            reason,
+            channels: unplaced,
+        }) => {
+            // An emitter that moves has no still fix to stop on: follow it instead.
+            let advice = if reason == Some(explain::MOVING) {
+                Err(
+                    "the emitter moves: no stop rule for a still fix; follow it with \
+                     `foxhunt track`"
+                        .to_string(),
+                )
+            } else {
+                located_advice(guide, d, &[], o)
+            };
             if let Some(l) = located.as_mut() {
                 l.report.advice = advice.as_ref().ok().cloned();
                 l.report.advice_error = advice.as_ref().err().cloned();
@@ -233,11 +255,17 @@ pub fn locate_guided(
             let channels = located
                 .as_ref()
                 .map(|l| l.report.channels.clone())
-                .unwrap_or_default();
+                .unwrap_or(unplaced);
+            let motion = channels
+                .iter()
+                .find(|c| c.reason == reason)
+                .and_then(|c| c.motion);
             let region = channels.iter().find_map(|c| c.region);
             Err(Box::new(NoFix {
                 used: d.observations.len() as u32,
                 error,
+                reason,
+                motion,
                 across: region.and_then(|r| across_region(d, &r)),
                 region,
                 channels,

@@ -6,14 +6,16 @@ use crate::estimate::{PipelineRun, pipeline, pool};
 use crate::inputs::capture::Decoded;
 use crate::inputs::stations::Reference;
 use crate::locate::Parts;
-use crate::locate::explain::{explain, no_emitter, open_range, points_away};
+use crate::locate::Unlocated;
+use crate::locate::explain::{explain, no_emitter, open_range, points_away, reason_code};
 use crate::locate::report::{
-    ChannelSummary, Drawn, EllipseReport, OffsetCheckReport, RegionReport, SourceReport, geodetic,
+    ChannelSummary, Drawn, EllipseReport, MotionReport, OffsetCheckReport, RegionReport,
+    SourceReport, geodetic,
 };
 use crate::locate::stations::{StationReport, station_reports};
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_core::fix::locate::Observation;
-use foxhunt_core::fix::locate::{ChannelOutcome, Source};
+use foxhunt_core::fix::locate::{ChannelOutcome, NoEmitter, Source};
 use foxhunt_core::{Bearing, Error};
 use std::borrow::Cow;
 use std::collections::BTreeMap;
@@ -56,7 +58,7 @@ pub(crate) fn located_by_pipeline(
     o: &LocateOptions,
     frame: &LocalFrame,
     rejected: &mut BTreeMap<&'static str, u32>,
-) -> Result<(Parts, Vec<StationReport>), String> {
+) -> Result<(Parts, Vec<StationReport>), Unlocated> {
     // Each station's prior and noise (the stations file's, else the defaults), then the
     // reference transmitters' channels calibrate the stations that hear them.
     let network = o.network.as_deref();
@@ -78,7 +80,9 @@ pub(crate) fn located_by_pipeline(
         })
         .collect();
     if local.len() < references.len() {
-        return Err("a reference transmitter cannot be put in the drive's frame".into());
+        return Err(
+            String::from("a reference transmitter cannot be put in the drive's frame").into(),
+        );
     }
     // The user's noise replaces every bearing's own; else a station's stated noise its own.
     // A copy only when something changes: a long capture's observations are most of the
@@ -132,6 +136,8 @@ pub(crate) fn located_by_pipeline(
     let mut why_none = None;
     for c in r.channels() {
         let mut region = None;
+        let mut motion = None;
+        let reason = reason_code(c.outcome);
         let outcome = match c.outcome {
             ChannelOutcome::Emitter(_) => "emitter".to_string(),
             ChannelOutcome::Region(i) => {
@@ -147,7 +153,7 @@ pub(crate) fn located_by_pipeline(
                     region = Some(g);
                     open_range(&g)
                 };
-                why_none.get_or_insert(text.clone());
+                why_none.get_or_insert((text.clone(), reason));
                 text
             }
             ChannelOutcome::NoConsistentEmitter(why) => {
@@ -159,6 +165,9 @@ pub(crate) fn located_by_pipeline(
                     }
                     _ => None,
                 };
+                if let NoEmitter::Moving(m) = why {
+                    motion = Some(MotionReport::of(&m, frame));
+                }
                 let text = geometry.unwrap_or_else(|| {
                     no_emitter(
                         why,
@@ -167,7 +176,7 @@ pub(crate) fn located_by_pipeline(
                         setup.priors.config(&o.config()).max_sigma,
                     )
                 });
-                why_none.get_or_insert(text.clone());
+                why_none.get_or_insert((text.clone(), reason));
                 text
             }
         };
@@ -176,6 +185,8 @@ pub(crate) fn located_by_pipeline(
             bearings: c.bearings,
             outcome,
             region,
+            reason,
+            motion,
         });
     }
     for (i, r) in references.iter().enumerate() {
@@ -189,10 +200,18 @@ pub(crate) fn located_by_pipeline(
                 heard.count()
             ),
             region: None,
+            reason: None,
+            motion: None,
         });
     }
     if r.emitters().is_empty() && channels.iter().all(|c| c.region.is_none()) {
-        return Err(why_none.unwrap_or_else(|| "no consistent emitter".into()));
+        let (error, reason) = why_none.unwrap_or_else(|| ("no consistent emitter".into(), None));
+        return Err(Unlocated {
+            error,
+            located: None,
+            reason,
+            channels,
+        });
     }
     const WEAKER: &str = "fewer bearings agree on it than on its channel's emitter: a \
                           reflection, or a second transmitter on the channel";

@@ -8,6 +8,7 @@ use crate::inputs::unit::UnitReport;
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;
 use foxhunt_core::fix::ellipse::Ellipse;
+use foxhunt_core::fix::locate::motion::{MOTION_ALPHA, Motion, SpanFix};
 use foxhunt_core::fix::locate::{Region, Source};
 use foxhunt_core::model::bearing::theta_to_azimuth;
 use serde::Serialize;
@@ -181,6 +182,80 @@ pub struct ChannelSummary {
     /// What the bearings hold when the range is open (absent otherwise).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub region: Option<RegionReport>,
+    /// Why there is no emitter, as a code (absent for an emitter): `moving`, `open_range`,
+    /// `no_consensus`, `too_noisy`, `too_few`, `geometry`, `offset_beyond_prior`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reason: Option<&'static str>,
+    /// With `moving`: the evidence (absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub motion: Option<MotionReport>,
+}
+
+/// The evidence that an emitter moves (docs/src/field.md, "An emitter that moves"; field
+/// names are stable): where the early and the late bearings meet, how far apart against
+/// their uncertainty, and the test.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct MotionReport {
+    /// Where the first third of the bearings (in time) meets.
+    pub early: SpanReport,
+    /// Where the last third meets.
+    pub late: SpanReport,
+    /// How far apart, metres.
+    pub apart_m: f32,
+    /// The same in standard deviations of their difference (the stations' offsets counted
+    /// once).
+    pub apart_sd: f32,
+    /// How likely an emitter that stands still gives spans this far apart.
+    pub p_value: f32,
+    /// The level below which the check says "moving".
+    pub false_alarm: f32,
+}
+
+/// One span of time's position in the motion check.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct SpanReport {
+    /// Latitude, degrees.
+    pub lat: f64,
+    /// Longitude, degrees.
+    pub lon: f64,
+    /// East of the local origin, metres.
+    pub east_m: f32,
+    /// North of the local origin, metres.
+    pub north_m: f32,
+    /// Its 95 % ellipse.
+    pub ellipse: Option<EllipseReport>,
+    /// Seconds of its first and last bearing.
+    pub time_span_s: [f32; 2],
+    /// Its bearings.
+    pub used: u32,
+}
+
+impl MotionReport {
+    /// The core's evidence in `frame`.
+    pub fn of(m: &Motion, frame: &LocalFrame) -> Self {
+        let span = |s: &SpanFix| {
+            let g = geodetic(frame, s.position);
+            SpanReport {
+                lat: g.lat,
+                lon: g.lon,
+                east_m: s.position[0],
+                north_m: s.position[1],
+                ellipse: Ellipse::from_covariance(&s.covariance, 0.95)
+                    .ok()
+                    .map(|e| EllipseReport::from(&e)),
+                time_span_s: s.time_span,
+                used: s.used,
+            }
+        };
+        Self {
+            early: span(&m.early),
+            late: span(&m.late),
+            apart_m: m.apart_m,
+            apart_sd: m.apart_sd,
+            p_value: m.p_value,
+            false_alarm: MOTION_ALPHA,
+        }
+    }
 }
 
 /// What `locate` found (the `--json` object; field names are stable).
@@ -250,6 +325,12 @@ pub struct NoFix {
     pub used: u32,
     /// Why there is no fix.
     pub error: String,
+    /// Why, as a code (as [`ChannelSummary::reason`]; absent before the field pipeline ran).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reason: Option<&'static str>,
+    /// With `moving`: the evidence.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub motion: Option<MotionReport>,
     /// What the bearings hold when the range is open: the first channel's region (absent
     /// when none has one).
     #[serde(skip_serializing_if = "Option::is_none")]

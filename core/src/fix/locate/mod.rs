@@ -32,6 +32,10 @@
 //!    for kilometres. A region that runs out to [`super::robust::RansacOptions::max_range`] is
 //!    no fix but a [`Region`] ([`ChannelOutcome::Region`]): the line of bearing from the
 //!    observers, its half-width and the range interval the bearings allow.
+//! 6. **Still, or moving** ([`motion`]): the emitter's bearings, in thirds by time, must meet
+//!    in one place for their noise and the stations' offsets (a likelihood-ratio test at
+//!    [`motion::MOTION_ALPHA`]); a channel without a fix is checked by its thirds' own sources.
+//!    An emitter that moves is [`NoEmitter::Moving`], not a fix.
 //!
 //! No allocation: the caller lends the working storage ([`Buffers`], or a [`Workspace`] of
 //! fixed capacity: `B` observations, `S` stations), the report holds at most `C` channels and
@@ -63,6 +67,7 @@
 //! ```
 
 mod config;
+pub mod motion;
 mod region;
 mod report;
 mod sequential;

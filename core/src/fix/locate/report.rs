@@ -4,6 +4,7 @@
 use super::super::bias::BiasPrior;
 use super::super::channel;
 use super::super::ellipse::Ellipse;
+use super::motion::Motion;
 use crate::error::Error;
 
 /// A located source: an emitter, or another point some bearings agree on.
@@ -65,6 +66,9 @@ pub struct Source {
     pub index_span: [u32; 2],
     /// First and last time of its bearings, seconds.
     pub time_span: [f32; 2],
+    /// P-value of the motion check ([`super::motion`]): how likely an emitter that stands still
+    /// gives spans this far apart (`None`: too few bearings per span to check).
+    pub motion_p: Option<f32>,
 }
 
 impl Source {
@@ -180,6 +184,9 @@ pub enum NoEmitter {
     /// A DF unit's offset lies far beyond its prior and no fix with it free holds up: check
     /// the antenna (mounting, array indexing, cables) and calibrate.
     OffsetBeyondPrior(OffsetBeyond),
+    /// The emitter moves: the early and late bearings meet in places too far apart for their
+    /// noise and the stations' offsets ([`super::motion`]). A track, not a fix.
+    Moving(Motion),
 }
 
 /// What the bearings of a channel hold when their likelihood region is open in range (it runs
@@ -334,6 +341,7 @@ const EMPTY_SOURCE: Source = Source {
     },
     index_span: [0; 2],
     time_span: [0.0; 2],
+    motion_p: None,
 };
 
 /// A region slot not yet filled.

@@ -3,11 +3,12 @@
 //! later ones (a reflection, a second transmitter) other sources.
 
 use super::super::bias::{BiasPrior, StationSlot};
+use super::motion::{self, MIN_SPAN_BEARINGS, Motion, MotionNoise, SEGMENTS, Split};
 use super::region::direction_only;
-use super::source::{Found, as_region, find_source};
+use super::source::{Found, as_region, find_source, noise_scale};
 use super::{
     ChannelFreq, ChannelOutcome, Item, LocateConfig, NoEmitter, OtherReason, OtherSource, Region,
-    Report, StationOffset,
+    Report, Source, StationOffset,
 };
 use rand_core::Rng;
 
@@ -53,7 +54,12 @@ pub(super) fn channel_sources<const C: usize, const O: usize, R: Rng + ?Sized>(
             // An open range: the channel's answer is its region; a later source's is none
             // (its bearings stay outliers).
             Ok(Found::Region(region, kept)) => {
-                if first && let Some(slot) = report.regions.get_mut(report.region_count) {
+                if first
+                    && let Some(m) =
+                        moving_by_spans(&mut run[..len], scratch, stations, freq, config, rng)
+                {
+                    outcome = ChannelOutcome::NoConsistentEmitter(NoEmitter::Moving(m));
+                } else if first && let Some(slot) = report.regions.get_mut(report.region_count) {
                     *slot = region;
                     outcome = ChannelOutcome::Region(report.region_count);
                     report.region_count += 1;
@@ -64,11 +70,19 @@ pub(super) fn channel_sources<const C: usize, const O: usize, R: Rng + ?Sized>(
             Err(why) => {
                 if first {
                     outcome = ChannelOutcome::NoConsistentEmitter(why);
-                    // No point, but perhaps a direction.
-                    if matches!(
+                    let spread = matches!(
                         why,
                         NoEmitter::NoConsensus | NoEmitter::TooNoisy | NoEmitter::Geometry(_)
-                    ) && let Some(region) = direction_region(set, stations, freq, config)
+                    );
+                    // Bearings that meet nowhere: an emitter that moves, or perhaps a
+                    // direction.
+                    if spread
+                        && let Some(m) =
+                            moving_by_spans(&mut run[..len], scratch, stations, freq, config, rng)
+                    {
+                        outcome = ChannelOutcome::NoConsistentEmitter(NoEmitter::Moving(m));
+                    } else if spread
+                        && let Some(region) = direction_region(&run[..len], stations, freq, config)
                         && let Some(slot) = report.regions.get_mut(report.region_count)
                     {
                         *slot = region;
@@ -81,6 +95,14 @@ pub(super) fn channel_sources<const C: usize, const O: usize, R: Rng + ?Sized>(
             }
         };
         if first {
+            // A still emitter's fix, or the middle of a moving one's path?
+            let members = scratch.get(..kept).unwrap_or(&[]);
+            let motion = motion_of(&source, members, stations);
+            source.motion_p = motion.map(|m| m.p_value);
+            if let Some(m) = motion.filter(Motion::moving) {
+                outcome = ChannelOutcome::NoConsistentEmitter(NoEmitter::Moving(m));
+                break;
+            }
             source.offsets = record_offsets(stations, offsets, &mut report.offsets_written);
             if let Some(slot) = report.emitters.get_mut(report.emitter_count) {
                 *slot = source;
@@ -114,6 +136,113 @@ pub(super) fn channel_sources<const C: usize, const O: usize, R: Rng + ?Sized>(
         ChannelOutcome::NoConsistentEmitter(_) => report.rejected.no_emitter += run.len() as u32,
     }
     outcome
+}
+
+/// No fix from the whole channel `run` (no consensus, too noisy, an open range), but an
+/// emitter that moves spreads its bearings along its path and each span of time may hold one:
+/// each span's source by the same search ([`find_source`], the stations from their priors);
+/// when every span has one, the motion check on their bearings, started from their fixes, at
+/// their pooled noise. `Some` only when it says the emitter moves. `run` is reordered on the
+/// way and left in input order; the stations are left at their priors.
+fn moving_by_spans<R: Rng + ?Sized>(
+    run: &mut [Item],
+    scratch: &mut [Item],
+    stations: &mut [StationSlot],
+    freq: ChannelFreq,
+    config: &LocateConfig,
+    rng: &mut R,
+) -> Option<Motion> {
+    let time = |it: &Item| it.obs.time_s;
+    let split = Split::of(run, time)?;
+    if run.len() < SEGMENTS * MIN_SPAN_BEARINGS || scratch.len() < run.len() {
+        return None;
+    }
+    // Each span's bearings together, in input order within it (through scratch).
+    let mut bounds = [0usize; SEGMENTS + 1];
+    let mut w = 0;
+    for (k, bound) in bounds.iter_mut().take(SEGMENTS).enumerate() {
+        *bound = w;
+        for it in run.iter().filter(|it| split.span(time(it)) == k) {
+            scratch[w] = *it;
+            w += 1;
+        }
+    }
+    bounds[SEGMENTS] = w;
+    run[..w].copy_from_slice(&scratch[..w]);
+    let mut members = [(0usize, 0usize); SEGMENTS];
+    let mut starts = [[0.0f32; 2]; SEGMENTS];
+    // Pooled noise: dof-weighted scale^2, N / N_eff over all spans.
+    let (mut scale2_dof, mut dof, mut used, mut effective) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);
+    let mut estimated = false;
+    let mut every = true;
+    for k in 0..SEGMENTS {
+        let (a, b) = (bounds[k], bounds[k + 1]);
+        for s in stations.iter_mut() {
+            s.reset();
+        }
+        let Ok(Found::Source(source, kept)) =
+            find_source(&run[a..b], scratch, stations, freq, config, rng)
+        else {
+            every = false;
+            break;
+        };
+        // The span as [others | its source's bearings].
+        let others = remove_kept(&mut run[a..b], &scratch[..kept]);
+        if others + kept != b - a {
+            every = false;
+            break;
+        }
+        run[a + others..b].copy_from_slice(&scratch[..kept]);
+        members[k] = (a + others, b);
+        starts[k] = source.position;
+        let scale = noise_scale(&source, &run[a + others..b]);
+        scale2_dof += scale * scale * source.dof.max(0.0);
+        dof += source.dof.max(0.0);
+        used += source.used as f32;
+        effective += source.effective;
+        estimated |= source.sigma_estimated;
+    }
+    for s in stations.iter_mut() {
+        s.reset();
+    }
+    let motion = if every && dof > 0.0 && effective > 0.0 {
+        let noise = MotionNoise {
+            scale: libm::sqrtf(scale2_dof / dof),
+            tau: (used / effective).max(1.0),
+            dof: estimated.then_some(dof),
+        };
+        let parts = members.map(|(a, b)| &run[a..b]);
+        motion::check(parts, stations, starts, noise, split, time)
+    } else {
+        None
+    };
+    super::super::order::heapsort_by(run, |a, b| a.index < b.index);
+    motion.filter(Motion::moving)
+}
+
+/// The motion check ([`motion::check`]) on a source's bearings `members`, at its noise, the
+/// stations' offsets started from its fit.
+fn motion_of(source: &Source, members: &[Item], stations: &[StationSlot]) -> Option<Motion> {
+    let noise = MotionNoise {
+        scale: noise_scale(source, members),
+        tau: if source.effective > 0.0 {
+            (source.used as f32 / source.effective).max(1.0)
+        } else {
+            1.0
+        },
+        dof: source.sigma_estimated.then_some(source.dof),
+    };
+    let time = |it: &Item| it.obs.time_s;
+    let split = Split::of(members, time)?;
+    let parts = core::array::from_fn(|k| if k == 0 { members } else { &[][..] });
+    motion::check(
+        parts,
+        stations,
+        [source.position; SEGMENTS],
+        noise,
+        split,
+        time,
+    )
 }
 
 /// The last fit's offset of every station it used, appended to `offsets` from `written` on (as

@@ -251,15 +251,19 @@ pub const CIRCLE_WINDOWS: usize = 6;
 
 /// The solver at the noise `source` used (its sigma over its `members`' median).
 fn solver_at(source: &Source, members: &[Item], config: &LocateConfig) -> BiasedOptions {
+    BiasedOptions {
+        scale: noise_scale(source, members),
+        ..config.solver
+    }
+}
+
+/// The noise scale `source` used: its sigma over its bearings' (`members`) median sigma.
+pub(super) fn noise_scale(source: &Source, members: &[Item]) -> f32 {
     let median = median_sigma(members);
-    let scale = if median > 0.0 {
+    if median > 0.0 {
         source.sigma / median
     } else {
         1.0
-    };
-    BiasedOptions {
-        scale,
-        ..config.solver
     }
 }
 
@@ -585,5 +589,6 @@ fn as_reported(
             first.map(|i| i.obs.time_s).unwrap_or(0.0),
             last.map(|i| i.obs.time_s).unwrap_or(0.0),
         ],
+        motion_p: None,
     }
 }

@@ -320,3 +320,76 @@ fn noisy_crossing_bearings_are_no_parallel_region() {
         "{regions} regions, {held} held"
     );
 }
+
+/// Four masts at the corners of an 8 km square, each reporting every 2 s for 10 minutes (2
+/// degree noise, offsets within the 2 degree prior), on an emitter at `at(t)`.
+fn masts(at: impl Fn(f32) -> [f32; 2], seed: u64) -> [Observation; 1200] {
+    let mut rng = XorShiftRng::seed_from_u64(seed);
+    let sites = [
+        [0.0f32, 0.0],
+        [8000.0, 0.0],
+        [8000.0, 8000.0],
+        [0.0, 8000.0],
+    ];
+    let offsets = [1.5 * DEG, -2.0 * DEG, 0.5 * DEG, 2.5 * DEG];
+    core::array::from_fn(|k| {
+        let s = k % 4;
+        let t = 2.0 * (k / 4) as f32;
+        let mut x = obs(
+            sites[s],
+            at(t),
+            offsets[s] + 2.0 * DEG * random::normal(&mut rng),
+            0,
+        );
+        x.time_s = t;
+        x.station = s as u16;
+        x
+    })
+}
+
+fn masts_locate(o: &[Observation]) -> Report<1, 1> {
+    let prior = crate::fix::bias::BiasPrior {
+        mean: 0.0,
+        sd: 2.0 * DEG,
+    };
+    let mut work = Workspace::<1200, 4>::with_prior(prior);
+    let mut rng = XorShiftRng::seed_from_u64(3);
+    locate::<1, 1, _>(o, &LocateConfig::default(), work.buffers(), &mut rng).unwrap()
+}
+
+/// A drone crossing the square at 12 m/s is said to move, with its early and late spans
+/// where it was; the same drone hovering is fixed, its motion check passed.
+#[test]
+fn a_drone_crossing_the_city_moves_and_a_hovering_one_is_fixed() {
+    let crossing = masts(|t| [400.0 + 12.0 * t, 2500.0], 11);
+    let r = masts_locate(&crossing);
+    let ChannelOutcome::NoConsistentEmitter(NoEmitter::Moving(m)) = r.channels()[0].outcome else {
+        panic!("{:?}", r.channels()[0]);
+    };
+    assert!(r.emitters().is_empty());
+    assert!(m.moving() && m.apart_sd > 10.0, "{m:?}");
+    // The early third's centre is at t = 100 s, (1600, 2500); the late one's at t = 500 s.
+    for (span, t) in [(m.early, 100.0), (m.late, 500.0)] {
+        let truth = [400.0 + 12.0 * t, 2500.0];
+        let err = libm::hypotf(span.position[0] - truth[0], span.position[1] - truth[1]);
+        assert!(err < 1200.0, "{err} m: {span:?}");
+    }
+    let hovering = masts(|_| [4000.0, 4500.0], 12);
+    let r = masts_locate(&hovering);
+    let e = r.emitters()[0];
+    let p = e.motion_p.expect("checked");
+    assert!(p > motion::MOTION_ALPHA, "{p}: {e:?}");
+}
+
+/// A vehicle's U drive round a still emitter with a 4 degree mounting offset: the thirds see
+/// it from three sides and the offset shifts each third's own fix differently, but the shared
+/// offset explains them all: not moving.
+#[test]
+fn a_mounting_offset_round_a_u_drive_is_not_motion() {
+    let mut rng = XorShiftRng::seed_from_u64(21);
+    let o = drive(&mut rng, 4.0 * DEG);
+    let r = run::<512>(&o, &LocateConfig::default());
+    let e = r.emitters()[0];
+    let p = e.motion_p.expect("checked");
+    assert!(p > motion::MOTION_ALPHA, "{p}: {e:?}");
+}

@@ -267,6 +267,7 @@ fn no_emitter(r: &Pipeline) -> String {
             NoEmitter::TooFew => "too few bearings for a checked fix".into(),
             NoEmitter::Geometry(e) => format!("no fix yet: {e}"),
             NoEmitter::OffsetBeyondPrior(b) => crate::locate::explain::offset_beyond(&b),
+            NoEmitter::Moving(m) => crate::locate::explain::moving(&m),
         },
         _ => "no bearing yet".into(),
     }

@@ -17,6 +17,7 @@
 
 pub mod bench;
 mod capture;
+pub mod locate;
 
 pub use capture::{FREQ_MHZ, MovingCapture, capture};
 

@@ -2,8 +2,8 @@
 //! df-aggregator's algorithm on the same runs of each network condition.
 
 use super::{EMITTER_MHZ, NetworkCondition, NetworkDrive, peer, simulate};
-use crate::estimate::pipeline;
 use crate::estimate::stations::{PriorOrigin, StationSetup, calibrate_on_references};
+use crate::estimate::{PipelineRun, pipeline};
 use crate::outputs::tables::Row;
 use crate::runs::field::{FieldDrive, THREE_SIGMA_TAIL, bound_at, judge};
 use foxhunt_core::Method;
@@ -49,15 +49,16 @@ fn setup_of(d: &FieldDrive) -> StationSetup {
     }
 }
 
-/// Run both methods on run `run` of `c`.
-pub fn run_network(c: NetworkCondition, run: usize) -> NetworkRun {
+/// The default pipeline on run `run` of `c`, as `locate --stations` runs it (any reference
+/// transmitter's calibration first): the drive (its priors after the calibration) and the
+/// report (`None` when the pipeline failed).
+pub fn locate_network(c: NetworkCondition, run: usize) -> (FieldDrive, Option<PipelineRun>) {
     let NetworkDrive {
         mut drive,
         references,
         ..
     } = simulate(c, run);
     let config = LocateConfig::default();
-    let clock = std::time::Instant::now();
     let mut setup = setup_of(&drive);
     if !references.is_empty() {
         let (rest, _) = calibrate_on_references(
@@ -72,6 +73,13 @@ pub fn run_network(c: NetworkCondition, run: usize) -> NetworkRun {
         }
     }
     let r = pipeline(&drive.observations, &config, &setup.priors, run as u64).ok();
+    (drive, r)
+}
+
+/// Run both methods on run `run` of `c`.
+pub fn run_network(c: NetworkCondition, run: usize) -> NetworkRun {
+    let clock = std::time::Instant::now();
+    let (drive, r) = locate_network(c, run);
     let seconds = clock.elapsed().as_secs_f64();
     let j = judge(&drive, r.as_ref().map(|r| &r.report), BiasPrior::default());
     let j = j.first().copied();

@@ -21,7 +21,7 @@ mod bench;
 mod capture;
 pub mod peer;
 
-pub use bench::{bench, measure_network};
+pub use bench::{bench, locate_network, measure_network};
 pub use capture::{START_MS, capture};
 
 use crate::estimate::stations::LocalReference;
