@@ -9,6 +9,7 @@
 //! percentile error, how often P(moving) > 0.5 was right, and for the default method its
 //! smoothed figures.
 
+use super::triangulate::triangulate;
 use super::{MovingRun, MovingScenario};
 use crate::estimate::pool;
 use crate::outputs::tables::Row;
@@ -224,12 +225,12 @@ fn row(
     row.coverage = Some(share(
         &mut ok.iter().flat_map(|f| f.covered.iter().copied()),
     ));
-    let mode = share(&mut ok.iter().flat_map(|f| f.mode_right.iter().copied()));
     let (median, p90) = quantiles(&errors);
-    let mut note = format!(
-        "median {median:.1} m, p90 {p90:.1} m; P(moving) right {:.0} %",
-        100.0 * mode
-    );
+    let mut note = format!("median {median:.1} m, p90 {p90:.1} m");
+    if ok.iter().any(|f| !f.mode_right.is_empty()) {
+        let mode = share(&mut ok.iter().flat_map(|f| f.mode_right.iter().copied()));
+        note.push_str(&format!("; P(moving) right {:.0} %", 100.0 * mode));
+    }
     let smoothed: Vec<(f32, bool)> = ok.iter().flat_map(|f| f.smoothed.iter().copied()).collect();
     if !smoothed.is_empty() {
         let ms = smoothed
@@ -279,6 +280,27 @@ pub fn measure(
     })
 }
 
+/// The per-epoch triangulation's row ([`super::triangulate`]) on the scenario's runs, its note
+/// saying how many epochs gave no fix.
+fn triangulation_row(s: &MovingScenario, bound: Option<f64>) -> Row {
+    let runs: Vec<(RunFigures, usize)> = pool().install(|| {
+        (0..s.runs)
+            .into_par_iter()
+            .map(|r| triangulate(&s.simulate(r), s.warmup_s))
+            .collect()
+    });
+    let missed: usize = runs.iter().map(|(_, m)| m).sum();
+    let figures: Vec<Result<RunFigures, Error>> = runs.into_iter().map(|(f, _)| Ok(f)).collect();
+    let mut r = row(s, TRIANGULATION, Method::Ml, 0, &figures, bound);
+    if let Some(note) = r.note.as_mut() {
+        note.push_str(&format!("; {missed} epochs without a fix"));
+    }
+    r
+}
+
+/// The triangulation row's method label.
+pub const TRIANGULATION: &str = "triangulation";
+
 /// Runs a scenario's table takes (for the progress bar).
 pub fn total_runs(s: &MovingScenario) -> u64 {
     let swarms = TRACK_METHODS.iter().filter(|m| m.is_swarm()).count();
@@ -309,6 +331,9 @@ pub fn bench(s: &MovingScenario, particles: usize, progress: &Progress) -> Vec<R
         &base,
         bound,
     ));
+    if s.bearings && s.stations.len() >= 2 {
+        rows.push(triangulation_row(s, bound));
+    }
     for m in TRACK_METHODS.iter().filter(|m| m.is_swarm()) {
         let runs = measure(s, *m, SWARM_PARTICLES, few, false, progress);
         rows.push(row(s, m.name(), *m, SWARM_PARTICLES, &runs, bound));

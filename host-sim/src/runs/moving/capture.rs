@@ -1,5 +1,6 @@
 //! A moving-emitter scenario's run written as its stations would log it: KrakenSDR XML records,
-//! each with its STATION_ID (`mast-N` for a fixed station, `car-N` for a vehicle), position,
+//! each with its STATION_ID (`mast-N` for a fixed station, `anchor-N` indoors, `car-N` for a
+//! vehicle), position,
 //! heading and epoch, on 433.920 MHz; the stations file that goes with them (each station's
 //! noise and offset prior); and the truth, the emitter's position every second, as CSV.
 
@@ -26,8 +27,9 @@ pub struct MovingCapture {
 }
 
 /// Station `s`'s id.
-fn id(s: usize, route: &Route) -> String {
+fn id(scenario: &MovingScenario, s: usize, route: &Route) -> String {
     match route {
+        Route::Fixed(_) if scenario.aoa.is_some() => format!("anchor-{}", s + 1),
         Route::Fixed(_) => format!("mast-{}", s + 1),
         Route::Square { .. } => format!("car-{}", s + 1),
     }
@@ -66,7 +68,7 @@ pub fn capture(
             w.station_bearing(
                 &frame,
                 &StationBearing {
-                    id: &id(s, &st.route),
+                    id: &id(scenario, s, &st.route),
                     fixed,
                     at: o.bearing.vehicle,
                     azimuth_deg: theta_to_azimuth(o.bearing.theta).to_degrees(),
@@ -81,8 +83,9 @@ pub fn capture(
     for (s, st) in scenario.stations.iter().enumerate() {
         let _ = writeln!(
             stations,
-            "[[station]]\nid = {:?}\noffset_deg = 0\noffset_sd_deg = {}\nnoise_deg = {:.3}\nantenna = \"uca\"\nunmodelled_deg = 0\n",
-            id(s, &st.route),
+            "[[station]]\nid = {:?}\noffset_deg = {}\noffset_sd_deg = {}\nnoise_deg = {:.3}\nantenna = \"uca\"\nunmodelled_deg = 0\n",
+            id(scenario, s, &st.route),
+            scenario.offset_mean.to_degrees(),
             scenario.offset_sd.to_degrees(),
             st.sigma.to_degrees()
         );

@@ -14,10 +14,15 @@
 //! degrees), the trackers' prior. RSSI (outdoors): -40 dBm at 1 m, exponent 2.5, 6 dB noise;
 //! the emitter's power is unknown to 6 dB and the exponent to 0.2, both drawn per run from
 //! those priors.
+//!
+//! Indoors, `move-indoor-aoa` ([`indoor`]): a person walking a room, four wall anchors
+//! reporting 37 angles a second with the error traits of real Bluetooth 5.1 arrays.
 
 pub mod bench;
 mod capture;
+pub mod indoor;
 pub mod locate;
+pub mod triangulate;
 
 pub use capture::{FREQ_MHZ, MovingCapture, capture};
 
@@ -30,12 +35,12 @@ use foxhunt_core::random;
 use foxhunt_core::track::{Epoch, Layout, Level, Motion};
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
-use std::f32::consts::{PI, TAU};
+use std::f32::consts::{FRAC_PI_2, PI, TAU};
 
 const DEG: f32 = PI / 180.0;
 
-/// The names of the outdoor moving scenarios, in table order.
-pub const NAMES: [&str; 8] = [
+/// The names of the moving scenarios, in table order.
+pub const NAMES: [&str; 9] = [
     "move-fixed-straight",
     "move-fixed-turning",
     "move-fixed-stop-and-go",
@@ -44,6 +49,7 @@ pub const NAMES: [&str; 8] = [
     "move-mixed-stop-and-go",
     "move-fixed-rssi",
     "move-mixed-both",
+    "move-indoor-aoa",
 ];
 
 /// How the emitter moves.
@@ -57,6 +63,8 @@ pub enum Path {
     StopAndGo,
     /// Still.
     Hover,
+    /// A person walking a room at 1.2 m/s, with turns and stops.
+    Walk,
 }
 
 /// A leg of a path: how long, at what speed, turning at what rate (rad/s, left positive).
@@ -74,6 +82,7 @@ impl Path {
             Path::Turning => [1200.0, 2000.0],
             Path::StopAndGo => [1000.0, 3000.0],
             Path::Hover => [4000.0, 4500.0],
+            Path::Walk => [3.0, 2.5],
         }
     }
 
@@ -104,6 +113,42 @@ impl Path {
             }
             Path::StopAndGo => vec![go(150.0), stop(150.0), go(150.0), stop(150.0)],
             Path::Hover => vec![stop(600.0)],
+            Path::Walk => {
+                let walk = |seconds| Leg {
+                    seconds,
+                    speed: indoor::WALK_SPEED,
+                    turn: 0.0,
+                };
+                // A quarter circle of 1.5 m radius, left.
+                let corner = Leg {
+                    seconds: FRAC_PI_2 * 1.5 / indoor::WALK_SPEED,
+                    speed: indoor::WALK_SPEED,
+                    turn: indoor::WALK_SPEED / 1.5,
+                };
+                // Round the room anticlockwise with pauses, into the middle, back and north.
+                vec![
+                    walk(7.0),
+                    corner,
+                    walk(4.0),
+                    stop(6.0),
+                    corner,
+                    walk(6.0),
+                    corner,
+                    walk(2.5),
+                    corner,
+                    walk(3.0),
+                    stop(8.0),
+                    corner,
+                    corner,
+                    walk(3.0),
+                    stop(4.0),
+                    Leg {
+                        turn: -indoor::WALK_SPEED / 1.5,
+                        ..corner
+                    },
+                    walk(1.0),
+                ]
+            }
         }
     }
 
@@ -201,6 +246,11 @@ pub struct MovingScenario {
     pub rssi: bool,
     /// Sd of each unit's offset (truth drawn from it; the trackers' prior), radians.
     pub offset_sd: f32,
+    /// Mean of the trackers' offset prior, radians (0 but indoors).
+    pub offset_mean: f32,
+    /// Indoor arrays' error traits (none: Gaussian noise of each station's sd and a
+    /// Gaussian offset).
+    pub aoa: Option<indoor::AoaErrors>,
     /// The stations' path loss (RSSI).
     pub law: PathLoss,
     /// RSSI noise, dB.
@@ -263,6 +313,8 @@ impl MovingScenario {
             bearings,
             rssi,
             offset_sd: 2.0 * DEG,
+            offset_mean: 0.0,
+            aoa: None,
             law: PathLoss {
                 p0: -40.0,
                 d0: 1.0,
@@ -290,11 +342,33 @@ impl MovingScenario {
             "move-mixed-stop-and-go" => base(Path::StopAndGo, mixed(), true, false),
             "move-fixed-rssi" => base(Path::Straight, fixed4(), false, true),
             "move-mixed-both" => base(Path::Turning, mixed(), true, true),
+            "move-indoor-aoa" => {
+                let anchors = indoor::ANCHORS
+                    .iter()
+                    .zip(indoor::NOISE_DEG)
+                    .map(|((at, _), sd)| Station {
+                        route: Route::Fixed(*at),
+                        sigma: sd * DEG,
+                    })
+                    .collect();
+                let (mean, sd) = indoor::bias_prior();
+                MovingScenario {
+                    offset_mean: mean,
+                    offset_sd: sd,
+                    aoa: Some(indoor::AoaErrors::ALL),
+                    duration_s: Path::Walk.legs().iter().map(|l| l.seconds).sum(),
+                    rate_hz: indoor::RATE_HZ,
+                    motion: Motion::INDOOR,
+                    warmup_s: 3.0,
+                    runs: 30,
+                    ..base(Path::Walk, anchors, true, false)
+                }
+            }
             _ => return None,
         })
     }
 
-    /// Every outdoor moving scenario, in table order.
+    /// Every moving scenario, in table order.
     pub fn all() -> Vec<Self> {
         NAMES.iter().filter_map(|n| Self::named(n)).collect()
     }
@@ -321,15 +395,22 @@ impl MovingScenario {
         let mut s = Settings::new(self.layout(), self.motion);
         s.offsets = vec![
             BiasPrior {
-                mean: 0.0,
+                mean: self.offset_mean,
                 sd: self.offset_sd,
             };
             self.stations.len()
         ];
         s.power_sd = if self.rssi { self.power_sd } else { 0.0 };
         s.exponent_sd = if self.rssi { self.exponent_sd } else { 0.0 };
-        // Without bearings the first cloud is the city.
-        s.region = Some(([CITY / 2.0, CITY / 2.0], CITY / 3.0));
+        // Without bearings the first cloud is the city (or the room, which holds the walker).
+        s.region = Some(match self.aoa {
+            Some(_) => {
+                let [w, d] = indoor::ROOM;
+                s.room = Some(indoor::ROOM);
+                ([w / 2.0, d / 2.0], w.max(d) / 3.0)
+            }
+            None => ([CITY / 2.0, CITY / 2.0], CITY / 3.0),
+        });
         s
     }
 
@@ -345,11 +426,22 @@ impl MovingScenario {
     /// Run `run`'s updates and truth.
     pub fn simulate(&self, run: usize) -> MovingRun {
         let mut rng = self.rng(run);
-        let offsets: Vec<f32> = self
-            .stations
-            .iter()
-            .map(|_| self.offset_sd * random::normal(&mut rng))
-            .collect();
+        let draws: Vec<indoor::AnchorDraw> = match &self.aoa {
+            Some(errors) => self
+                .stations
+                .iter()
+                .map(|_| indoor::AnchorDraw::draw(&mut rng, errors))
+                .collect(),
+            None => Vec::new(),
+        };
+        let offsets: Vec<f32> = match self.aoa {
+            Some(_) => draws.iter().map(|d| d.bias).collect(),
+            None => self
+                .stations
+                .iter()
+                .map(|_| self.offset_sd * random::normal(&mut rng))
+                .collect(),
+        };
         let rssi = (
             self.power_sd * random::normal(&mut rng),
             self.exponent_sd * random::normal(&mut rng),
@@ -364,9 +456,11 @@ impl MovingScenario {
             for (s, station) in self.stations.iter().enumerate() {
                 let at = station.route.at(t);
                 if self.bearings {
-                    let theta = wrap(
-                        predicted(&p, &at) + offsets[s] + station.sigma * random::normal(&mut rng),
-                    );
+                    let truth = predicted(&p, &at);
+                    let theta = match &self.aoa {
+                        Some(errors) => indoor::report(&mut rng, s, truth, &draws[s], errors),
+                        None => wrap(truth + offsets[s] + station.sigma * random::normal(&mut rng)),
+                    };
                     let mut o = Observation::new(
                         Bearing {
                             vehicle: at,
@@ -429,6 +523,24 @@ mod tests {
         assert!((p[1] - 2000.0).abs() < 1.0 && v[0] > 11.9, "{p:?} {v:?}");
         let (_, _, moving) = Path::StopAndGo.at(200.0);
         assert!(!moving);
+    }
+
+    #[test]
+    fn the_walk_stays_in_the_room_at_walking_pace() {
+        let total: f32 = Path::Walk.legs().iter().map(|l| l.seconds).sum();
+        assert!(total > 50.0, "{total}");
+        let [w, d] = indoor::ROOM;
+        let mut last = Path::Walk.at(0.0).0;
+        let mut stopped = 0;
+        for k in 1..=(10.0 * total) as usize {
+            let (p, v, moving) = Path::Walk.at(k as f32 / 10.0);
+            assert!(p[0] > 1.0 && p[0] < w - 1.0 && p[1] > 1.0 && p[1] < d - 1.0, "{k}: {p:?}");
+            assert!((p[0] - last[0]).hypot(p[1] - last[1]) <= 0.121);
+            assert!(v[0].hypot(v[1]) <= indoor::WALK_SPEED + 1e-3);
+            stopped += usize::from(!moving);
+            last = p;
+        }
+        assert!(stopped > 100, "{stopped}");
     }
 
     #[test]
