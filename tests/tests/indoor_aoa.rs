@@ -3,6 +3,19 @@
 //! 5.1 arrays (noise 10-16 degrees, per-anchor bias, compression toward boresight, 2 degree
 //! steps, 37 reports a second). The default tracker against per-epoch triangulation on the
 //! same seeded runs.
+//!
+//! Figures, over the updates after the 3 s warm-up of RUNS seeded runs: each method's median
+//! and 90th percentile error, their ratio, and the tracker's time-averaged 95 % coverage.
+//! Measured (ci profile, 40 runs): tracker median 0.58 m, p90 1.42 m, coverage 0.940;
+//! triangulation median 1.37 m, p90 2.79 m; ratio 0.42.
+//!
+//! Bars, and why: the promise is a median at most 0.75 of the triangulation's (25 % better)
+//! with coverage in 0.90-0.98; the runs are seeded, so the figures are fixed, and they sit
+//! well inside the ratio bar and 0.04 inside the coverage band (about 1.5 standard errors of
+//! the time-averaged coverage over 40 runs, whose per-run figures spread by about 0.15): the
+//! band asserted is the promised one, failing when a change makes the ellipses overconfident
+//! or far too wide. The triangulation's median is held to 0.9-1.8 m, around the 1.07 m it
+//! gives on the real arrays, so that the scenario stays as hard as the data it stands for.
 
 use foxhunt_sim::runs::moving::MovingScenario;
 use foxhunt_sim::runs::moving::bench::{one, quantiles};
@@ -11,7 +24,7 @@ use foxhunt_sim::runs::moving::triangulate::triangulate;
 use foxhunt_sim::track::moving::{DEFAULT_METHOD, PARTICLES};
 
 /// Seeded runs.
-const RUNS: usize = 24;
+const RUNS: usize = 40;
 
 /// What the runs gave.
 struct Figures {
@@ -80,6 +93,22 @@ fn the_tracker_against_per_epoch_triangulation() {
     let s = MovingScenario::named("move-indoor-aoa").expect("scenario");
     let f = measure(&s, RUNS);
     report("every trait", &f);
+    let ratio = f.tracker.0 / f.triangulation.0;
+    assert!(
+        ratio <= 0.75,
+        "tracker median {:.2} m is {ratio:.2} of the triangulation's, above 0.75",
+        f.tracker.0
+    );
+    assert!(
+        (0.90..=0.98).contains(&f.coverage),
+        "coverage {:.3} outside 0.90-0.98",
+        f.coverage
+    );
+    assert!(
+        (0.9..=1.8).contains(&f.triangulation.0),
+        "triangulation median {:.2} m outside 0.9-1.8 m",
+        f.triangulation.0
+    );
 }
 
 /// Each error trait off in turn (run by hand: `--ignored`), to find which one costs what.
@@ -90,7 +119,13 @@ fn each_trait_off_in_turn() {
     let all = AoaErrors::ALL;
     for (label, errors) in [
         ("every trait", all),
-        ("no noise", AoaErrors { noise: false, ..all }),
+        (
+            "no noise",
+            AoaErrors {
+                noise: false,
+                ..all
+            },
+        ),
         ("no bias", AoaErrors { bias: false, ..all }),
         (
             "no compression",

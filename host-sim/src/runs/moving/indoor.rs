@@ -4,9 +4,9 @@
 //! real arrays:
 //!
 //! - noise: each anchor its own sd, 10, 12, 14 and 16 degrees (told to the trackers, as a
-//!   calibration would);
+//!   calibration would, widened by [`REPORT_SD_FACTOR`]);
 //! - bias: each anchor's offset drawn per run uniformly in -5..+7.5 degrees (the trackers'
-//!   prior: that interval's mean and sd);
+//!   prior: that interval's mean, and its sd widened by [`OFFSET_SD_FACTOR`]);
 //! - compression: beyond a knee drawn per run and anchor in 40..60 degrees off boresight, the
 //!   reported angle is pulled toward boresight, the pull growing over 20 degrees to 19 degrees
 //!   (not modelled by any tracker);
@@ -33,6 +33,24 @@ pub const NOISE_DEG: [f32; 4] = [10.0, 12.0, 14.0, 16.0];
 pub const BIAS_DEG: [f32; 2] = [-5.0, 7.5];
 /// The interval each anchor's compression knee is drawn from, degrees off boresight.
 pub const KNEE_DEG: [f32; 2] = [40.0, 60.0];
+/// How many times its noise sd the trackers give each report. The compression is an error
+/// that stays while the walker stays near one place, so reports 27 ms apart are not
+/// independent; trusting each as if it were gave ellipses that held the walker 68 % of the
+/// time (docs/src/tracking.md). Chosen on this scenario with [`OFFSET_SD_FACTOR`] and
+/// [`MEMORY_S`].
+pub const REPORT_SD_FACTOR: f32 = 2.0;
+/// How many times the bias interval's sd the trackers' offset prior is: the offsets also
+/// take up the compression, which depends on where the walker is.
+pub const OFFSET_SD_FACTOR: f32 = 2.0;
+/// Seconds in which the trackers' offsets forget (the outdoor 120 s would hold on to a
+/// compression the walker has since left: ~12 m of walking).
+pub const MEMORY_S: f32 = 10.0;
+
+/// The sd the trackers give a report of anchor `a`, radians.
+pub fn tracked_sd(a: usize) -> f32 {
+    REPORT_SD_FACTOR * NOISE_DEG[a] * DEG
+}
+
 /// The compression's full pull toward boresight, degrees.
 pub const PULL_DEG: f32 = 19.0;
 /// Degrees off the knee over which the pull grows to its full size.
@@ -71,10 +89,14 @@ impl AoaErrors {
     };
 }
 
-/// The tracker's prior of each anchor's bias: the mean and sd of the uniform it is drawn from.
+/// The trackers' prior of each anchor's offset: the mean of the uniform the bias is drawn
+/// from, and [`OFFSET_SD_FACTOR`] times its sd.
 pub fn bias_prior() -> (f32, f32) {
     let [lo, hi] = BIAS_DEG;
-    ((lo + hi) / 2.0 * DEG, (hi - lo) / 12f32.sqrt() * DEG)
+    (
+        (lo + hi) / 2.0 * DEG,
+        OFFSET_SD_FACTOR * (hi - lo) / 12f32.sqrt() * DEG,
+    )
 }
 
 /// One run's draws of an anchor: its bias and its compression knee, radians.
@@ -160,5 +182,4 @@ mod tests {
         let r = report(&mut rng, 1, FRAC_PI_2 + 10.3 * DEG, &d, &errors);
         assert!((r - (FRAC_PI_2 + 14.0 * DEG)).abs() < 1e-4, "{}", r / DEG);
     }
-
 }

@@ -227,7 +227,8 @@ impl Route {
 pub struct Station {
     /// Where it is.
     pub route: Route,
-    /// Its bearing noise, radians.
+    /// Its bearing noise, radians (indoors: the sd the trackers give it,
+    /// [`indoor::tracked_sd`], the noise itself drawn by [`indoor::report`]).
     pub sigma: f32,
 }
 
@@ -345,10 +346,10 @@ impl MovingScenario {
             "move-indoor-aoa" => {
                 let anchors = indoor::ANCHORS
                     .iter()
-                    .zip(indoor::NOISE_DEG)
-                    .map(|((at, _), sd)| Station {
+                    .enumerate()
+                    .map(|(a, (at, _))| Station {
                         route: Route::Fixed(*at),
-                        sigma: sd * DEG,
+                        sigma: indoor::tracked_sd(a),
                     })
                     .collect();
                 let (mean, sd) = indoor::bias_prior();
@@ -400,6 +401,9 @@ impl MovingScenario {
             };
             self.stations.len()
         ];
+        if self.aoa.is_some() {
+            s.memory_s = indoor::MEMORY_S;
+        }
         s.power_sd = if self.rssi { self.power_sd } else { 0.0 };
         s.exponent_sd = if self.rssi { self.exponent_sd } else { 0.0 };
         // Without bearings the first cloud is the city (or the room, which holds the walker).
@@ -534,7 +538,10 @@ mod tests {
         let mut stopped = 0;
         for k in 1..=(10.0 * total) as usize {
             let (p, v, moving) = Path::Walk.at(k as f32 / 10.0);
-            assert!(p[0] > 1.0 && p[0] < w - 1.0 && p[1] > 1.0 && p[1] < d - 1.0, "{k}: {p:?}");
+            assert!(
+                p[0] > 1.0 && p[0] < w - 1.0 && p[1] > 1.0 && p[1] < d - 1.0,
+                "{k}: {p:?}"
+            );
             assert!((p[0] - last[0]).hypot(p[1] - last[1]) <= 0.121);
             assert!(v[0].hypot(v[1]) <= indoor::WALK_SPEED + 1e-3);
             stopped += usize::from(!moving);

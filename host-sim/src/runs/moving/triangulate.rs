@@ -28,9 +28,8 @@ pub fn triangulate(run: &MovingRun, warmup: f32) -> (RunFigures, usize) {
         };
         let p = fix.position;
         f.errors.push((p[0] - x[0]).hypot(p[1] - x[1]));
-        f.covered.push(
-            Ellipse::from_covariance(&fix.covariance, 0.95).is_ok_and(|e| e.contains(&p, x)),
-        );
+        f.covered
+            .push(Ellipse::from_covariance(&fix.covariance, 0.95).is_ok_and(|e| e.contains(&p, x)));
         f.evaluations += u64::from(fix.iterations);
     }
     f.seconds = t0.elapsed().as_secs_f64();
