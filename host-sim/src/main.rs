@@ -52,10 +52,16 @@ enum Command {
     /// model, each DF unit's offset learned): per update, position, velocity, 95 % ellipse and
     /// P(moving). RSSI comes from a ZigBee coordinator's AF_INCOMING_MSG frames and needs the
     /// anchors file (TOML: each anchor's short address and position, the room, path loss and
-    /// noise). Prints CSV (or --json); --geojson, --csv and --svg write files.
+    /// noise). Prints CSV (or --json); --geojson, --csv and --svg write files. Live (-,
+    /// --baud, --kraken, --mqtt): one line per update as the bearings arrive (a JSON object
+    /// with --json). Exit status: 0 with a track, 1 when there is none (the message says
+    /// why), 2 on a usage error.
     ///
     /// Examples:
     ///   foxhunt track drone.nmea --json
+    ///   foxhunt track drone.xml --stations drone.stations.toml
+    ///   cat /dev/ttyUSB0 | foxhunt track - --json
+    ///   foxhunt track --mqtt mqtt://127.0.0.1:1883/foxhunt --quiet-exit 30
     ///   foxhunt track serial-bridge/captures/rssi-sim.znp --anchors serial-bridge/captures/rssi-sim.anchors.toml
     ///   foxhunt track node.cap --anchors lab.toml --json --svg track.svg
     #[command(verbatim_doc_comment, allow_negative_numbers = true)]

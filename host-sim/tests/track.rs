@@ -1,8 +1,12 @@
 //! `foxhunt track` through the binary: bearings of a recorded drive, MT-frame RSSI with an
-//! anchors file, the JSON schema, CSV and GeoJSON, and one-line refusals.
+//! anchors file, the JSON schema, CSV and GeoJSON, a live line, and one-line refusals.
 
+use std::io::Write;
 use std::path::PathBuf;
-use std::process::{Command, Output};
+use std::process::{Command, Output, Stdio};
+use std::time::Duration;
+
+mod common;
 
 fn capture(name: &str) -> String {
     format!(
@@ -244,7 +248,8 @@ fn bad_options_are_one_line_refusals() {
             .collect();
         let out = foxhunt(&all);
         let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(1), "{all:?}: {err}");
+        // A value the program refuses is a usage error, as --help says.
+        assert_eq!(out.status.code(), Some(2), "{all:?}: {err}");
         assert!(
             err.contains(words) && err.trim().lines().count() == 1,
             "{err}"
@@ -258,4 +263,140 @@ fn bad_options_are_one_line_refusals() {
     let out = foxhunt(&["track", f.to_str().expect("path")]);
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("nothing to track"));
+}
+
+/// A drone seen by four masts (`move-fixed-turning`, run 1) as its stations log it, and the
+/// stations file: (capture, stations file).
+fn drone(dir: &std::path::Path) -> (PathBuf, PathBuf) {
+    let xml = dir.join("drone.xml");
+    let out = foxhunt(&[
+        "simulate",
+        "--condition",
+        "move-fixed-turning",
+        "--run",
+        "1",
+        "--out",
+        xml.to_str().expect("path"),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    (xml, dir.join("drone.stations.toml"))
+}
+
+#[test]
+fn a_live_line_is_tracked_as_it_arrives_and_ends_where_the_recording_does() {
+    let dir = scratch("live");
+    let (xml, stations) = drone(&dir);
+    let (xml, stations) = (
+        xml.to_str().expect("path"),
+        stations.to_str().expect("path"),
+    );
+    let recorded = json(&foxhunt(&["track", xml, "--stations", stations, "--json"]));
+    let points = recorded["tracks"][0]["points"].as_array().expect("points");
+    let bytes = std::fs::read(xml).expect("capture");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .args(["track", "-", "--stations", stations, "--json"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run foxhunt");
+    let rx = common::line_reader(&mut child);
+    let mut stdin = child.stdin.take().expect("stdin");
+    let half = bytes.len() / 2;
+    stdin.write_all(&bytes[..half]).expect("first half");
+    stdin.flush().expect("flush");
+    // Updates come while the line is still open: the first half's are printed before the
+    // second half is written.
+    let first = rx
+        .recv_timeout(Duration::from_secs(60))
+        .expect("an update before the line closed");
+    let mut lines = vec![first];
+    stdin.write_all(&bytes[half..]).expect("second half");
+    drop(stdin);
+    lines.extend(rx.iter());
+    let status = child.wait().expect("wait");
+    assert!(status.success());
+    let live: Vec<serde_json::Value> = lines
+        .iter()
+        .map(|l| serde_json::from_str(l).expect("one JSON object per line"))
+        .collect();
+    println!(
+        "live {} updates, recorded {}; last live {}, last recorded {}",
+        live.len(),
+        points.len(),
+        live.last().expect("a point"),
+        points.last().expect("a point")
+    );
+    // The same bearings in the same windows, except that the pause between the halves may
+    // close one update early (the line went quiet): at most one update more.
+    assert!(
+        (points.len()..=points.len() + 1).contains(&live.len()),
+        "{} live updates against {} recorded",
+        live.len(),
+        points.len()
+    );
+    for p in &live {
+        for key in POINT_KEYS.iter().chain(&["lat", "lon", "freq_mhz"]) {
+            assert!(p.get(*key).is_some(), "{key} missing from {p}");
+        }
+    }
+    // Where the track ends: the live tracker saw the same bearings, so it ends within the
+    // recorded track's last 95 % semi-major axis of the recorded end (one split update moves
+    // a particle filter's draws, not what the bearings say).
+    let (a, b) = (
+        live.last().expect("a point"),
+        points.last().expect("a point"),
+    );
+    let d = (a["east_m"].as_f64().expect("east") - b["east_m"].as_f64().expect("east"))
+        .hypot(a["north_m"].as_f64().expect("north") - b["north_m"].as_f64().expect("north"));
+    let major = b["ellipse"]["major_m"].as_f64().expect("major");
+    assert!(
+        d < major,
+        "live end {d:.0} m from the recorded end (major {major:.0} m)"
+    );
+}
+
+#[test]
+fn a_live_line_without_bearings_and_live_files_are_refused() {
+    let run = |args: &[&str], input: &[u8]| {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+            .args(args)
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("run foxhunt");
+        child
+            .stdin
+            .take()
+            .expect("stdin")
+            .write_all(input)
+            .expect("write");
+        child.wait_with_output().expect("wait")
+    };
+    // Nothing on the line: no track, exit status 1, one line saying why.
+    let out = run(&["track", "-"], b"$GPGGA,garbage\r\n");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("nothing to track") && err.trim().lines().count() == 1,
+        "{err}"
+    );
+    assert!(out.stdout.is_empty());
+    // Files are written from recordings; no CAPTURE at all is a usage error.
+    for args in [
+        vec!["track", "-", "--geojson", "x.geojson"],
+        vec!["track", "-", "--anchors", "a.toml"],
+        vec!["track"],
+        vec!["track", "-", "--kraken", "http://127.0.0.1:9"],
+    ] {
+        let out = run(&args, b"");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.trim().lines().count() == 1, "{err}");
+    }
 }

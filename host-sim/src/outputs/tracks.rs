@@ -52,6 +52,16 @@ pub fn point(t: &Tracks, p: &TrackPoint) -> Value {
     Value::Object(o)
 }
 
+/// One point of a live track, a line of its own: the point's fields and its channel's
+/// `freq_mhz`.
+pub fn live_point(t: &Tracks, freq_mhz: Option<f32>, p: &TrackPoint) -> Value {
+    let mut v = point(t, p);
+    if let Some(m) = v.as_object_mut() {
+        m.insert("freq_mhz".into(), freq_mhz.short());
+    }
+    v
+}
+
 /// `{"tracks": [{"freq_mhz", "points": [...]}]}`.
 pub fn json(t: &Tracks) -> Value {
     let tracks: Vec<Value> = t

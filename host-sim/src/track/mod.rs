@@ -4,6 +4,7 @@
 
 pub mod capture;
 pub mod indoor;
+pub mod live;
 pub mod moving;
 pub mod tracks;
 pub mod updates;

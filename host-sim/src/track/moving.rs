@@ -252,43 +252,59 @@ macro_rules! with_state_size {
 /// Track through `updates` as `s` says: the first cloud from the first update's bearings
 /// (their crossings, or along them), else from `s.region`; every later update stepped.
 pub fn track(updates: &[Update], s: &Settings) -> Result<TrackRun, Error> {
-    if updates.is_empty() {
-        return Err(Error::TooFewMeasurements);
-    }
+    let mut points = Vec::with_capacity(updates.len());
+    let mut run = crate::estimate::pool()
+        .install(|| track_each(&mut updates.iter().copied(), s, &mut |p| points.push(p)))?;
+    run.points = points;
+    Ok(run)
+}
+
+/// Track through the updates `next` yields as they come (a live line's: it may block), handing
+/// each update's point to `sink` as soon as it is made; the run's `points` stay empty, so a
+/// line that never ends keeps nothing but the filter. The filters are built on the stack:
+/// call it on a thread with a large stack ([`crate::estimate::pool`]'s, or one of its own).
+pub fn track_each(
+    next: &mut dyn Iterator<Item = Update>,
+    s: &Settings,
+    sink: &mut dyn FnMut(TrackPoint),
+) -> Result<TrackRun, Error> {
     if !TRACK_METHODS.contains(&s.method) {
         return Err(Error::Unsupported);
     }
+    let first = next.next().ok_or(Error::TooFewMeasurements)?;
     let particles = if s.method.uses_particles() {
         s.particles
     } else {
         // The EKF starts from the moments of a cloud: any compiled count makes it.
         PARTICLES
     };
-    crate::estimate::pool().install(|| {
-        with_track_particles!(particles, N => {
-            with_state_size!(s.layout.dims(), D => run::<N, D>(updates, s))
-        })
+    with_track_particles!(particles, N => {
+        with_state_size!(s.layout.dims(), D => run::<N, D>(first, next, s, sink))
     })
 }
 
 fn run<const N: usize, const D: usize>(
-    updates: &[Update],
+    first: Update,
+    rest: &mut dyn Iterator<Item = Update>,
     s: &Settings,
+    sink: &mut dyn FnMut(TrackPoint),
 ) -> Result<TrackRun, Error> {
     let mut rng = XorShiftRng::seed_from_u64(s.seed);
     let mut cloud = Box::new(ParticleSet::<N, D>::new());
-    let first = updates[0].epoch.bearings();
-    let (start, from) = if first.is_empty() {
+    let bearings = first.epoch.bearings();
+    let (start, stepped) = if bearings.is_empty() {
         let (centre, sd) = s.region.ok_or(Error::TooFewMeasurements)?;
-        (Start::Region(centre, sd), 0)
+        (Start::Region(centre, sd), true)
     } else {
-        (Start::Bearings(first), 1)
+        (Start::Bearings(bearings), false)
     };
     let how = initial_cloud(start, &s.layout, &s.prior(), &mut cloud, &mut rng)?;
     let drive = Drive {
         cloud: &cloud.states,
-        updates,
-        from,
+        first,
+        stepped,
+        rest,
+        sink,
         rng: &mut rng,
         smoother: s.smooth.then(|| FixedLag::<D, LAG>::new(s.motion)),
         layout: s.layout,
@@ -301,9 +317,11 @@ fn run<const N: usize, const D: usize>(
 /// The visitor that steps a filter through the updates.
 struct Drive<'a, const D: usize> {
     cloud: &'a [[f32; D]],
-    updates: &'a [Update],
-    /// The first update stepped (the one before made the cloud).
-    from: usize,
+    first: Update,
+    /// Whether the first update is stepped (it did not make the cloud).
+    stepped: bool,
+    rest: &'a mut dyn Iterator<Item = Update>,
+    sink: &'a mut dyn FnMut(TrackPoint),
     rng: &'a mut XorShiftRng,
     smoother: Option<FixedLag<D, LAG>>,
     layout: Layout,
@@ -314,22 +332,21 @@ impl<const D: usize> WithFilter<D, Epoch<K>> for Drive<'_, D> {
 
     fn visit<F: Filter<D, Measurement = Epoch<K>>>(mut self, f: &mut F) -> Self::Output {
         f.initialise(self.cloud, self.rng)?;
-        let mut run = TrackRun {
-            points: Vec::with_capacity(self.updates.len()),
-            ..TrackRun::default()
-        };
+        let mut run = TrackRun::default();
         let mut held_times = std::collections::VecDeque::new();
-        let mut previous = self.updates[0].t_s;
-        for (k, u) in self.updates.iter().enumerate() {
-            let e = if k < self.from {
-                f.estimate()?
-            } else {
+        let mut previous = self.first.t_s;
+        let mut step = self.stepped;
+        for u in core::iter::once(self.first).chain(&mut *self.rest) {
+            let e = if step {
                 match f.step(&u.epoch, self.rng) {
                     Ok(e) => e,
                     Err(_) => f.estimate()?,
                 }
+            } else {
+                f.estimate()?
             };
-            run.points.push(TrackPoint::of(u.t_s, &e));
+            step = true;
+            (self.sink)(TrackPoint::of(u.t_s, &e));
             if let Some(s) = self.smoother.as_mut() {
                 held_times.push_back(u.t_s);
                 if let Some(sm) = s.push(e, u.t_s - previous) {

@@ -170,27 +170,49 @@ pub fn channels(
 /// Bearings (in time order) as updates: each update the bearings within [`WINDOW_S`] of its
 /// first, at most [`K`].
 pub fn bearing_updates(obs: &[Observation]) -> Vec<Update> {
-    let mut out: Vec<Update> = Vec::new();
-    let mut start = f32::NEG_INFINITY;
-    let mut previous = None;
-    for o in obs {
-        let open = out
-            .last()
-            .is_some_and(|u| o.time_s - start <= WINDOW_S && !u.epoch.is_full());
-        if !open {
-            let dt = previous.map_or(0.0, |p: f32| (o.time_s - p).max(0.0));
-            out.push(Update {
+    let mut window = Window::default();
+    let mut out: Vec<Update> = obs.iter().filter_map(|o| window.push(*o)).collect();
+    out.extend(window.close());
+    out
+}
+
+/// Bearings grouped into updates as they arrive: a bearing joins the open update when it
+/// comes within [`WINDOW_S`] of the update's first and the update has room, else it closes
+/// that update and opens the next.
+#[derive(Debug, Clone, Default)]
+pub struct Window {
+    open: Option<Update>,
+    /// Time of the last update opened, seconds.
+    previous: Option<f32>,
+}
+
+impl Window {
+    /// Add bearing `o`; the update it closed, if any.
+    pub fn push(&mut self, o: Observation) -> Option<Update> {
+        let joins = self
+            .open
+            .as_ref()
+            .is_some_and(|u| o.time_s - u.t_s <= WINDOW_S && !u.epoch.is_full());
+        let mut closed = None;
+        if !joins {
+            closed = self.open.take();
+            let dt = self.previous.map_or(0.0, |p| (o.time_s - p).max(0.0));
+            self.open = Some(Update {
                 t_s: o.time_s,
                 epoch: Epoch::new(dt),
             });
-            start = o.time_s;
-            previous = Some(o.time_s);
+            self.previous = Some(o.time_s);
         }
-        if let Some(u) = out.last_mut() {
-            let _ = u.epoch.push_bearing(*o);
+        if let Some(u) = self.open.as_mut() {
+            let _ = u.epoch.push_bearing(o);
         }
+        closed
     }
-    out
+
+    /// Close the open update (the line went quiet, or ended).
+    pub fn close(&mut self) -> Option<Update> {
+        self.open.take()
+    }
 }
 
 /// Bearing updates and timed RSSI readings in one time order: a reading within [`WINDOW_S`]

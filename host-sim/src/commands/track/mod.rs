@@ -1,10 +1,17 @@
-//! `foxhunt track`: an emitter that moves, tracked from recorded captures: bearings of any
-//! station and format, the RSSI an anchors file's anchors report in MT frames, or both.
+//! `foxhunt track`: an emitter that moves, tracked from recorded captures (bearings of any
+//! station and format, the RSSI an anchors file's anchors report in MT frames, or both) or
+//! live from a line ([`live`]).
 
+mod live;
+
+use crate::commands::locate::live::LiveSource;
+use crate::commands::locate::{Given, given, kraken_urls};
+use crate::commands::values;
 use crate::inputs::files::{Source, stream};
+use crate::inputs::mqtt::MqttUrl;
 use crate::inputs::stations::Network;
 use crate::outputs::files::Outputs;
-use crate::outputs::terminal::{Out, Outcome, note};
+use crate::outputs::terminal::{Out, Outcome, Stop, note};
 use crate::outputs::tracks;
 use crate::track::capture::{Measured, TrackDecoder};
 use crate::track::indoor::AnchorsFile;
@@ -16,9 +23,33 @@ use std::path::PathBuf;
 /// Options of `foxhunt track`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Capture files (read in order as one stream), or `-` for standard input.
-    #[arg(required = true)]
+    /// Capture files (read in order as one stream); `-` alone tracks standard input live, a
+    /// serial device with --baud too: one line (a JSON object with --json) per update.
     pub captures: Vec<PathBuf>,
+    /// Read the one CAPTURE as a serial device at this baud rate, live.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub baud: Option<u32>,
+    /// Live: poll a KrakenSDR's web page, `http://HOST:8081` (repeatable: every unit polled at
+    /// once, each a station of its own); no CAPTURE.
+    #[arg(long, value_name = "URL")]
+    pub kraken: Vec<String>,
+    /// Live: every station's bearings from an MQTT broker, `mqtt://HOST[:PORT]/PREFIX` (as
+    /// `locate --mqtt` reads them); no CAPTURE.
+    #[arg(long, value_name = "URL")]
+    pub mqtt: Option<String>,
+    /// With --mqtt: the client id of the broker session (one per tracker).
+    #[arg(
+        long,
+        value_name = "ID",
+        default_value = "foxhunt-track",
+        requires = "mqtt"
+    )]
+    pub mqtt_client_id: String,
+    /// Live: stop after this many seconds without a byte (`inf`: until the line closes, the
+    /// default).
+    #[arg(long, allow_hyphen_values = true,
+          value_parser = values::f64_where(|s| s >= 0.0, "a number of seconds >= 0, or inf"))]
+    pub quiet_exit: Option<f64>,
     /// The anchors file: where the anchors whose RSSI the captures hold stand.
     #[arg(long)]
     pub anchors: Option<PathBuf>,
@@ -68,7 +99,13 @@ pub struct Args {
 }
 
 impl Args {
-    fn options(&self) -> Result<Options, String> {
+    fn options(&self) -> Result<Options, Stop> {
+        let network = self.stations.as_deref().map(Network::load).transpose()?;
+        self.values(network).map_err(Stop::Usage)
+    }
+
+    /// The options the flags' values give (a value out of range: why).
+    fn values(&self, network: Option<Network>) -> Result<Options, String> {
         let method = Method::from_name(&self.method)
             .filter(|m| TRACK_METHODS.contains(m))
             .ok_or_else(|| {
@@ -109,7 +146,7 @@ impl Args {
                 .transpose()?,
             width_mhz: positive("channel-width", self.channel_width)?,
             seed: self.seed,
-            network: self.stations.as_deref().map(Network::load).transpose()?,
+            network,
         })
     }
 }
@@ -136,9 +173,55 @@ fn no_anchor(m: &Measured, file: &AnchorsFile) -> Option<String> {
     })
 }
 
+/// The live line the arguments ask for, if any.
+fn live_source(a: &Args) -> Result<Option<LiveSource>, Stop> {
+    if let Some(url) = &a.mqtt {
+        if !a.captures.is_empty() || a.baud.is_some() || !a.kraken.is_empty() {
+            return Err(Stop::usage(
+                "--mqtt reads the broker: give no CAPTURE, --baud or --kraken",
+            ));
+        }
+        return Ok(Some(LiveSource::Mqtt {
+            url: MqttUrl::parse(url).map_err(Stop::Usage)?,
+            client_id: a.mqtt_client_id.clone(),
+        }));
+    }
+    if !a.kraken.is_empty() {
+        let other = !a.captures.is_empty() || a.baud.is_some();
+        let urls = kraken_urls(&a.kraken, other, "CAPTURE")?;
+        return Ok(Some(LiveSource::Kraken(urls)));
+    }
+    match given(a.baud, &a.captures)? {
+        Given::Nothing => Err(Stop::usage(
+            "give a CAPTURE, - for standard input, --kraken or --mqtt",
+        )),
+        Given::Files(_) => Ok(None),
+        Given::Live(source) => Ok(Some(source)),
+    }
+}
+
 /// Run `foxhunt track`.
 pub fn run(a: &Args, out: &mut Out) -> Outcome {
     let options = a.options()?;
+    if let Some(source) = live_source(a)? {
+        if a.anchors.is_some() || a.svg.is_some() {
+            return Err(Stop::usage(
+                "a live track takes bearings: track RSSI from an anchors file in a recorded \
+                 capture",
+            ));
+        }
+        if a.geojson.is_some() || a.kml.is_some() || a.csv.is_some() {
+            return Err(Stop::usage(
+                "a live track prints each update: write --geojson, --kml and --csv from the \
+                 recorded capture",
+            ));
+        }
+        let quiet = a
+            .quiet_exit
+            .filter(|s| s.is_finite())
+            .map(std::time::Duration::from_secs_f64);
+        return live::run(source, quiet, &options, a.json, out);
+    }
     let mut inputs: Vec<&std::path::Path> = a.captures.iter().map(PathBuf::as_path).collect();
     inputs.extend(a.anchors.as_deref());
     inputs.extend(a.stations.as_deref());
@@ -148,7 +231,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
     }
     let file = a.anchors.as_deref().map(AnchorsFile::load).transpose()?;
     if a.svg.is_some() && file.is_none() {
-        return Err("--svg draws the anchors' room: give --anchors".into());
+        return Err(Stop::usage("--svg draws the anchors' room: give --anchors"));
     }
     let mut dec = TrackDecoder::new(file.as_ref());
     let sources: Vec<Source> = a.captures.iter().map(|p| Source::from_path(p)).collect();

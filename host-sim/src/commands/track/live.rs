@@ -1,0 +1,167 @@
+//! `foxhunt track` on a live line (standard input, a serial device, KrakenSDRs' web pages or
+//! an MQTT broker): one line per update as the bearings arrive, the CSV's row or, with
+//! `--json`, one object per line. The line is read as `locate` reads it
+//! ([`crate::commands::locate::live`]); each channel's updates are stepped by its own
+//! tracker ([`crate::track::live`]). An update closes when a bearing comes after its window,
+//! or when the line brings nothing new for a moment (so a quiet line's last bearings are
+//! tracked at once, not when the next arrive). Memory stays bounded: each bearing leaves the
+//! decoder once its channel has it, and the points are printed, not kept.
+
+use crate::commands::locate::live::{LiveSource, reader};
+use crate::estimate::stations::station_setup;
+use crate::inputs::capture::Decoder;
+use crate::outputs::terminal::{Out, Outcome, Stop, note};
+use crate::outputs::tracks;
+use crate::track::live::{Dropped, LIVE_CHANNELS, LIVE_SOURCES, LiveChannels, Ready};
+use crate::track::moving::Settings;
+use crate::track::tracks::{Options, Tracks};
+use foxhunt_bridge::BridgeConfig;
+use foxhunt_core::fix::bias::BiasPrior;
+use foxhunt_core::track::{Layout, Motion};
+use std::time::Duration;
+
+/// Track what `source` delivers until it closes (or stays quiet for `quiet_exit`), printing a
+/// line per update to `out`.
+pub fn run(
+    source: LiveSource,
+    quiet_exit: Option<Duration>,
+    o: &Options,
+    json: bool,
+    out: &mut Out,
+) -> Outcome {
+    let mut dec = Decoder::new(BridgeConfig::default(), false);
+    if let LiveSource::Kraken(urls) = &source
+        && urls.len() > 1
+    {
+        // Each unit an input, so one without a STATION_ID is a station of its own.
+        for u in urls {
+            dec.begin_input(u.base.trim_start_matches("http://"))?;
+        }
+    }
+    let fallback = BiasPrior {
+        mean: 0.0,
+        sd: o.offset_sd,
+    };
+    let mut settings = Settings::new(Layout::default(), Motion::OUTDOOR);
+    settings.method = o.method;
+    settings.particles = o.particles;
+    settings.seed = o.seed;
+    if let Some(a) = o.accel_sd {
+        settings.motion.accel_sd = a;
+    }
+    let mut live = LiveChannels::new(o.width_mhz, settings, unheard(o, fallback));
+    let mut line = reader(&source, None, None)?;
+    let mut heard = 0usize;
+    let mut printed = 0usize;
+    let mut dropped = [false; 2];
+    let mut failed: Option<String> = None;
+    let mut ended = false;
+    while !ended {
+        ended = line.take(&mut dec, quiet_exit)?;
+        if ended {
+            dec.end();
+        }
+        // The frame and the stations heard so far, for the points' places and the noise.
+        dec.snapshot();
+        // Taken out of the decoder, so a line that never ends keeps no bearing it tracked.
+        let mut new: Vec<_> = dec.decoded.observations.drain(..).collect();
+        heard += new.len();
+        new.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+        // Each station's noise and offset prior from the stations file, else `--sigma`,
+        // else the record's own.
+        let ids = dec.decoded.stations.iter().map(|s| s.id.as_str());
+        let setup = station_setup(ids, o.network.as_ref(), fallback, false);
+        let mut ready: Vec<Ready> = Vec::new();
+        for mut b in new.iter().copied() {
+            let station = usize::from(b.station);
+            if let Some(s) = o.sigma.or(setup.noise.get(station).copied().flatten()) {
+                b.bearing.sigma = s;
+            }
+            match live.push(b) {
+                Ok(r) => ready.extend(r),
+                Err(why) => {
+                    let k = why as usize;
+                    if !dropped[k] {
+                        dropped[k] = true;
+                        note(&match why {
+                            Dropped::Channels => format!(
+                                "foxhunt: more than {LIVE_CHANNELS} channels on the line: the \
+                                 bearings of later ones are left out"
+                            ),
+                            Dropped::Stations => format!(
+                                "foxhunt: more than {LIVE_SOURCES} stations on a channel: a live \
+                                 track follows the first {LIVE_SOURCES} heard, the others' \
+                                 bearings are left out"
+                            ),
+                        });
+                    }
+                }
+            }
+        }
+        if new.is_empty() || ended {
+            ready.extend(live.close());
+        }
+        let shell = Tracks {
+            tracks: Vec::new(),
+            frame: dec.decoded.frame,
+            first_ms: dec.decoded.first_ms,
+        };
+        let prior_of = |s: u16| setup.priors.of(usize::from(s));
+        for r in ready {
+            match live.step(r, &prior_of) {
+                Ok(p) => {
+                    if printed == 0 && !json {
+                        out.line(tracks::CSV_HEADER)?;
+                    }
+                    printed += 1;
+                    let text = if json {
+                        tracks::live_point(&shell, r.freq_mhz, &p).to_string()
+                    } else {
+                        tracks::csv_line(&shell, r.freq_mhz, &p)
+                            .trim_end()
+                            .to_string()
+                    };
+                    out.line(&text)?;
+                    out.flush()?;
+                }
+                Err(e) => {
+                    let what = r
+                        .freq_mhz
+                        .map_or(String::new(), |f| format!(" on {f:.3} MHz"));
+                    let e = format!("cannot track{what}: {e}");
+                    note(&format!("foxhunt: {e}"));
+                    failed = Some(e);
+                }
+            }
+        }
+    }
+    if printed > 0 {
+        return Ok(());
+    }
+    Err(Stop::Error(failed.unwrap_or_else(|| {
+        if heard == 0 {
+            "no bearing on the line: nothing to track".into()
+        } else {
+            "no update could be tracked".into()
+        }
+    })))
+}
+
+/// The offset prior of a station not yet heard when its channel's tracker starts: the widest
+/// of the stations file's and `--offset-sd`'s, centred on zero.
+fn unheard(o: &Options, fallback: BiasPrior) -> BiasPrior {
+    let widest = o
+        .network
+        .iter()
+        .flat_map(|n| {
+            n.stations
+                .iter()
+                .map(|s| s.prior.sd)
+                .chain(n.default_prior.map(|p| p.sd))
+        })
+        .fold(fallback.sd, f32::max);
+    BiasPrior {
+        mean: 0.0,
+        sd: widest,
+    }
+}

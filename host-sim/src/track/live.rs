@@ -1,0 +1,313 @@
+//! Tracking on a live line: bearings arrive one by one, each channel's are grouped into
+//! updates as they come ([`Window`]) and each update is stepped at once by that channel's
+//! tracker, which lives on a thread of its own between updates (the core's filters are sized
+//! at compile time and dispatched inside a call, [`track_each`], so the thread is what keeps
+//! one across updates). Memory stays bounded: a channel keeps its filter and its open update,
+//! never the points already handed out.
+//!
+//! Stations join a channel as they are heard, so the state is sized for [`LIVE_SOURCES`]
+//! from the start (a recorded capture's is sized for the stations it holds): a later station
+//! takes the next free offset, whose prior is the widest any station may have (its own is not
+//! known when the tracker starts), and bearings of stations beyond it are dropped.
+
+use crate::track::moving::{Settings, TrackPoint, Update, track_each};
+use crate::track::updates::Window;
+use foxhunt_core::fix::bias::BiasPrior;
+use foxhunt_core::fix::channel::belongs;
+use foxhunt_core::fix::observation::Observation;
+use foxhunt_core::track::Layout;
+use std::sync::mpsc;
+use std::thread::JoinHandle;
+
+/// DF stations a live channel tracks: the most a compiled state of bearings alone holds.
+pub const LIVE_SOURCES: u8 = 4;
+/// Channels a live line may hold, as a capture may.
+pub const LIVE_CHANNELS: usize = 16;
+
+/// A channel's tracker on its own thread: an update in, its point out.
+pub struct LiveTracker {
+    updates: Option<mpsc::SyncSender<Update>>,
+    points: mpsc::Receiver<TrackPoint>,
+    thread: Option<JoinHandle<Result<(), String>>>,
+}
+
+impl LiveTracker {
+    /// Start a tracker of `settings`; it makes its cloud from the first update it is given.
+    pub fn start(settings: Settings) -> Result<Self, String> {
+        let (updates, rx) = mpsc::sync_channel::<Update>(1);
+        let (tx, points) = mpsc::sync_channel::<TrackPoint>(1);
+        let thread = std::thread::Builder::new()
+            .name("foxhunt-track".into())
+            // The filters are built on the stack, as on the estimation pool's workers.
+            .stack_size(64 << 20)
+            .spawn(move || {
+                track_each(&mut rx.into_iter(), &settings, &mut |p| {
+                    let _ = tx.send(p);
+                })
+                .map(|_| ())
+                .map_err(|e| e.to_string())
+            })
+            .map_err(|e| format!("cannot start a tracker: {e}"))?;
+        Ok(Self {
+            updates: Some(updates),
+            points,
+            thread: Some(thread),
+        })
+    }
+
+    /// Step update `u`: its point, or why the tracker stopped (it is then spent).
+    pub fn step(&mut self, u: Update) -> Result<TrackPoint, String> {
+        let sent = self.updates.as_ref().is_some_and(|tx| tx.send(u).is_ok());
+        if sent && let Ok(p) = self.points.recv() {
+            return Ok(p);
+        }
+        self.updates = None;
+        Err(match self.thread.take().map(JoinHandle::join) {
+            Some(Ok(Err(e))) => e,
+            Some(Err(_)) => "the tracker failed".into(),
+            _ => "the tracker has stopped".into(),
+        })
+    }
+}
+
+impl Drop for LiveTracker {
+    fn drop(&mut self) {
+        // Closing the updates ends the thread's loop.
+        self.updates = None;
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// One channel of a live line.
+struct LiveChannel {
+    /// Where its band starts, MHz (none: the bearings without a frequency).
+    lowest: Option<f32>,
+    /// The frequency its first bearing gave, MHz.
+    freq_mhz: Option<f32>,
+    /// The line's station index of each source, by source number.
+    sources: Vec<u16>,
+    window: Window,
+    tracker: Option<LiveTracker>,
+}
+
+/// Why a bearing was left out.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Dropped {
+    /// The line already has [`LIVE_CHANNELS`] channels.
+    Channels,
+    /// Its channel already tracks [`LIVE_SOURCES`] stations.
+    Stations,
+}
+
+/// An update of a channel, ready to step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ready {
+    /// The channel's index on the line.
+    pub channel: usize,
+    /// Its frequency, MHz.
+    pub freq_mhz: Option<f32>,
+    /// The update.
+    pub update: Update,
+}
+
+/// Every channel of a live line.
+pub struct LiveChannels {
+    channels: Vec<LiveChannel>,
+    width_mhz: f32,
+    settings: Settings,
+    unheard: BiasPrior,
+}
+
+impl LiveChannels {
+    /// Channels `width_mhz` wide, each tracked as `settings` say (their layout is replaced by
+    /// [`LIVE_SOURCES`] stations' bearings, their offsets' priors set when a tracker starts);
+    /// `unheard`: the offset prior of a station not yet heard when its channel's tracker
+    /// started.
+    pub fn new(width_mhz: f32, mut settings: Settings, unheard: BiasPrior) -> Self {
+        settings.layout = Layout {
+            sources: LIVE_SOURCES,
+            rssi: false,
+        };
+        Self {
+            channels: Vec::new(),
+            width_mhz,
+            settings,
+            unheard,
+        }
+    }
+
+    /// Take bearing `o` (the line's station index in `o.station`): the update it closed, if
+    /// any, or why it was left out.
+    pub fn push(&mut self, mut o: Observation) -> Result<Option<Ready>, Dropped> {
+        let c = match self
+            .channels
+            .iter()
+            .position(|c| belongs(o.freq_mhz, c.lowest, self.width_mhz))
+        {
+            Some(c) => c,
+            None if self.channels.len() < LIVE_CHANNELS => {
+                // The band centred on the first bearing's frequency.
+                self.channels.push(LiveChannel {
+                    lowest: o.freq_mhz.map(|f| f - self.width_mhz / 2.0),
+                    freq_mhz: o.freq_mhz,
+                    sources: Vec::new(),
+                    window: Window::default(),
+                    tracker: None,
+                });
+                self.channels.len() - 1
+            }
+            None => return Err(Dropped::Channels),
+        };
+        let ch = &mut self.channels[c];
+        let source = match ch.sources.iter().position(|s| *s == o.station) {
+            Some(s) => s,
+            None if ch.sources.len() < usize::from(LIVE_SOURCES) => {
+                ch.sources.push(o.station);
+                ch.sources.len() - 1
+            }
+            None => return Err(Dropped::Stations),
+        };
+        o.station = source as u16;
+        Ok(ch.window.push(o).map(|update| Ready {
+            channel: c,
+            freq_mhz: ch.freq_mhz,
+            update,
+        }))
+    }
+
+    /// Close every channel's open update (the line went quiet, or ended).
+    pub fn close(&mut self) -> Vec<Ready> {
+        self.channels
+            .iter_mut()
+            .enumerate()
+            .filter_map(|(c, ch)| {
+                ch.window.close().map(|update| Ready {
+                    channel: c,
+                    freq_mhz: ch.freq_mhz,
+                    update,
+                })
+            })
+            .collect()
+    }
+
+    /// Step `r` with its channel's tracker (started on the channel's first update, and again
+    /// after one that stopped; `prior_of` gives the offset prior of a station by its index on
+    /// the line): its point, or why there is none.
+    pub fn step(
+        &mut self,
+        r: Ready,
+        prior_of: &dyn Fn(u16) -> BiasPrior,
+    ) -> Result<TrackPoint, String> {
+        let ch = self.channels.get_mut(r.channel).ok_or("no such channel")?;
+        let tracker = match ch.tracker.as_mut() {
+            Some(t) => t,
+            None => {
+                let mut settings = self.settings.clone();
+                settings.offsets = (0..usize::from(LIVE_SOURCES))
+                    .map(|k| ch.sources.get(k).map_or(self.unheard, |s| prior_of(*s)))
+                    .collect();
+                ch.tracker.insert(LiveTracker::start(settings)?)
+            }
+        };
+        let point = tracker.step(r.update);
+        if point.is_err() {
+            // The next update starts a new tracker from its bearings.
+            ch.tracker = None;
+        }
+        point
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::track::moving::track;
+    use foxhunt_core::model::bearing::Bearing;
+    use foxhunt_core::track::Motion;
+
+    /// Three stations around an emitter at (1000, 2000) m, each bearing at second `k`.
+    fn bearings(seconds: usize) -> Vec<Observation> {
+        let emitter = [1000.0f32, 2000.0];
+        let stations = [[0.0f32, 0.0], [3000.0, 500.0], [500.0, 4500.0]];
+        let mut out = Vec::new();
+        for k in 0..seconds {
+            for (i, s) in stations.iter().enumerate() {
+                let bearing = Bearing {
+                    vehicle: *s,
+                    theta: (emitter[1] - s[1]).atan2(emitter[0] - s[0]),
+                    sigma: 2f32.to_radians(),
+                };
+                let mut o = Observation::new(bearing, k as f32 + 0.01 * i as f32);
+                o.station = 7 + i as u16;
+                o.freq_mhz = Some(433.92);
+                out.push(o);
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn a_live_channel_tracks_as_the_recorded_capture_does() {
+        let obs = bearings(30);
+        let mut settings = Settings::new(
+            Layout {
+                sources: LIVE_SOURCES,
+                rssi: false,
+            },
+            Motion::OUTDOOR,
+        );
+        settings.particles = 200;
+        let prior = BiasPrior {
+            mean: 0.0,
+            sd: 2f32.to_radians(),
+        };
+        let mut live = LiveChannels::new(0.025, settings.clone(), prior);
+        let mut points = Vec::new();
+        for o in &obs {
+            if let Some(r) = live.push(*o).unwrap() {
+                points.push(live.step(r, &|_| prior).unwrap());
+            }
+        }
+        for r in live.close() {
+            points.push(live.step(r, &|_| prior).unwrap());
+        }
+        // The same bearings, numbered as the live line numbers its stations, in one call.
+        let mut numbered = obs.clone();
+        for o in numbered.iter_mut() {
+            o.station -= 7;
+        }
+        let updates = crate::track::updates::bearing_updates(&numbered);
+        settings.offsets = vec![prior; 4];
+        let batch = track(&updates, &settings).unwrap();
+        assert_eq!(points.len(), 30, "one point per second's update");
+        assert_eq!(points, batch.points, "live and recorded points differ");
+        let last = points.last().unwrap().position;
+        println!("last point {last:?}");
+        assert!((last[0] - 1000.0).hypot(last[1] - 2000.0) < 300.0);
+    }
+
+    #[test]
+    fn a_fifth_station_and_a_seventeenth_channel_are_dropped() {
+        let settings = Settings::new(Layout::default(), Motion::OUTDOOR);
+        let mut live = LiveChannels::new(0.025, settings, BiasPrior::default());
+        let mut o = bearings(1)[0];
+        for s in 0..4 {
+            o.station = s;
+            assert!(live.push(o).is_ok());
+        }
+        o.station = 4;
+        assert_eq!(live.push(o), Err(Dropped::Stations));
+        for c in 1..16 {
+            o.station = 0;
+            o.freq_mhz = Some(100.0 + c as f32);
+            assert!(live.push(o).is_ok());
+        }
+        o.freq_mhz = Some(300.0);
+        assert_eq!(live.push(o), Err(Dropped::Channels));
+        // A bearing within the band of a known channel still lands.
+        o.freq_mhz = Some(433.93);
+        assert!(live.push(o).is_ok());
+    }
+}
