@@ -295,3 +295,53 @@ fn the_live_map_draws_fixed_stations_as_squares() {
         );
     }
 }
+
+#[test]
+fn the_live_map_tracks_an_emitter_that_moves_with_its_ellipse_and_velocity() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("web-moving");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("drone.xml");
+    // A drone flying east at 12 m/s over its last minutes, seen by four masts.
+    let out = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .args([
+            "simulate",
+            "--condition",
+            "move-fixed-turning",
+            "--run",
+            "1",
+            "--force",
+            "--out",
+        ])
+        .arg(&path)
+        .output()
+        .expect("run foxhunt simulate");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let osm = dir.join("grid.osm");
+    grid_osm(&osm);
+    let dom = page_dom(&dir, &path, &osm);
+    assert!(dom.contains("data-ended=\"1\""), "{dom}");
+    // No fix for a moving emitter: its track instead, one per channel.
+    assert!(dom.contains("data-emitters=\"0\""), "{dom}");
+    assert!(dom.contains("data-tracks=\"1\""), "{dom}");
+    let speed: f64 = dom
+        .split("data-speed=\"")
+        .nth(1)
+        .and_then(|s| s.split('"').next())
+        .and_then(|s| s.parse().ok())
+        .expect("the track's speed on the page");
+    println!("speed on the map {speed} m/s (truth 12 m/s)");
+    // The tracker's velocity at the end, from 1 Hz bearings of 2 degrees at 3-6 km: within
+    // a factor of two of the truth (a still emitter would show about 0).
+    assert!((6.0..24.0).contains(&speed), "speed {speed} m/s");
+    let points: usize = dom
+        .split("data-points=\"")
+        .nth(1)
+        .and_then(|s| s.split('"').next())
+        .and_then(|s| s.parse().ok())
+        .expect("the track's points");
+    assert!(points > 100, "{points} points on the track line");
+}

@@ -135,7 +135,24 @@ function render(st) {
       + `${fmt(r.lat, 5)}, ${fmt(r.lon, 5)}, range ${fmt(r.min_range_m / 1000, 1)} km to ${to}`
       + `<br><span class="why">${r.line}</span></div>`;
   });
-  text("fix", fix || (st.fix_error || "no fix yet"), { "data-emitters": st.emitters.length });
+  // Emitters that move: the track so far, the current ellipse and where the velocity leads
+  // in a minute.
+  (st.tracks || []).forEach((t, i) => {
+    L.polyline(t.line, { color: "#e377c2", weight: 3 }).addTo(layers);
+    if (t.ellipse.length) L.polygon(t.ellipse, { color: "#e377c2", weight: 1.5, fillOpacity: 0.1 }).addTo(layers);
+    L.polyline(t.arrow, { color: "#e377c2", weight: 4, dashArray: "2 4" }).addTo(layers);
+    L.circleMarker(t.arrow[1], { radius: 3, color: "#e377c2", fillOpacity: 1 }).addTo(layers)
+      .bindTooltip("where the velocity leads in a minute");
+    L.circleMarker(t.at, { radius: 6, color: "#e377c2", fillOpacity: 1 }).addTo(layers)
+      .bindTooltip(`moving emitter ${i + 1}`);
+    bounds.extend(t.at);
+    fix += `<div class="track" data-track="${i + 1}" data-speed="${fmt(t.speed_mps, 1)}" `
+      + `data-points="${t.line.length}">Moving emitter${t.freq_mhz ? ` (${fmt(t.freq_mhz, 3)} MHz)` : ""}: `
+      + `${fmt(t.at[0], 5)}, ${fmt(t.at[1], 5)}<br><b>${fmt(t.speed_mps, 1)} m/s</b> toward `
+      + `${fmt(t.heading_deg, 0)}°, P(moving) ${fmt(t.p_moving, 2)}</div>`;
+  });
+  text("fix", fix || (st.fix_error || "no fix yet"),
+    { "data-emitters": st.emitters.length, "data-tracks": (st.tracks || []).length });
   drawUnit(st.unit, bounds);
   const a = st.advice;
   if (a) {

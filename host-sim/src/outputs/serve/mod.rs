@@ -12,6 +12,7 @@
 //! Routes: `/` the page, `/app.js`, `/leaflet/*`, `/state` (the latest state, JSON),
 //! `/events` (server-sent events `state`, and `end` once the input has ended), `/roads.geojson`, `/config.json`.
 
+pub mod moving;
 pub mod state;
 
 use crate::guidance::guide::Guide;
@@ -156,6 +157,7 @@ fn feed(
     let mut update = 0u64;
     let mut history: Vec<[f64; 2]> = Vec::new();
     let mut reported = (0usize, 0u32);
+    let mut tracker = moving::MapTracker::default();
     let mut publish = |dec: &mut Decoder, end: bool| {
         // New bearings, or a DF unit's new sentences (its user port carries no bearings).
         let n = (dec.decoded.observations.len(), dec.decoded.unit.sentences);
@@ -165,7 +167,8 @@ fn feed(
         reported = n;
         dec.snapshot();
         update += 1;
-        let st = state::build(&dec.decoded, update, &history, &mut guide, end);
+        tracker.update(&dec.decoded, end);
+        let st = state::build(&dec.decoded, update, &history, &mut guide, &tracker, end);
         history = st.history.clone();
         if let Ok(body) = serde_json::to_string(&st) {
             if let Ok(mut l) = shared.latest.write() {

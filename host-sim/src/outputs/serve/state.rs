@@ -14,6 +14,7 @@ use crate::locate::explain::open_range;
 use crate::locate::report::{RegionReport, geodetic};
 use crate::locate::stations::station_reports;
 use crate::outputs::maps::{ellipse_ring, wedge_ring};
+use crate::outputs::serve::moving::{MapTrack, MapTracker};
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;
 use foxhunt_core::fix::bias::BiasPrior;
@@ -123,6 +124,8 @@ pub struct MapState {
     pub others: Vec<MapSource>,
     /// The channels whose range is open: their lines of bearing and range intervals.
     pub regions: Vec<MapRegion>,
+    /// The channels whose emitter moves: each one's track, ellipse and velocity.
+    pub tracks: Vec<MapTrack>,
     /// Why there is no fix, when there is none.
     pub fix_error: Option<String>,
     /// The suggested move.
@@ -286,12 +289,14 @@ pub struct MapRegion {
 }
 
 /// Build the map's state after `update` updates; `history` carries the CEP50 history from
-/// the last state; `guide` advises (with roads: a road turn).
+/// the last state; `guide` advises (with roads: a road turn); `tracker` has tracked every
+/// channel (drawn where the emitter moves).
 pub fn build(
     d: &Decoded,
     update: u64,
     history: &[[f64; 2]],
     guide: &mut Guide,
+    tracker: &MapTracker,
     done: bool,
 ) -> MapState {
     let bearings: Vec<foxhunt_core::Bearing> = d.bearings().copied().collect();
@@ -363,6 +368,19 @@ pub fn build(
                     }
                 })
                 .collect();
+            // The channels the pipeline finds moving get their track instead of a fix.
+            let moving: Vec<Option<f32>> = r
+                .channels()
+                .iter()
+                .filter(|c| {
+                    matches!(
+                        c.outcome,
+                        ChannelOutcome::NoConsistentEmitter(NoEmitter::Moving(_))
+                    )
+                })
+                .map(|c| c.freq_mhz)
+                .collect();
+            st.tracks = tracker.tracks(&frame, &moving);
             if st.emitters.is_empty() {
                 st.fix_error = Some(
                     st.regions
@@ -438,7 +456,7 @@ mod tests {
         .unwrap();
         let d = crate::inputs::capture::decode(&bytes, Default::default(), false);
         let mut guide = Guide::new(None, 100.0).unwrap();
-        let st = build(&d, 1, &[], &mut guide, true);
+        let st = build(&d, 1, &[], &mut guide, &MapTracker::default(), true);
         let ids: Vec<(&str, bool)> = st
             .stations
             .iter()
@@ -468,7 +486,7 @@ mod tests {
         .unwrap();
         let d = crate::inputs::capture::decode(&bytes, Default::default(), false);
         let mut guide = Guide::new(None, 100.0).unwrap();
-        let st = build(&d, 1, &[], &mut guide, true);
+        let st = build(&d, 1, &[], &mut guide, &MapTracker::default(), true);
         assert!(st.emitters.is_empty(), "{:?}", st.emitters);
         assert_eq!(st.regions.len(), 1, "{:?}", st.fix_error);
         let r = &st.regions[0];
