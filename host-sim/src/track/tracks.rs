@@ -23,8 +23,12 @@ pub struct Options {
     pub particles: usize,
     /// Prior sd of each DF source's offset, radians.
     pub offset_sd: f32,
-    /// Acceleration sd of the moving model, m/s^2 (none: outdoors or indoors by the input).
+    /// How the emitter moves (none: outdoors, or indoors for RSSI alone from an anchors file).
+    pub motion: Option<Motion>,
+    /// Acceleration sd of the moving model, m/s^2 (none: the motion's own).
     pub accel_sd: Option<f32>,
+    /// Seconds in which the stations' offsets forget what they learned.
+    pub memory_s: f32,
     /// Every bearing's noise, radians (none: each record's own).
     pub sigma: Option<f32>,
     /// Channel width for grouping bearings by frequency, MHz.
@@ -73,12 +77,13 @@ fn settings(
     setup: &StationSetup,
 ) -> Settings {
     let indoor = anchors.filter(|_| c.sources.is_empty());
-    let mut motion = match indoor {
-        Some(f) => Motion {
+    let mut motion = match (o.motion, indoor) {
+        (Some(m), _) => m,
+        (None, Some(f)) => Motion {
             accel_sd: file_accel_sd(f),
             ..Motion::INDOOR
         },
-        None => Motion::OUTDOOR,
+        (None, None) => Motion::OUTDOOR,
     };
     if let Some(a) = o.accel_sd {
         motion.accel_sd = a;
@@ -91,6 +96,7 @@ fn settings(
     s.method = o.method;
     s.particles = o.particles;
     s.seed = o.seed;
+    s.memory_s = o.memory_s;
     s.offsets = c
         .sources
         .iter()

@@ -42,10 +42,11 @@ pub fn run(
         mean: 0.0,
         sd: o.offset_sd,
     };
-    let mut settings = Settings::new(Layout::default(), Motion::OUTDOOR);
+    let mut settings = Settings::new(Layout::default(), o.motion.unwrap_or(Motion::OUTDOOR));
     settings.method = o.method;
     settings.particles = o.particles;
     settings.seed = o.seed;
+    settings.memory_s = o.memory_s;
     if let Some(a) = o.accel_sd {
         settings.motion.accel_sd = a;
     }

@@ -18,6 +18,7 @@ use crate::track::indoor::AnchorsFile;
 use crate::track::moving::{DEFAULT_METHOD, PARTICLES, TRACK_METHODS, TRACK_PARTICLES};
 use crate::track::tracks::{Options, Tracks};
 use foxhunt_core::Method;
+use foxhunt_core::track::Motion;
 use std::path::PathBuf;
 
 /// Options of `foxhunt track`.
@@ -80,9 +81,19 @@ pub struct Args {
     /// Prior sd of each DF unit's bearing offset, degrees.
     #[arg(long, default_value_t = 2.0)]
     pub offset_sd: f32,
-    /// Acceleration sd of the moving emitter, m/s^2 (default 1 outdoors, 0.5 indoors).
+    /// How the emitter moves: `outdoor` (a drone, a vehicle: 1 m/s^2, starting at up to
+    /// 10 m/s, a stop or start once in ten minutes) or `indoor` (a person walking: 0.5 m/s^2,
+    /// 1 m/s, once a minute). Default: indoor for RSSI alone from an anchors file (its own
+    /// acceleration), else outdoor.
+    #[arg(long, value_parser = ["outdoor", "indoor"])]
+    pub motion: Option<String>,
+    /// Acceleration sd of the moving emitter, m/s^2 (default: the motion's).
     #[arg(long)]
     pub accel_sd: Option<f32>,
+    /// Seconds in which each station's offset forgets what it learned (an error that changes
+    /// with where the emitter is, as an indoor array's toward its boresight, wants about 10).
+    #[arg(long, default_value_t = crate::track::moving::MEMORY_S)]
+    pub memory_s: f32,
     /// Every bearing's noise, degrees (default: the stations file's, else each record's own).
     #[arg(long)]
     pub sigma: Option<f32>,
@@ -139,7 +150,12 @@ impl Args {
             method,
             particles: self.particles,
             offset_sd: self.offset_sd.to_radians(),
+            motion: self.motion.as_deref().map(|m| match m {
+                "indoor" => Motion::INDOOR,
+                _ => Motion::OUTDOOR,
+            }),
             accel_sd: self.accel_sd.map(|a| positive("accel-sd", a)).transpose()?,
+            memory_s: positive("memory-s", self.memory_s)?,
             sigma: self
                 .sigma
                 .map(|s| positive("sigma", s).map(f32::to_radians))
