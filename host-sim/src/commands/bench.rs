@@ -30,6 +30,10 @@ pub struct Args {
     /// 100000 (default: the scenario's table).
     #[arg(long, value_parser = super::values::particles)]
     pub particles: Option<usize>,
+    /// Moving scenarios: only this method's rows (repeatable), each at --particles (default
+    /// 1000) over every run, e.g. `--method sir-robust` for the default's row alone.
+    #[arg(long, value_name = "NAME")]
+    pub method: Vec<String>,
     /// Print JSON (an array of rows with stable field names).
     #[arg(long, conflicts_with = "markdown")]
     pub json: bool,
@@ -142,6 +146,12 @@ fn print(a: &Args, rows: &[crate::outputs::tables::Row], out: &mut Out) -> Outco
 
 /// Run `foxhunt bench`.
 pub fn run(a: &Args, out: &mut Out) -> Outcome {
+    let moving = a.scenario_file.is_none() && a.scenario.starts_with("moving");
+    if !a.method.is_empty() && !moving {
+        return Err(Stop::usage(
+            "--method picks rows of the moving scenarios (--scenario moving...)",
+        ));
+    }
     if let Some(conditions) = field_conditions(a)? {
         if a.particles.is_some() {
             return Err(Stop::usage(
@@ -171,12 +181,26 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
         let rows = crate::runs::small_n::bench(a.runs.unwrap_or(400));
         return print(a, &rows, out);
     }
-    if a.scenario_file.is_none() && a.scenario.starts_with("moving") {
+    if moving {
         if a.runs == Some(0) {
             return Err("--runs must be at least 1, not 0".into());
         }
-        let rows =
-            crate::runs::moving::bench::bench_named(&a.scenario, a.runs, a.particles, !a.quiet)?;
+        let only = a
+            .method
+            .iter()
+            .map(|n| {
+                foxhunt_core::Method::from_name(n)
+                    .filter(|m| crate::track::moving::TRACK_METHODS.contains(m))
+                    .ok_or_else(|| Stop::usage(format!("--method {n}: not a tracking method")))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let rows = crate::runs::moving::bench::bench_named(
+            &a.scenario,
+            a.runs,
+            a.particles,
+            &only,
+            !a.quiet,
+        )?;
         return print(a, &rows, out);
     }
     if a.scenario_file.is_none() && a.scenario.starts_with("guidance") {

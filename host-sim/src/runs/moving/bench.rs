@@ -301,18 +301,33 @@ fn triangulation_row(s: &MovingScenario, bound: Option<f64>) -> Row {
 /// The triangulation row's method label.
 pub const TRIANGULATION: &str = "triangulation";
 
-/// Runs a scenario's table takes (for the progress bar).
-pub fn total_runs(s: &MovingScenario) -> u64 {
+/// Runs a scenario's table takes (for the progress bar; `only`: those methods' rows alone).
+pub fn total_runs(s: &MovingScenario, only: &[Method]) -> u64 {
+    if !only.is_empty() {
+        return (only.len() * s.runs) as u64;
+    }
     let swarms = TRACK_METHODS.iter().filter(|m| m.is_swarm()).count();
     ((TRACK_METHODS.len() - swarms) * s.runs + (swarms + 1) * SWARM_RUNS.min(s.runs)) as u64
 }
 
 /// The table of scenario `s`: every tracking method with `particles` (the default smoothed
 /// too), the swarms at [`SWARM_PARTICLES`] over [`SWARM_RUNS`] runs beside the default at the
-/// same settings.
-pub fn bench(s: &MovingScenario, particles: usize, progress: &Progress) -> Vec<Row> {
+/// same settings; with `only`, those methods' rows alone, each at `particles` over every run.
+pub fn bench(
+    s: &MovingScenario,
+    particles: usize,
+    only: &[Method],
+    progress: &Progress,
+) -> Vec<Row> {
     let bound = pcrb(s);
     let mut rows = Vec::new();
+    if !only.is_empty() {
+        for m in only {
+            let runs = measure(s, *m, particles, s.runs, *m == DEFAULT_METHOD, progress);
+            rows.push(row(s, m.name(), *m, particles, &runs, bound));
+        }
+        return rows;
+    }
     for m in TRACK_METHODS {
         if m.is_swarm() {
             continue;
@@ -342,11 +357,13 @@ pub fn bench(s: &MovingScenario, particles: usize, progress: &Progress) -> Vec<R
 }
 
 /// `foxhunt bench --scenario moving` (every scenario) or `moving/NAME`: the tables, with
-/// `runs` and the non-swarm rows' `particles` overridden where given.
+/// `runs` and the non-swarm rows' `particles` overridden where given, and `only` those
+/// methods' rows when some are named.
 pub fn bench_named(
     name: &str,
     runs: Option<usize>,
     particles: Option<usize>,
+    only: &[Method],
     show: bool,
 ) -> Result<Vec<Row>, String> {
     let mut list = match name.strip_prefix("moving").unwrap_or(name) {
@@ -372,10 +389,10 @@ pub fn bench_named(
             s.runs = r;
         }
     }
-    let progress = Progress::new(list.iter().map(total_runs).sum(), show);
+    let progress = Progress::new(list.iter().map(|s| total_runs(s, only)).sum(), show);
     let rows = list
         .iter()
-        .flat_map(|s| bench(s, particles, &progress))
+        .flat_map(|s| bench(s, particles, only, &progress))
         .collect();
     progress.finish();
     Ok(rows)
