@@ -162,6 +162,35 @@ fn bench_gives_finite_rows_at_a_count_the_old_tables_lacked() {
 }
 
 #[test]
+fn bench_method_gives_one_tracking_method_s_rows_of_a_moving_scenario() {
+    let out = foxhunt(&[
+        "bench",
+        "--scenario",
+        "moving/move-fixed-hover",
+        "--method",
+        "ekf",
+        "--runs",
+        "2",
+        "--json",
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let rows: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let rows = rows.as_array().expect("array");
+    assert_eq!(rows.len(), 1, "{rows:?}");
+    assert_eq!(rows[0]["method"], "ekf");
+    assert_eq!(rows[0]["runs"], 2);
+    misused(
+        &foxhunt(&["bench", "--scenario", "moving", "--method", "ml"]),
+        &["--method ml", "tracking"],
+    );
+    misused(
+        &foxhunt(&["bench", "--method", "sir"]),
+        &["--method", "moving"],
+    );
+}
+
+#[test]
 fn bench_rows_say_when_the_geometry_is_unbounded() {
     // The emitter sits on the line of a straight drive: every bearing is the same line.
     let dir = scratch("unbounded");
