@@ -308,3 +308,71 @@ fn a_live_line_sends_every_update() {
         "foxhunt-emitter-433920",
     );
 }
+
+#[test]
+fn a_moving_emitter_s_track_reaches_tak_with_its_course_and_speed() {
+    let dir = std::env::temp_dir().join(format!("foxhunt-cot-track-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("scratch");
+    let xml = dir.join("drone.xml");
+    let sim = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .args([
+            "simulate",
+            "--condition",
+            "move-fixed-turning",
+            "--run",
+            "1",
+            "--force",
+            "--out",
+        ])
+        .arg(&xml)
+        .output()
+        .expect("simulate");
+    assert!(
+        sim.status.success(),
+        "{}",
+        String::from_utf8_lossy(&sim.stderr)
+    );
+    // The track's last point and its ellipse: two datagrams.
+    let ear = listener(&["udp", "2"]);
+    let url = format!("udp://127.0.0.1:{}", ear.2);
+    let stations = dir.join("drone.stations.toml");
+    let lines = common::json_lines(&[
+        "track".into(),
+        xml.to_string_lossy().into_owned(),
+        "--stations".into(),
+        stations.to_string_lossy().into_owned(),
+        "--json".into(),
+        "--cot".into(),
+        url,
+    ]);
+    let events = received(ear);
+    assert_eq!(events.len(), 2, "{events:#?}");
+    let last = lines[0]["tracks"][0]["points"]
+        .as_array()
+        .and_then(|p| p.last())
+        .expect("a point")
+        .clone();
+    let uid = "foxhunt-track-433920";
+    let point = by_uid(&events, uid);
+    assert_eq!(point["type"], "a-u-G");
+    assert!((f(&point["lat"]) - f(&last["lat"])).abs() < 1e-6, "{point}");
+    assert!((f(&point["lon"]) - f(&last["lon"])).abs() < 1e-6, "{point}");
+    assert!((f(&point["ce"]) - f(&last["ellipse"]["major_m"])).abs() <= 0.051);
+    // CoT's <track> (takproto decodes it into its own field): the speed and the course
+    // (true, at the point) the velocity gives.
+    let track = &point["detail"]["track"];
+    let (ve, vn) = (f(&last["vel_e_mps"]), f(&last["vel_n_mps"]));
+    let (speed, course) = (f(&track["speed"]), f(&track["course"]));
+    println!("TAK track: {speed} m/s toward {course} deg; the point's velocity ({ve}, {vn})");
+    assert!((speed - ve.hypot(vn)).abs() < 0.01, "{speed}");
+    // The frame's north and the point's true north differ by the meridians' convergence
+    // over the few kilometres from the frame's origin: well under a degree here.
+    let frame_course = ve.atan2(vn).to_degrees().rem_euclid(360.0);
+    let diff = (course - frame_course + 540.0).rem_euclid(360.0) - 180.0;
+    assert!(diff.abs() < 0.5, "course {course} against {frame_course}");
+    let ellipse = by_uid(&events, &format!("{uid}-ellipse"));
+    assert_eq!(ellipse["type"], "u-d-c-e");
+    let shape = ellipse["detail"]["xmlDetail"].as_str().expect("detail");
+    assert!((attr(shape, "ellipse", "minor") - f(&last["ellipse"]["minor_m"])).abs() <= 0.051);
+    std::fs::remove_dir_all(&dir).ok();
+}

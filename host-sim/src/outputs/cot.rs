@@ -10,7 +10,8 @@
 
 use super::maps::{latest_bearings, lonlat, ray_length, xml_text};
 use crate::inputs::capture::Decoded;
-use crate::locate::report::{Located, geodetic};
+use crate::locate::report::{EllipseReport, Located, geodetic};
+use crate::track::moving::TrackPoint;
 use foxhunt_bridge::geo::LocalFrame;
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -196,6 +197,90 @@ fn true_azimuth(frame: &LocalFrame, from: [f32; 2], theta: f32) -> f64 {
     east.atan2(north).to_degrees().rem_euclid(360.0)
 }
 
+/// A located thing's two events: its point (type `a-u-G`, unknown ground; `ce` the ellipse's
+/// semi-major axis, a circle that holds the ellipse; `extra`: more detail elements) and its
+/// ellipse (`u-d-c-e`, semi-axes in metres, the major axis's angle clockwise from north),
+/// linked to the point.
+fn located(
+    uid: &str,
+    name: &str,
+    [lat, lon]: [f64; 2],
+    e: &EllipseReport,
+    remarks: &str,
+    extra: &str,
+    now: SystemTime,
+) -> [String; 2] {
+    let point = Event {
+        uid,
+        kind: "a-u-G",
+        how: "m-f",
+        lat,
+        lon,
+        ce: f64::from(e.major_m),
+        detail: &format!(
+            "<contact callsign=\"{name}\"/>{extra}<remarks>{}</remarks>",
+            xml_text(remarks)
+        ),
+    };
+    let ellipse_uid = format!("{uid}-ellipse");
+    let shape = format!(
+        "<shape><ellipse major=\"{:.1}\" minor=\"{:.1}\" angle=\"{:.1}\"/>\
+         <link uid=\"{ellipse_uid}-style\" type=\"b-x-KmlStyle\" relation=\"p-c\"><Style>\
+         <LineStyle><color>ff0000ff</color><width>2</width></LineStyle>\
+         <PolyStyle><color>400000ff</color></PolyStyle></Style></link></shape>\
+         <link uid=\"{uid}\" type=\"a-u-G\" relation=\"p-p\"/>\
+         <contact callsign=\"{name}: {:.0} % ellipse\"/>",
+        e.major_m,
+        e.minor_m,
+        e.orientation_deg.rem_euclid(360.0),
+        100.0 * e.confidence
+    );
+    let ellipse = Event {
+        uid: &ellipse_uid,
+        kind: "u-d-c-e",
+        how: "m-f",
+        lat,
+        lon,
+        ce: UNKNOWN,
+        detail: &shape,
+    };
+    [point.xml(now), ellipse.xml(now)]
+}
+
+/// The events of a moving emitter's latest track point on channel `freq_mhz` (uid
+/// `foxhunt-track-KHZ`): its point, with CoT's `<track>` (course, degrees true, and speed,
+/// m/s) so TAK draws where it heads, and its 95 % ellipse. Empty when the point has no
+/// ellipse.
+pub fn track_events(
+    freq_mhz: Option<f32>,
+    p: &TrackPoint,
+    frame: &LocalFrame,
+    now: SystemTime,
+) -> Vec<String> {
+    let Some(e) = p.ellipse() else {
+        return Vec::new();
+    };
+    let e = EllipseReport::from(&e);
+    let uid = format!("foxhunt-track-{}", channel(freq_mhz));
+    let name = match freq_mhz {
+        Some(f) => format!("moving emitter {f:.3} MHz"),
+        None => "moving emitter".into(),
+    };
+    let g = geodetic(frame, p.position);
+    let speed = p.velocity[0].hypot(p.velocity[1]);
+    let course = true_azimuth(frame, p.position, p.velocity[1].atan2(p.velocity[0]));
+    let remarks = format!(
+        "tracked; {:.0} % ellipse {:.0} m x {:.0} m; {speed:.1} m/s toward {course:.0} deg; \
+         P(moving) {:.2}",
+        100.0 * e.confidence,
+        e.major_m,
+        e.minor_m,
+        p.p_moving
+    );
+    let track = format!("<track course=\"{course:.1}\" speed=\"{speed:.2}\"/>");
+    located(&uid, &name, [g.lat, g.lon], &e, &remarks, &track, now).to_vec()
+}
+
 /// The channel's name in uids and callsigns: its frequency in kHz, or `all` for bearings
 /// without one.
 fn channel(freq_mhz: Option<f32>) -> String {
@@ -240,42 +325,7 @@ pub fn events(l: &Located, d: &Decoded, now: SystemTime) -> Vec<String> {
             r.cep50_m,
             r.used
         );
-        let point = Event {
-            uid: &uid,
-            kind: "a-u-G",
-            how: "m-f",
-            lat: r.lat,
-            lon: r.lon,
-            ce: f64::from(e.major_m),
-            detail: &format!(
-                "<contact callsign=\"{name}\"/><remarks>{}</remarks>",
-                xml_text(&remarks)
-            ),
-        };
-        out.push(point.xml(now));
-        let ellipse_uid = format!("{uid}-ellipse");
-        let shape = format!(
-            "<shape><ellipse major=\"{:.1}\" minor=\"{:.1}\" angle=\"{:.1}\"/>\
-             <link uid=\"{ellipse_uid}-style\" type=\"b-x-KmlStyle\" relation=\"p-c\"><Style>\
-             <LineStyle><color>ff0000ff</color><width>2</width></LineStyle>\
-             <PolyStyle><color>400000ff</color></PolyStyle></Style></link></shape>\
-             <link uid=\"{uid}\" type=\"a-u-G\" relation=\"p-p\"/>\
-             <contact callsign=\"{name}: {:.0} % ellipse\"/>",
-            e.major_m,
-            e.minor_m,
-            e.orientation_deg.rem_euclid(360.0),
-            100.0 * e.confidence
-        );
-        let ellipse = Event {
-            uid: &ellipse_uid,
-            kind: "u-d-c-e",
-            how: "m-f",
-            lat: r.lat,
-            lon: r.lon,
-            ce: UNKNOWN,
-            detail: &shape,
-        };
-        out.push(ellipse.xml(now));
+        out.extend(located(&uid, &name, [r.lat, r.lon], e, &remarks, "", now));
     }
     let reach = ray_length(l, d);
     let latest = latest_bearings(d);

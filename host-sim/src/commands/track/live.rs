@@ -7,9 +7,11 @@
 //! tracked at once, not when the next arrive). Memory stays bounded: each bearing leaves the
 //! decoder once its channel has it, and the points are printed, not kept.
 
+use super::Args;
 use crate::commands::locate::live::{LiveSource, reader};
 use crate::estimate::stations::station_setup;
 use crate::inputs::capture::Decoder;
+use crate::outputs::cot::{self, CotSender};
 use crate::outputs::terminal::{Out, Outcome, Stop, note};
 use crate::outputs::tracks;
 use crate::track::live::{Dropped, LIVE_CHANNELS, LIVE_SOURCES, LiveChannels, Ready};
@@ -26,9 +28,11 @@ pub fn run(
     source: LiveSource,
     quiet_exit: Option<Duration>,
     o: &Options,
-    json: bool,
+    a: &Args,
     out: &mut Out,
 ) -> Outcome {
+    let json = a.json;
+    let mut tak = a.cot.clone().map(CotSender::new);
     let mut dec = Decoder::new(BridgeConfig::default(), false);
     if let LiveSource::Kraken(urls) = &source
         && urls.len() > 1
@@ -124,6 +128,18 @@ pub fn run(
                     };
                     out.line(&text)?;
                     out.flush()?;
+                    // TAK missing an update is no reason to stop tracking: the next one sends
+                    // the latest point again.
+                    if let (Some(tak), Some(frame)) = (tak.as_mut(), shell.frame.as_ref())
+                        && let Err(e) = tak.send(&cot::track_events(
+                            r.freq_mhz,
+                            &p,
+                            frame,
+                            std::time::SystemTime::now(),
+                        ))
+                    {
+                        note(&format!("foxhunt: {e}; this update not sent"));
+                    }
                 }
                 Err(e) => {
                     let what = r

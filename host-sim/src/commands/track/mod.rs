@@ -10,6 +10,7 @@ use crate::commands::values;
 use crate::inputs::files::{Source, stream};
 use crate::inputs::mqtt::MqttUrl;
 use crate::inputs::stations::Network;
+use crate::outputs::cot::{self, CotSender, CotUrl};
 use crate::outputs::files::Outputs;
 use crate::outputs::terminal::{Out, Outcome, Stop, note};
 use crate::outputs::tracks;
@@ -46,6 +47,11 @@ pub struct Args {
         requires = "mqtt"
     )]
     pub mqtt_client_id: String,
+    /// Send each channel's latest point to TAK as Cursor-on-Target (`udp://HOST:PORT` or
+    /// `tcp://HOST:PORT`): its position with course and speed, and its 95 % ellipse; live:
+    /// every update, a recording: its last point.
+    #[arg(long, value_name = "URL", value_parser = |s: &str| CotUrl::parse(s))]
+    pub cot: Option<CotUrl>,
     /// Live: stop after this many seconds without a byte (`inf`: until the line closes, the
     /// default).
     #[arg(long, allow_hyphen_values = true,
@@ -236,7 +242,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
             .quiet_exit
             .filter(|s| s.is_finite())
             .map(std::time::Duration::from_secs_f64);
-        return live::run(source, quiet, &options, a.json, out);
+        return live::run(source, quiet, &options, a, out);
     }
     let mut inputs: Vec<&std::path::Path> = a.captures.iter().map(PathBuf::as_path).collect();
     inputs.extend(a.anchors.as_deref());
@@ -269,6 +275,22 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
     }
     let t = crate::track::tracks::tracks(&m, file.as_ref(), &options)?;
     write_files(a, &t, file.as_ref(), &outputs)?;
+    if let Some(url) = &a.cot {
+        let frame = t.frame.as_ref().ok_or(
+            "--cot needs the track on the earth: a capture with GPS positions, or an anchors \
+             file with an `origin`",
+        )?;
+        let now = std::time::SystemTime::now();
+        let events: Vec<String> = t
+            .tracks
+            .iter()
+            .filter_map(|c| c.points.last().map(|p| (c.freq_mhz, p)))
+            .flat_map(|(f, p)| cot::track_events(f, p, frame, now))
+            .collect();
+        CotSender::new(url.clone())
+            .send(&events)
+            .map_err(Stop::Error)?;
+    }
     if a.json {
         let text = serde_json::to_string(&tracks::json(&t)).map_err(|e| e.to_string())?;
         out.line(&text)
