@@ -10,7 +10,7 @@
 //! 300 m, one hypothesis) and `guidance-look` (the look-ahead: 9 headings within 90 degrees,
 //! three legs deep, 729 sequences, over three hypotheses), each "step" one whole decision from
 //! the aoa-afsa bearings with an unknown offset. The moving-emitter tracker:
-//! `track-<N>-<part>` (N 128 or 256; parts in [`track`], measured by
+//! `track-<N>-<part> <steps> [seed]` (N 128 or 256; parts in [`track`], measured by
 //! `serial-bridge/qemu/track-steps.sh`). On the host this binary is an empty stub.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
@@ -220,12 +220,12 @@ mod image {
     /// `track-<N>-<part>`: the tracker's run; prints its error, its state's bytes (what a
     /// firmware would hold as a static) and the stack its steps needed below the frame that
     /// holds the state (repainted once the first cloud is made).
-    fn run_track(spec: &str, steps: usize) -> Result<f32, Error> {
+    fn run_track(spec: &str, steps: usize, seed: u64) -> Result<f32, Error> {
         let (n, part) = spec.split_once('-').ok_or(Error::Unsupported)?;
         let part = crate::track::Part::named(part).ok_or(Error::Unsupported)?;
         let ran = match n {
-            "128" => crate::track::run::<128>(part, steps, repaint_stack)?,
-            "256" => crate::track::run::<256>(part, steps, repaint_stack)?,
+            "128" => crate::track::run::<128>(part, steps, seed, repaint_stack)?,
+            "256" => crate::track::run::<256>(part, steps, seed, repaint_stack)?,
             _ => return Err(Error::Unsupported),
         };
         println!(
@@ -249,7 +249,8 @@ mod image {
         let filter = it.next().unwrap_or("sir");
         let steps = it.next().and_then(|s| s.parse().ok()).unwrap_or(60usize);
         if let Some(spec) = filter.strip_prefix("track-") {
-            match run_track(spec, steps) {
+            let seed = it.next().and_then(|s| s.parse().ok()).unwrap_or(1);
+            match run_track(spec, steps, seed) {
                 Ok(e) => {
                     println!("{filter} {steps} steps: error {e} m");
                     process::exit(if e.is_finite() { 0 } else { 1 })

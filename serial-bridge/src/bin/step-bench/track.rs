@@ -175,12 +175,17 @@ impl Setting {
 /// The host's robust likelihood (`sir-robust`: 5 % wild bearings).
 const LIKELIHOOD: GaussianUniform = GaussianUniform { eps: 0.05 };
 
-/// Run `part` for `steps` steps at `N` particles. `settled` is called once the first cloud is
+/// Run `part` for `steps` steps at `N` particles, the noise and offsets drawn from `seed`. `settled` is called once the first cloud is
 /// made, before the first step (the image repaints its stack there: the start's one-off
 /// frame is not what a running tracker needs).
 #[inline(never)]
-pub fn run<const N: usize>(part: Part, steps: usize, settled: fn()) -> Result<Ran, Error> {
-    let mut rng = XorShiftRng::seed_from_u64(1);
+pub fn run<const N: usize>(
+    part: Part,
+    steps: usize,
+    seed: u64,
+    settled: fn(),
+) -> Result<Ran, Error> {
+    let mut rng = XorShiftRng::seed_from_u64(seed);
     let setting = Setting::new(&mut rng);
     if part == Part::Step {
         filtered::<N>(&setting, steps, settled, &mut rng)
