@@ -50,6 +50,10 @@ pub struct Args {
     #[arg(long, default_value_t = 30.0, requires = "mqtt",
           value_parser = super::values::f64_where(|s| s > 0.0 && s <= 3600.0, "seconds in (0, 3600]"))]
     pub seconds: f64,
+    /// Instead: the moving-emitter tracker at 1 000 and 10 000 particles on four fixed
+    /// stations reporting at 10 Hz: times real time and peak memory.
+    #[arg(long, conflicts_with = "mqtt")]
+    pub track: bool,
 }
 
 /// Run `foxhunt perf`.
@@ -65,6 +69,12 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
         let exe = std::env::current_exe().map_err(|e| e.to_string())?;
         let f = crate::runs::mqtt_load::run(&load, &exe)?;
         out.line(&crate::runs::mqtt_load::table(&load, &f))?;
+        return Ok(());
+    }
+    if a.track {
+        use crate::runs::perf_track::{measure, table};
+        let rows = measure(|n| note(&format!("perf: tracking at N = {n}")))?;
+        out.line(&table(&rows))?;
         return Ok(());
     }
     if a.no_numpy && a.no_growth && !a.scale {

@@ -9,6 +9,7 @@ pub mod moving;
 pub mod mqtt_load;
 pub mod network;
 pub mod perf;
+pub mod perf_track;
 pub mod run;
 pub mod scenario;
 pub mod simulate;

@@ -9,8 +9,14 @@
 //! 003's model). Guidance: `guidance-d` (a greedy D-optimal choice among 16 free headings of
 //! 300 m, one hypothesis) and `guidance-look` (the look-ahead: 9 headings within 90 degrees,
 //! three legs deep, 729 sequences, over three hypotheses), each "step" one whole decision from
-//! the aoa-afsa bearings with an unknown offset. On the host this binary is an empty stub.
+//! the aoa-afsa bearings with an unknown offset. The moving-emitter tracker:
+//! `track-<N>-<part> <steps> [seed]` (N 128 or 256; parts in [`track`], measured by
+//! `serial-bridge/qemu/track-steps.sh`). On the host this binary is an empty stub.
 #![cfg_attr(target_os = "none", no_std, no_main)]
+
+#[cfg(target_os = "none")]
+#[path = "step-bench/track.rs"]
+mod track;
 
 #[cfg(target_os = "none")]
 mod image {
@@ -161,6 +167,80 @@ mod image {
         Ok(sequences)
     }
 
+    const PAINT: u32 = 0xCCCC_CCCC;
+
+    // SAFETY: the linker script defines both symbols; only their addresses are taken.
+    #[allow(unsafe_code)]
+    unsafe extern "C" {
+        static _stack_start: u32;
+        static _stack_end: u32;
+    }
+
+    /// The stack's (bottom, top) addresses.
+    fn stack_bounds() -> (usize, usize) {
+        (
+            core::ptr::addr_of!(_stack_end) as usize,
+            core::ptr::addr_of!(_stack_start) as usize,
+        )
+    }
+
+    /// The stack pointer where the stack was last repainted.
+    static PAINTED_AT: core::sync::atomic::AtomicUsize = core::sync::atomic::AtomicUsize::new(0);
+
+    /// Paint the stack below the current frame again (as the firmware does after its start,
+    /// `src/bin/firmware/hw.rs`) and note where: the lowest word written since then says what
+    /// the calls below that frame needed.
+    #[inline(never)]
+    #[allow(unsafe_code)]
+    fn repaint_stack() {
+        let (bottom, _) = stack_bounds();
+        let sp = cortex_m::register::msp::read() as usize;
+        PAINTED_AT.store(sp, core::sync::atomic::Ordering::Relaxed);
+        let mut p = bottom;
+        // A margin below the stack pointer for this function's own frame.
+        while p + 256 < sp {
+            // SAFETY: [bottom, sp - 256) is stack below every live frame, mapped RAM.
+            unsafe { core::ptr::write_volatile(p as *mut u32, PAINT) };
+            p += 4;
+        }
+    }
+
+    /// The lowest stack address written since the last paint.
+    #[allow(unsafe_code)]
+    fn stack_low_water() -> usize {
+        let (bottom, top) = stack_bounds();
+        let mut p = bottom;
+        // SAFETY: every word in [bottom, top) is mapped RAM in the stack region.
+        while p < top && unsafe { core::ptr::read_volatile(p as *const u32) } == PAINT {
+            p += 4;
+        }
+        p
+    }
+
+    /// `track-<N>-<part>`: the tracker's run; prints its error, its state's bytes (what a
+    /// firmware would hold as a static) and the stack its steps needed below the frame that
+    /// holds the state (repainted once the first cloud is made).
+    fn run_track(spec: &str, steps: usize, seed: u64) -> Result<f32, Error> {
+        let (n, part) = spec.split_once('-').ok_or(Error::Unsupported)?;
+        let part = crate::track::Part::named(part).ok_or(Error::Unsupported)?;
+        let ran = match n {
+            "128" => crate::track::run::<128>(part, steps, seed, repaint_stack)?,
+            "256" => crate::track::run::<256>(part, steps, seed, repaint_stack)?,
+            _ => return Err(Error::Unsupported),
+        };
+        println!(
+            "state {} B, step stack {} B, D {}, rmse {} m after {} s",
+            ran.bytes,
+            PAINTED_AT
+                .load(core::sync::atomic::Ordering::Relaxed)
+                .saturating_sub(stack_low_water()),
+            crate::track::D,
+            ran.rmse,
+            crate::track::WARMUP_S,
+        );
+        Ok(ran.error)
+    }
+
     #[entry]
     fn main() -> ! {
         let args = semihosting::experimental::env::args::<128>();
@@ -168,6 +248,19 @@ mod image {
         let _program = it.next();
         let filter = it.next().unwrap_or("sir");
         let steps = it.next().and_then(|s| s.parse().ok()).unwrap_or(60usize);
+        if let Some(spec) = filter.strip_prefix("track-") {
+            let seed = it.next().and_then(|s| s.parse().ok()).unwrap_or(1);
+            match run_track(spec, steps, seed) {
+                Ok(e) => {
+                    println!("{filter} {steps} steps: error {e} m");
+                    process::exit(if e.is_finite() { 0 } else { 1 })
+                }
+                Err(e) => {
+                    println!("{filter}: {e}");
+                    process::exit(1)
+                }
+            }
+        }
         if let Some(kind) = filter.strip_prefix("guidance-") {
             match run_guidance(kind == "look", steps) {
                 Ok(n) => {

@@ -195,11 +195,16 @@ impl<const K: usize> Mover<K> {
             bounce(room, x);
         }
         let f = &self.forgetting;
+        // Selects, not f32::min/max: on the MCU those are calls to fminf/fmaxf per particle.
         let grow = |v: f32, by: f32, cap: f32| {
-            if v > 0.0 {
-                (v + by).min(cap.max(v))
-            } else {
+            let cap = if cap > v { cap } else { v };
+            let grown = v + by;
+            if !(v > 0.0) {
                 0.0
+            } else if grown < cap {
+                grown
+            } else {
+                cap
             }
         };
         for s in 0..self.layout.sources as usize {
@@ -327,12 +332,12 @@ impl<const D: usize, const K: usize> Model<D> for Mover<K> {
         for o in z.bearings() {
             let (r, var) = self.bearing_terms(x, o);
             let s = o.bearing.sigma;
-            l += ln_density(lik, r, libm::sqrtf(s * s + var));
+            l += ln_density(lik, r, fastmath::sqrt(s * s + var));
         }
         for lv in z.levels() {
             let (r, _, var) = self.level_terms(x, lv);
             let s = lv.sigma_db;
-            l += ln_density(lik, r, libm::sqrtf(s * s + var));
+            l += ln_density(lik, r, fastmath::sqrt(s * s + var));
         }
         l
     }
@@ -355,7 +360,7 @@ impl<const D: usize, const K: usize> Model<D> for Mover<K> {
             for (x, lw) in states.iter_mut().zip(log_weights.iter_mut()) {
                 let (r, var) = self.bearing_terms(x, o);
                 let total = s2 + var;
-                let s = libm::sqrtf(total);
+                let s = fastmath::sqrt(total);
                 *lw += ln_density(lik, r, s);
                 if let Some((m, v)) = slot
                     && var > 0.0
@@ -373,7 +378,7 @@ impl<const D: usize, const K: usize> Model<D> for Mover<K> {
             for (x, lw) in states.iter_mut().zip(log_weights.iter_mut()) {
                 let (r, g, var) = self.level_terms(x, l);
                 let total = s2 + var;
-                let s = libm::sqrtf(total);
+                let s = fastmath::sqrt(total);
                 *lw += ln_density(lik, r, s);
                 if let Some(i) = slot
                     && var > 0.0
