@@ -337,11 +337,7 @@ pub fn run(load: &Load, exe: &Path) -> Result<Figures, String> {
     for (k, ticks) in by_tick.chunks(per_sample).enumerate() {
         let mut v: Vec<f64> = ticks.iter().flatten().copied().collect();
         let end = start + Duration::from_secs_f64((k + 1) as f64 * SAMPLE_S);
-        let rss = memory
-            .iter()
-            .filter(|(t, _)| *t <= end)
-            .next_back()
-            .map_or(0.0, |m| m.1);
+        let rss = memory.iter().rfind(|(t, _)| *t <= end).map_or(0.0, |m| m.1);
         timeline.push(Sample {
             t_s: ((k * per_sample + ticks.len()) as f64 / load.rate_hz),
             latency_ms: [q(&mut v, 0.5), q(&mut v, 0.99)],
