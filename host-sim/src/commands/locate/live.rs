@@ -318,19 +318,13 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
     let mut stamper = None;
     if let Some(h) = &o.history {
         h.resume(&mut dec)?;
-        if matches!(o.source, LiveSource::Mqtt { .. }) {
-            // As after each batch from the broker: none held for its station's next, so the
-            // resumed bearings keep the order the uninterrupted run gave them.
-            dec.end();
-        }
         if !matches!(o.source, LiveSource::Mqtt { .. }) {
             stamper = Some(h.stamper(&mut dec));
         }
     }
     let mut line = reader(&o.source, o.gpsd.as_ref(), o.history.clone())?;
     let mut tak = o.cot.clone().map(CotSender::new);
-    // A broker's bearings: each channel's latest kept, and none held for the station's next
-    // (its own bridge judged its clock before publishing).
+    // A broker's bearings: each channel's latest kept.
     let mut window = match &o.source {
         LiveSource::Mqtt { keep, .. } => Some(ChannelWindow::new(*keep)),
         _ => None,
@@ -342,9 +336,8 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
     let mut updates = 0u64;
     while !ended {
         ended = line.take(&mut dec, o.quiet_exit)?;
-        if ended || window.is_some() {
-            // Bearings still waiting for a later fix are placed with the fixes there are (a
-            // broker's: at once, the station's bridge already checked its clock).
+        if ended {
+            // Bearings still waiting for a later fix are placed with the fixes there are.
             dec.end();
         }
         if let (Some(h), Some(stamper)) = (&o.history, stamper.as_mut()) {
