@@ -524,8 +524,7 @@ fn a_worker_killed_and_started_again_on_its_history_gives_the_uninterrupted_fix(
     let restart_db = db("restart.db");
     let mut killed = Worker::start_with(&url, "restart-worker", 30, &["--db", &restart_db]);
     publish_in_turn(&first, &url);
-    // Killed once its history holds every bearing sent (the bridge holds each station's
-    // latest until the next, so its updates stop 3 short until the line ends).
+    // Killed once its history holds every bearing sent.
     let start = Instant::now();
     loop {
         let out = Command::new(FOXHUNT)
@@ -572,4 +571,120 @@ fn a_worker_killed_and_started_again_on_its_history_gives_the_uninterrupted_fix(
         "the fix after the restart is the uninterrupted run's"
     );
     assert_same_fix(&resumed, &recorded(&files));
+}
+
+/// The stations' captures again on a second channel, 433.000 MHz (shard 1 of 2, where
+/// 433.920 is shard 0): files of their own in `dir`.
+fn second_channel(files: &[PathBuf]) -> Vec<PathBuf> {
+    files
+        .iter()
+        .map(|f| {
+            let text = std::fs::read_to_string(f).expect("read");
+            assert!(text.contains("<FREQUENCY>433.92"), "a 433.92 MHz capture");
+            let p = f.with_file_name(format!(
+                "{}-b.xml",
+                f.file_stem().expect("stem").to_string_lossy()
+            ));
+            std::fs::write(&p, text.replace("<FREQUENCY>433.92", "<FREQUENCY>433.00"))
+                .expect("write");
+            p
+        })
+        .collect()
+}
+
+/// Publish `files` one after the other for `shards` workers, each acknowledged before the
+/// next.
+fn publish_sharded(files: &[PathBuf], url: &str, shards: u32) {
+    for f in files {
+        let id = f.file_stem().expect("stem").to_string_lossy();
+        let out = Command::new(FOXHUNT)
+            .arg("publish")
+            .arg(f)
+            .args(["--mqtt", url, "--shards", &shards.to_string()])
+            .args(["--client-id", &format!("test-{id}")])
+            .output()
+            .expect("publish");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
+
+/// The number after `key` in a worker's notes.
+fn noted(err: &[String], key: &str) -> Option<u64> {
+    err.iter().find_map(|l| {
+        let rest = l.split(key).nth(1)?;
+        rest.split(',').next()?.trim().parse().ok()
+    })
+}
+
+#[test]
+fn two_sharded_workers_fuse_each_channel_once_and_one_restarted_resumes() {
+    let _one_broker = serial();
+    let broker = Broker::start("shards");
+    let x = station_files(&broker.dir);
+    let y = second_channel(&x);
+    let [x1, x2] = halves(&x);
+    let [y1, y2] = halves(&y);
+    let url = broker.url("net");
+    let db = broker.dir.join("shard-0.db").display().to_string();
+    // Shard 0 (433.920) keeps a history and is killed half way; shard 1 (433.000) runs
+    // throughout, quiet long enough to outlast the restart.
+    let mut zero = Worker::start_with(&url, "shard-0", 30, &["--mqtt-shard", "0/2", "--db", &db]);
+    let one = Worker::start_with(&url, "shard-1", 10, &["--mqtt-shard", "1/2"]);
+    publish_sharded(&[x1.clone(), y1.clone()].concat(), &url, 2);
+    let start = Instant::now();
+    loop {
+        let out = Command::new(FOXHUNT)
+            .args(["history", &db])
+            .output()
+            .expect("history");
+        if String::from_utf8_lossy(&out.stdout).starts_with("bearings 900 ") {
+            break;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(30),
+            "never stored 900: {out:?}"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    zero.child.kill().expect("kill");
+    let _ = zero.child.wait();
+    publish_sharded(&[x2, y2].concat(), &url, 2);
+    let again = Worker::start_with(&url, "shard-0", 3, &["--mqtt-shard", "0/2", "--db", &db]);
+    let (zero_fix, zero_err) = again.finish();
+    let (one_fix, one_err) = one.finish();
+    eprintln!("{}\n--\n{}", zero_err.join("\n"), one_err.join("\n"));
+    // Each worker took its own channel's bearings, every one once, and none of the other's
+    // (its topics are not subscribed to, so not even a misrouted one arrives).
+    assert!(
+        zero_err
+            .iter()
+            .any(|l| l.starts_with("history: 900 bearings resumed")),
+        "{zero_err:?}"
+    );
+    assert_eq!(noted(&zero_err, "mqtt: bearings "), Some(900));
+    assert_eq!(noted(&one_err, "mqtt: bearings "), Some(1800));
+    for err in [&zero_err, &one_err] {
+        assert_eq!(noted(err, "other shard "), Some(0), "{err:?}");
+        assert_eq!(noted(err, "duplicates "), Some(0), "{err:?}");
+    }
+    let freqs = |v: &Value| -> Vec<String> {
+        v["emitters"]
+            .as_array()
+            .expect("emitters")
+            .iter()
+            .map(|e| format!("{:.3}", e["freq_mhz"].as_f64().unwrap_or(0.0)))
+            .collect()
+    };
+    assert_eq!(freqs(&zero_fix), vec!["433.920"]);
+    assert_eq!(freqs(&one_fix), vec!["433.000"]);
+    // The restarted shard's fix is its channel's recorded fix (nothing lost or doubled:
+    // 1 800 bearings), and so is the other's.
+    assert_eq!(zero_fix["used"], 1800);
+    assert_eq!(one_fix["used"], 1800);
+    assert_same_fix(&zero_fix, &recorded(&x));
+    assert_same_fix(&one_fix, &recorded(&y));
 }

@@ -54,6 +54,17 @@ pub struct Args {
     /// stations reporting at 10 Hz: times real time and peak memory.
     #[arg(long, conflicts_with = "mqtt")]
     pub track: bool,
+    /// With --mqtt: workers, each fusing a shard of the channels (`locate --mqtt-shard`).
+    #[arg(long, default_value_t = 1, requires = "mqtt",
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(crate::inputs::mqtt::MAX_SHARDS)))]
+    pub workers: u32,
+    /// With --mqtt: each worker's bearings kept per channel (`locate --mqtt-keep`).
+    #[arg(long, value_name = "N", requires = "mqtt",
+          value_parser = super::values::count_at_least(2, "bearings per channel"))]
+    pub mqtt_keep: Option<usize>,
+    /// With --mqtt: also write the run's latency and memory over time as an SVG plot here.
+    #[arg(long, value_name = "FILE", requires = "mqtt")]
+    pub svg: Option<std::path::PathBuf>,
 }
 
 /// Run `foxhunt perf`.
@@ -65,9 +76,15 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
             channels: a.channels,
             rate_hz: a.rate_hz,
             seconds: a.seconds,
+            workers: a.workers,
+            keep: a.mqtt_keep,
         };
         let exe = std::env::current_exe().map_err(|e| e.to_string())?;
         let f = crate::runs::mqtt_load::run(&load, &exe)?;
+        if let Some(path) = &a.svg {
+            std::fs::write(path, crate::runs::mqtt_load::svg(&load, &f))
+                .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        }
         out.line(&crate::runs::mqtt_load::table(&load, &f))?;
         return Ok(());
     }

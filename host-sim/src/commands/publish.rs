@@ -30,6 +30,12 @@ pub struct Args {
     /// `145.500`, or `none`).
     #[arg(long, value_name = "URL")]
     pub mqtt: String,
+    /// Workers sharing the channels (`locate --mqtt-shard K/N`): each bearing goes to
+    /// PREFIX/bearings/K/CHANNEL/STATION instead, K its channel's shard of N (a hash of the
+    /// channel's name). Every station of a network must be given the same N.
+    #[arg(long, value_name = "N", default_value_t = 1,
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(crate::inputs::mqtt::MAX_SHARDS)))]
+    pub shards: u32,
     /// The station id of bearings whose records name none ($PFOXB, Agrelo, a KrakenSDR
     /// without a STATION_ID): 1 to 16 characters (default: the record kind, or
     /// FILE:KIND with several files).
@@ -100,6 +106,7 @@ fn input(a: &Args) -> Result<Input, Stop> {
 /// Turns the bridge's bearings into messages on their topics.
 struct Messages<'a> {
     url: &'a MqttUrl,
+    shards: u32,
     stamper: Stamper,
 }
 
@@ -109,7 +116,9 @@ impl Messages<'_> {
         check_station(&msg.station)?;
         msg.check()?;
         Ok(Message {
-            topic: self.url.bearing_topic(&msg.channel(), &msg.station),
+            topic: self
+                .url
+                .sharded_topic(self.shards, &msg.channel(), &msg.station),
             payload: serde_json::to_vec(&msg).map_err(|e| e.to_string())?,
         })
     }
@@ -202,6 +211,7 @@ pub fn run(a: &Args) -> Outcome {
     let link = Link::start(&url, &client_id, backlog)?;
     let mut messages = Messages {
         url: &url,
+        shards: a.shards,
         stamper: Stamper {
             station: a.station.clone(),
             day0_ms,

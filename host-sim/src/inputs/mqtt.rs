@@ -11,6 +11,10 @@
 //! QoS 1 delivers at least once: a broker's redelivery, or a station resending after a
 //! reconnect, brings a bearing twice. A bearing is its (channel, station, time): the second
 //! is dropped ([`Seen`]) before the bridge sees it.
+//!
+//! Several workers share a network's channels by a [`Shard`] level in the bearings' topics
+//! (docs/src/networks.md, "Sharding across workers"): a channel's bearings all go to the shard
+//! its name hashes to, so each channel is fused by exactly one worker.
 
 use foxhunt_bridge::kraken::KrakenXml;
 use foxhunt_bridge::kraken::Station;
@@ -26,8 +30,9 @@ use std::time::{Duration, Instant};
 pub const PORT: u16 = 1883;
 /// Longest message taken (a bearing's JSON is about 200 bytes): more is not a bearing.
 pub const MAX_MESSAGE: usize = 4096;
-/// Bearings remembered for the duplicate check: hours of a large network's traffic (about
-/// 60 bytes each), so a redelivery long after the first copy is still caught.
+/// Bearings remembered for the duplicate check: minutes to hours of a network's traffic (a
+/// 64-bit key each, about 40 bytes with the set's own), so a redelivery long after the first
+/// copy is still caught, in bounded memory.
 const REMEMBERED: usize = 1 << 20;
 /// Between reconnection attempts.
 pub const RETRY: Duration = Duration::from_millis(250);
@@ -95,6 +100,26 @@ impl MqttUrl {
         format!("{}/bearings/#", self.prefix)
     }
 
+    /// The topic of a bearing published for `shards` workers: `PREFIX/bearings/CHANNEL/STATION`
+    /// for one, else `PREFIX/bearings/SHARD/CHANNEL/STATION` with SHARD the channel's
+    /// [`shard_of`].
+    pub fn sharded_topic(&self, shards: u32, channel: &str, station: &str) -> String {
+        if shards <= 1 {
+            self.bearing_topic(channel, station)
+        } else {
+            let k = shard_of(channel, shards);
+            format!("{}/bearings/{k}/{channel}/{station}", self.prefix)
+        }
+    }
+
+    /// What a worker subscribes to: every bearing, or its shard's (`PREFIX/bearings/K/#`).
+    pub fn worker_filter(&self, shard: Option<Shard>) -> String {
+        match shard {
+            Some(s) if s.count > 1 => format!("{}/bearings/{}/#", self.prefix, s.index),
+            _ => self.bearings_filter(),
+        }
+    }
+
     /// A channel's fix: `PREFIX/fixes/CHANNEL`.
     pub fn fix_topic(&self, channel: &str) -> String {
         format!("{}/fixes/{channel}", self.prefix)
@@ -118,6 +143,50 @@ pub fn channel_name(freq_mhz: Option<f64>) -> String {
     match freq_mhz {
         Some(f) if f > 0.0 && f.is_finite() => format!("{f:.3}"),
         _ => "none".into(),
+    }
+}
+
+/// Most shards (workers sharing one network's channels).
+pub const MAX_SHARDS: u32 = 64;
+
+/// The shard of a channel among `count`: FNV-1a of its topic name, modulo `count`. Fixed by
+/// the name alone, so every publisher and worker agree without talking to each other.
+pub fn shard_of(channel: &str, count: u32) -> u32 {
+    let mut h: u32 = 0x811c_9dc5;
+    for b in channel.bytes() {
+        h = (h ^ u32::from(b)).wrapping_mul(0x0100_0193);
+    }
+    h % count.max(1)
+}
+
+/// One worker's share of the channels: those whose [`shard_of`] among `count` is `index`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    /// This worker's shard, from 0.
+    pub index: u32,
+    /// How many workers share the channels.
+    pub count: u32,
+}
+
+impl Shard {
+    /// `K/N` (0 <= K < N <= 64); nonsense refused on one line naming it.
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let bad =
+            || format!("--mqtt-shard wants K/N with 0 <= K < N <= {MAX_SHARDS}, not `{text}`");
+        let (k, n) = text.split_once('/').ok_or_else(bad)?;
+        let (index, count) = (
+            k.trim().parse::<u32>().map_err(|_| bad())?,
+            n.trim().parse::<u32>().map_err(|_| bad())?,
+        );
+        if count == 0 || count > MAX_SHARDS || index >= count {
+            return Err(bad());
+        }
+        Ok(Self { index, count })
+    }
+
+    /// Whether this worker owns `channel`.
+    pub fn owns(&self, channel: &str) -> bool {
+        shard_of(channel, self.count) == self.index
     }
 }
 
@@ -232,12 +301,17 @@ impl BearingMessage {
     }
 }
 
-/// The bearings already taken, by (channel, station, time).
-pub type Seen = crate::inputs::seen::Seen<(String, String, i64), REMEMBERED>;
+/// The bearings already taken, by the hash of their (channel, station, time).
+pub type Seen = crate::inputs::seen::Seen<u64, REMEMBERED>;
 
-/// A bearing's key in [`Seen`]: a station and a time identify it on its channel.
-pub fn bearing_key(m: &BearingMessage) -> (String, String, i64) {
-    (m.channel(), m.station.clone(), m.time_ms)
+/// A bearing's key in [`Seen`]: a station and a time identify it on its channel. Hashed to 64
+/// bits (the standard library's SipHash with its fixed keys) so that a million keys take tens of
+/// MB, not hundreds: two bearings of a day's traffic share a key with odds of about 1e-8.
+pub fn bearing_key(m: &BearingMessage) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    (m.channel(), m.station.as_str(), m.time_ms).hash(&mut h);
+    h.finish()
 }
 
 /// What the fusing side's subscription counted.
@@ -247,6 +321,9 @@ pub struct Counts {
     pub bearings: AtomicU64,
     /// Copies dropped as already seen.
     pub duplicates: AtomicU64,
+    /// Bearings on this worker's shard topic whose channel is another shard's (a publisher
+    /// told another shard count).
+    pub misrouted: AtomicU64,
     /// Messages that were no bearing (each noted once on stderr, the first few).
     pub refused: AtomicU64,
     /// Fixes handed to the client.
@@ -325,13 +402,14 @@ impl std::fmt::Debug for Subscription {
 
 impl Subscription {
     /// Connect as `client_id` (an error now is the command's), subscribe to every bearing
-    /// under the prefix, and start the thread that
+    /// under the prefix (`shard`'s only, with one), and start the thread that
     /// hands the new bearings' records to `take` in batches (its flag: it may block until
     /// the fusing side has room). Each new bearing goes to `keep` first, before the broker
     /// is told it arrived (a history that stores it; false: it had it already, a copy).
     pub fn start(
         url: &MqttUrl,
         client_id: &str,
+        shard: Option<Shard>,
         mut take: impl FnMut(Vec<KrakenXml>, bool) -> Handed + Send + 'static,
         mut keep: impl FnMut(&BearingMessage) -> bool + Send + 'static,
         note: fn(&str),
@@ -343,7 +421,7 @@ impl Subscription {
         // and overflow its queue for this worker.
         options.set_manual_acks(true);
         let (client, mut conn) = Client::new(options, 64);
-        let filter = url.bearings_filter();
+        let filter = url.worker_filter(shard);
         first_connect(&mut conn, url)?;
         // Also on a session the broker kept: the same client id may have subscribed under
         // another prefix, and subscribing again to the same filter changes nothing.
@@ -386,6 +464,16 @@ impl Subscription {
                     match event {
                         Ok(Event::Incoming(Packet::Publish(p))) => {
                             match BearingMessage::from_payload(&p.payload) {
+                                Ok(m) if shard.is_some_and(|s| !s.owns(&m.channel())) => {
+                                    if c.misrouted.fetch_add(1, Ordering::Relaxed) == 0 {
+                                        note(&format!(
+                                            "{}: channel {} is not this worker's shard: its \
+                                             publisher was told another shard count; skipped",
+                                            p.topic,
+                                            m.channel()
+                                        ));
+                                    }
+                                }
                                 Ok(m) if seen.first_time(bearing_key(&m)) && keep(&m) => {
                                     c.bearings.fetch_add(1, Ordering::Relaxed);
                                     batch.push(m.record());
@@ -582,6 +670,38 @@ mod tests {
             let json = serde_json::to_vec(&m).expect("json");
             assert!(BearingMessage::from_payload(&json).is_err(), "{m:?}");
         }
+    }
+
+    #[test]
+    fn shards_split_the_channels_once() {
+        let url = MqttUrl::parse("mqtt://h/net").expect("url");
+        let channels: Vec<String> = (0..16)
+            .map(|c| channel_name(Some(430.0 + 0.2 * f64::from(c))))
+            .collect();
+        let shards: Vec<Shard> = (0..2).map(|k| Shard { index: k, count: 2 }).collect();
+        let mut owned = [0usize; 2];
+        for ch in &channels {
+            let owners: Vec<&Shard> = shards.iter().filter(|s| s.owns(ch)).collect();
+            assert_eq!(owners.len(), 1, "{ch}");
+            let k = owners[0].index;
+            owned[k as usize] += 1;
+            // The publisher's topic falls under its owner's filter only.
+            let topic = url.sharded_topic(2, ch, "s1");
+            assert_eq!(topic, format!("net/bearings/{k}/{ch}/s1"));
+            assert!(topic.starts_with(url.worker_filter(Some(*owners[0])).trim_end_matches('#')));
+        }
+        // A hash balances channels only on average: the benchmark's 16 channels split 10/6
+        // (docs/src/speed.md counts on that split).
+        assert_eq!(owned, [10, 6]);
+        assert_eq!(
+            url.sharded_topic(1, "145.500", "a"),
+            url.bearing_topic("145.500", "a")
+        );
+        assert_eq!(url.worker_filter(None), "net/bearings/#");
+        for bad in ["2/2", "0/0", "1", "a/2", "0/65"] {
+            assert!(Shard::parse(bad).is_err(), "{bad}");
+        }
+        assert_eq!(Shard::parse("1/3"), Ok(Shard { index: 1, count: 3 }));
     }
 
     #[test]

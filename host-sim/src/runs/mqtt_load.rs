@@ -1,12 +1,13 @@
 //! `foxhunt perf --mqtt URL`: a network's load through a running MQTT broker (docs/src/speed.md,
 //! "Through an MQTT broker"): S stations each sending a bearing on each of C channels R times a
-//! second, a `foxhunt locate --mqtt` worker fusing them, and how long a bearing takes to be in
-//! its channel's published fix.
+//! second, `foxhunt locate --mqtt` workers fusing them (one, or several each owning a shard of
+//! the channels), and how long a bearing takes to be in its channel's published fix.
 //!
 //! A bearing's latency: from its send to the arrival (at a subscriber beside the stations) of
 //! the first fix of its channel whose bearings reach its time (the fix's `time_span_s`; the
-//! synthetic bearings' times are their send schedule). The worker's peak resident memory is its
-//! own `--stats` figure.
+//! synthetic bearings' times are their send schedule). The workers' peak resident memory is
+//! their own `--stats` figure; their resident memory is also sampled every few seconds, to show
+//! whether it stays flat over a long run.
 
 use crate::inputs::mqtt::{BearingMessage, MqttUrl, channel_name};
 use crate::outputs::mqtt::{Backlog, Link, Message};
@@ -33,6 +34,24 @@ pub struct Load {
     pub rate_hz: f64,
     /// Seconds of sending.
     pub seconds: f64,
+    /// Workers, each owning a shard of the channels (1: one worker, unsharded topics).
+    pub workers: u32,
+    /// Each worker's bearings kept per channel (`locate --mqtt-keep`; `None`: its default).
+    pub keep: Option<usize>,
+}
+
+/// Seconds between samples of the timeline.
+const SAMPLE_S: f64 = 10.0;
+
+/// One sample of a run: latencies of the bearings sent in it, and the workers' memory.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Sample {
+    /// Its end, seconds from the start of sending.
+    pub t_s: f64,
+    /// Latency of its bearings, ms: 50th and 99th percentile.
+    pub latency_ms: [f64; 2],
+    /// The workers' resident memory then, MB (summed).
+    pub rss_mb: f64,
 }
 
 /// What a load measured.
@@ -48,8 +67,12 @@ pub struct Figures {
     pub latency_ms: [f64; 3],
     /// Bearings whose time no fix reached.
     pub never: u64,
-    /// The worker's peak resident memory, bytes.
+    /// The largest worker's peak resident memory, bytes.
     pub worker_peak_bytes: u64,
+    /// Each worker's bearings taken and updates (solves) made.
+    pub per_worker: Vec<(u64, u64)>,
+    /// The run sample by sample.
+    pub timeline: Vec<Sample>,
 }
 
 /// The synthetic network: stations on a 8 km ring round an emitter at 47 N, 8 E.
@@ -112,33 +135,83 @@ fn watch_fixes(url: &MqttUrl) -> Result<mpsc::Receiver<(String, f64, Instant)>, 
     Ok(rx)
 }
 
-/// Run the load against the broker with `exe` (this program) as the worker.
-pub fn run(load: &Load, exe: &Path) -> Result<Figures, String> {
-    let mut url = load.url.clone();
-    url.prefix = format!("{}/perf-{}", url.prefix, std::process::id());
-    let worker_id = format!("foxhunt-perf-worker-{}", std::process::id());
-    let mut worker = Command::new(exe)
-        .args(["locate", "--stats", "--quiet-exit", "3", "--mqtt"])
+/// A worker started, its notes as they come.
+struct Worker {
+    child: std::process::Child,
+    notes: mpsc::Receiver<String>,
+}
+
+/// Start worker `k` of `load.workers` and wait for its subscription.
+fn start_worker(load: &Load, url: &MqttUrl, exe: &Path, k: u32) -> Result<Worker, String> {
+    let mut c = Command::new(exe);
+    c.args(["locate", "--stats", "--quiet-exit", "3", "--mqtt"])
         .arg(format!("mqtt://{}/{}", url.address(), url.prefix))
-        .args(["--mqtt-client-id", &worker_id])
+        .args([
+            "--mqtt-client-id",
+            &format!("foxhunt-perf-worker-{}-{k}", std::process::id()),
+        ]);
+    if load.workers > 1 {
+        c.args(["--mqtt-shard", &format!("{k}/{}", load.workers)]);
+    }
+    if let Some(n) = load.keep {
+        c.args(["--mqtt-keep", &n.to_string()]);
+    }
+    let mut child = c
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
         .map_err(|e| format!("cannot start the worker: {e}"))?;
-    let stderr = worker.stderr.take().ok_or("no stderr")?;
-    let (etx, erx) = mpsc::channel::<String>();
+    let stderr = child.stderr.take().ok_or("no stderr")?;
+    let (etx, notes) = mpsc::channel::<String>();
     std::thread::spawn(move || {
         for l in BufReader::new(stderr).lines().map_while(Result::ok) {
             let _ = etx.send(l);
         }
     });
-    let first = erx
+    let first = notes
         .recv_timeout(Duration::from_secs(10))
         .map_err(|_| "the worker did not subscribe".to_string())?;
     if !first.contains("subscribed") {
-        let _ = worker.kill();
+        let _ = child.kill();
         return Err(format!("worker: {first}"));
     }
+    Ok(Worker { child, notes })
+}
+
+/// Resident memory of process `pid`, MB (0 where unknown).
+fn rss_mb(pid: u32) -> f64 {
+    std::fs::read_to_string(format!("/proc/{pid}/status"))
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find_map(|l| l.strip_prefix("VmRSS:"))
+                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok())
+        })
+        .map_or(0.0, |kb| kb / 1024.0)
+}
+
+/// Run the load against the broker with `exe` (this program) as the workers.
+pub fn run(load: &Load, exe: &Path) -> Result<Figures, String> {
+    let mut url = load.url.clone();
+    url.prefix = format!("{}/perf-{}", url.prefix, std::process::id());
+    let mut workers = Vec::new();
+    for k in 0..load.workers.max(1) {
+        workers.push(start_worker(load, &url, exe, k)?);
+    }
+    // The workers' memory, sampled while the load runs.
+    let pids: Vec<u32> = workers.iter().map(|w| w.child.id()).collect();
+    let (mtx, mrx) = mpsc::channel::<(Instant, f64)>();
+    let sampling = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(true));
+    let on = sampling.clone();
+    std::thread::spawn(move || {
+        while on.load(std::sync::atomic::Ordering::Relaxed) {
+            let mb = pids.iter().map(|&p| rss_mb(p)).sum();
+            if mtx.send((Instant::now(), mb)).is_err() {
+                return;
+            }
+            std::thread::sleep(Duration::from_secs(1));
+        }
+    });
     let fixes = watch_fixes(&url)?;
     let freqs: Vec<f64> = (0..load.channels).map(|c| 430.0 + 0.2 * c as f64).collect();
     let ticks = (load.rate_hz * load.seconds).round() as u64;
@@ -149,7 +222,7 @@ pub fn run(load: &Load, exe: &Path) -> Result<Figures, String> {
     let mut threads = Vec::new();
     for k in 0..load.stations {
         let (url, freqs, stx) = (url.clone(), freqs.clone(), stx.clone());
-        let (rate, ring) = (load.rate_hz, load.stations);
+        let (rate, ring, shards) = (load.rate_hz, load.stations, load.workers);
         threads.push(std::thread::spawn(move || -> Result<u64, String> {
             let at = station(k, ring);
             let truth = bearing_to_emitter(at)?;
@@ -182,7 +255,7 @@ pub fn run(load: &Load, exe: &Path) -> Result<Figures, String> {
                         kind: "kraken-xml".into(),
                     };
                     link.send(Message {
-                        topic: url.bearing_topic(&m.channel(), &m.station),
+                        topic: url.sharded_topic(shards, &m.channel(), &m.station),
                         payload: serde_json::to_vec(&m).map_err(|e| e.to_string())?,
                     })?;
                 }
@@ -203,66 +276,205 @@ pub fn run(load: &Load, exe: &Path) -> Result<Figures, String> {
             *s = t;
         }
     }
-    let status = worker.wait().map_err(|e| e.to_string())?;
+    let mut notes: Vec<Vec<String>> = Vec::new();
+    let mut failed = Vec::new();
+    for w in &mut workers {
+        let status = w.child.wait().map_err(|e| e.to_string())?;
+        let n: Vec<String> = w.notes.iter().collect();
+        if !status.success() {
+            failed.push(n.join("; "));
+        }
+        notes.push(n);
+    }
+    sampling.store(false, std::sync::atomic::Ordering::Relaxed);
     // The fixes still in flight to the watcher.
     std::thread::sleep(Duration::from_millis(300));
     let seen: Vec<(String, f64, Instant)> = fixes.try_iter().collect();
-    let notes: Vec<String> = erx.try_iter().collect();
-    if !status.success() {
-        return Err(format!("the worker failed: {}", notes.join("; ")));
+    let memory: Vec<(Instant, f64)> = mrx.try_iter().collect();
+    if !failed.is_empty() {
+        return Err(format!("a worker failed: {}", failed.join(" | ")));
     }
-    let number = |key: &str, tail: &str| {
+    let number = |notes: &[String], key: &str, tail: &str| {
         notes.iter().find_map(|l| {
             let rest = l.split(key).nth(1)?;
             rest.split(tail).next()?.trim().parse::<u64>().ok()
         })
     };
+    // Each bearing's latency, by the tick it was sent in.
     let mut lat = Vec::new();
+    let mut by_tick: Vec<Vec<f64>> = vec![Vec::new(); sent_at.len()];
     let mut never = 0;
     for f in &freqs {
         let channel = channel_name(Some(*f));
         let mine: Vec<&(String, f64, Instant)> = seen.iter().filter(|s| s.0 == channel).collect();
+        // The fixes arrive in order: the first that reaches a tick is found from the last
+        // tick's.
+        let mut from = 0;
         for (i, sent) in sent_at.iter().enumerate() {
             let t = i as f64 / load.rate_hz;
-            match mine.iter().find(|s| s.1 + 1e-3 >= t && s.2 >= *sent) {
-                Some(s) => lat.push(s.2.duration_since(*sent).as_secs_f64() * 1000.0),
+            match mine[from..]
+                .iter()
+                .position(|s| s.1 + 1e-3 >= t && s.2 >= *sent)
+            {
+                Some(j) => {
+                    from += j;
+                    let ms = mine[from].2.duration_since(*sent).as_secs_f64() * 1000.0;
+                    lat.push(ms);
+                    by_tick[i].push(ms);
+                }
                 None => never += 1,
             }
         }
     }
-    lat.sort_by(f64::total_cmp);
-    let q = |p: f64| {
-        lat.get(((lat.len() as f64 - 1.0) * p).round() as usize)
+    let q = |v: &mut Vec<f64>, p: f64| {
+        v.sort_by(f64::total_cmp);
+        v.get(((v.len() as f64 - 1.0) * p).round() as usize)
             .copied()
             .unwrap_or(f64::NAN)
     };
+    let per_sample = ((SAMPLE_S * load.rate_hz).round() as usize).max(1);
+    let mut timeline = Vec::new();
+    for (k, ticks) in by_tick.chunks(per_sample).enumerate() {
+        let mut v: Vec<f64> = ticks.iter().flatten().copied().collect();
+        let end = start + Duration::from_secs_f64((k + 1) as f64 * SAMPLE_S);
+        let rss = memory.iter().rfind(|(t, _)| *t <= end).map_or(0.0, |m| m.1);
+        timeline.push(Sample {
+            t_s: ((k * per_sample + ticks.len()) as f64 / load.rate_hz),
+            latency_ms: [q(&mut v, 0.5), q(&mut v, 0.99)],
+            rss_mb: rss,
+        });
+    }
+    let per_worker: Vec<(u64, u64)> = notes
+        .iter()
+        .map(|n| {
+            (
+                number(n, "mqtt: bearings ", ",").unwrap_or(0),
+                number(n, "updates ", ",").unwrap_or(0),
+            )
+        })
+        .collect();
     Ok(Figures {
         sent: acked,
-        taken: number("mqtt: bearings ", ",").unwrap_or(0),
+        taken: per_worker.iter().map(|w| w.0).sum(),
         fixes: seen.len() as u64,
-        latency_ms: [q(0.5), q(0.99), q(1.0)],
+        latency_ms: [q(&mut lat, 0.5), q(&mut lat, 0.99), q(&mut lat, 1.0)],
         never,
-        worker_peak_bytes: number("peak_bytes ", "\n").unwrap_or(0),
+        worker_peak_bytes: notes
+            .iter()
+            .filter_map(|n| number(n, "peak_bytes ", "\n"))
+            .max()
+            .unwrap_or(0),
+        per_worker,
+        timeline,
     })
+}
+
+/// Resident memory at the end of the first minute (or the first sample) and at the end, MB.
+fn memory_ends(f: &Figures) -> (f64, f64) {
+    let first = f
+        .timeline
+        .iter()
+        .find(|s| s.t_s >= 60.0)
+        .or(f.timeline.first())
+        .map_or(0.0, |s| s.rss_mb);
+    (first, f.timeline.last().map_or(0.0, |s| s.rss_mb))
 }
 
 /// The load and its figures as a markdown table.
 pub fn table(l: &Load, f: &Figures) -> String {
+    let (rss_1, rss_end) = memory_ends(f);
+    let updates: Vec<String> = f.per_worker.iter().map(|w| w.1.to_string()).collect();
     format!(
-        "| stations | channels | rate Hz | bearings/s | sent | taken | fixes | p50 ms | p99 ms | \
-         max ms | no fix | worker peak MB |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n\
-         | {} | {} | {} | {:.0} | {} | {} | {} | {:.0} | {:.0} | {:.0} | {} | {:.1} |",
+        "| stations | channels | rate Hz | bearings/s | workers | sent | taken | fixes | updates | \
+         p50 ms | p99 ms | max ms | no fix | RSS MB at 1 min | at end | worker peak MB |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n\
+         | {} | {} | {} | {:.0} | {} | {} | {} | {} | {} | {:.0} | {:.0} | {:.0} | {} | {:.1} | \
+         {:.1} | {:.1} |",
         l.stations,
         l.channels,
         l.rate_hz,
         l.stations as f64 * l.channels as f64 * l.rate_hz,
+        l.workers,
         f.sent,
         f.taken,
         f.fixes,
+        updates.join(" + "),
         f.latency_ms[0],
         f.latency_ms[1],
         f.latency_ms[2],
         f.never,
+        rss_1,
+        rss_end,
         f.worker_peak_bytes as f64 / 1e6
     )
+}
+
+/// The run's timeline as an SVG plot: each sample's p50 and p99 latency (left scale, ms) and
+/// the workers' resident memory (right scale, MB), against the time of sending.
+pub fn svg(l: &Load, f: &Figures) -> String {
+    let (w, h, left, right, top, bottom) = (640.0, 300.0, 56.0, 56.0, 28.0, 36.0);
+    let (pw, ph) = (w - left - right, h - top - bottom);
+    let t_max = f.timeline.last().map_or(1.0, |s| s.t_s).max(1.0);
+    let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
+    let lat_max = f
+        .timeline
+        .iter()
+        .map(|s| finite(s.latency_ms[1]))
+        .fold(1.0f64, f64::max)
+        * 1.1;
+    let mem_max = f.timeline.iter().map(|s| s.rss_mb).fold(1.0f64, f64::max) * 1.1;
+    let x = |t: f64| left + pw * t / t_max;
+    let line = |pick: &dyn Fn(&Sample) -> f64, max: f64, colour: &str| {
+        let pts: Vec<String> = f
+            .timeline
+            .iter()
+            .map(|s| {
+                format!(
+                    "{:.1},{:.1}",
+                    x(s.t_s),
+                    top + ph * (1.0 - finite(pick(s)) / max)
+                )
+            })
+            .collect();
+        format!(
+            "<polyline fill=\"none\" stroke=\"{colour}\" stroke-width=\"1.5\" points=\"{}\"/>\n",
+            pts.join(" ")
+        )
+    };
+    let mut out = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" \
+         font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"100%\" height=\"100%\" \
+         fill=\"white\"/>\n<text x=\"{left}\" y=\"16\">{} stations x {} channels x {} Hz = \
+         {:.0} bearings/s, {} worker(s): latency p50 (blue), p99 (red), RSS (grey)</text>\n\
+         <rect x=\"{left}\" y=\"{top}\" width=\"{pw}\" height=\"{ph}\" fill=\"none\" \
+         stroke=\"black\"/>\n",
+        l.stations,
+        l.channels,
+        l.rate_hz,
+        l.stations as f64 * l.channels as f64 * l.rate_hz,
+        l.workers
+    );
+    for k in 0..=4 {
+        let fr = f64::from(k) / 4.0;
+        let y = top + ph * (1.0 - fr);
+        out += &format!(
+            "<text x=\"{:.0}\" y=\"{:.0}\" text-anchor=\"end\">{:.0} ms</text>\n\
+             <text x=\"{:.0}\" y=\"{:.0}\">{:.0} MB</text>\n\
+             <text x=\"{:.0}\" y=\"{:.0}\" text-anchor=\"middle\">{:.0} s</text>\n",
+            left - 4.0,
+            y + 4.0,
+            lat_max * fr,
+            w - right + 4.0,
+            y + 4.0,
+            mem_max * fr,
+            x(t_max * fr),
+            h - bottom + 14.0,
+            t_max * fr
+        );
+    }
+    out += &line(&|s| s.latency_ms[0], lat_max, "#1f5fbf");
+    out += &line(&|s| s.latency_ms[1], lat_max, "#c0392b");
+    out += &line(&|s| s.rss_mb, mem_max, "#888888");
+    out += "</svg>\n";
+    out
 }

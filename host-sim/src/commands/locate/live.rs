@@ -17,12 +17,13 @@
 //! unit running foxhunt's firmware: every line (`--json`: `unit`, also when there is no fix
 //! yet) carries what the unit said ([`crate::inputs::unit`]).
 
+use super::window::ChannelWindow;
 use crate::estimate::options::LocateOptions;
 use crate::guidance::guide::Guide;
 use crate::inputs::capture::{Decoded, Decoder};
 use crate::inputs::gpsd::{GpsdAddress, Report, Watch};
 use crate::inputs::kraken_http::KrakenUrl;
-use crate::inputs::mqtt::{Handed, MqttUrl, Subscription, channel_name};
+use crate::inputs::mqtt::{Handed, MqttUrl, Shard, Subscription, channel_name};
 use crate::locate::locate_guided;
 use crate::outputs::cot::{self, CotSender, CotUrl};
 use crate::outputs::history::recorder::Recorder;
@@ -55,6 +56,10 @@ pub enum LiveSource {
         url: MqttUrl,
         /// The session's client id.
         client_id: String,
+        /// This worker's share of the channels (`None`: all of them).
+        shard: Option<Shard>,
+        /// Bearings kept per channel, the latest ([`super::window`]).
+        keep: usize,
     },
 }
 
@@ -184,10 +189,16 @@ pub fn reader(
             }
             return Ok(line(rx, None));
         }
-        LiveSource::Mqtt { url, client_id } => {
+        LiveSource::Mqtt {
+            url,
+            client_id,
+            shard,
+            ..
+        } => {
             let sub = Subscription::start(
                 url,
                 client_id,
+                *shard,
                 move |v, wait| match wait {
                     true => match tx.send(Chunk::Records(v)) {
                         Ok(()) => Handed::Yes,
@@ -313,10 +324,16 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
     }
     let mut line = reader(&o.source, o.gpsd.as_ref(), o.history.clone())?;
     let mut tak = o.cot.clone().map(CotSender::new);
-    let mut reported = (0usize, 0u32);
+    // A broker's bearings: each channel's latest kept.
+    let mut window = match &o.source {
+        LiveSource::Mqtt { keep, .. } => Some(ChannelWindow::new(*keep)),
+        _ => None,
+    };
+    let mut reported = (0u64, 0u32);
     let mut ended = false;
     // The last update's outcome; `None` until one is printed.
     let mut last: Option<Option<String>> = None;
+    let mut updates = 0u64;
     while !ended {
         ended = line.take(&mut dec, o.quiet_exit)?;
         if ended {
@@ -326,12 +343,21 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
         if let (Some(h), Some(stamper)) = (&o.history, stamper.as_mut()) {
             h.keep_decoded(stamper, &mut dec);
         }
-        // New bearings, or a new fix sentence of a DF unit (its user port carries no bearings).
-        let n = (dec.decoded.observations.len(), dec.decoded.unit.fixes);
+        // New bearings, or a new fix sentence of a DF unit (its user port carries no bearings);
+        // counted before the window drops the oldest.
+        let dropped = window.as_ref().map_or(0, |w| w.dropped);
+        let n = (
+            dropped + dec.decoded.observations.len() as u64,
+            dec.decoded.unit.fixes,
+        );
+        if let Some(w) = window.as_mut() {
+            w.trim(&mut dec.decoded.observations);
+        }
         // New bearings (or a unit's fix) make an update; a line that ends without any makes
         // one too, so that it says why there is no fix.
         if n != reported || (ended && last.is_none()) {
             reported = n;
+            updates += 1;
             dec.snapshot();
             let located = locate_guided(&dec.decoded, &o.locate, guide);
             // TAK missing an update is no reason to stop following the emitter: the next
@@ -369,11 +395,15 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
         let c = &sub.counts;
         let n = |a: &std::sync::atomic::AtomicU64| a.load(std::sync::atomic::Ordering::Relaxed);
         note(&format!(
-            "mqtt: bearings {}, duplicates {}, refused {}, fixes {}",
+            "mqtt: bearings {}, duplicates {}, refused {}, other shard {}, fixes {}, updates {}, \
+             dropped past the window {}",
             n(&c.bearings),
             n(&c.duplicates),
             n(&c.refused),
-            n(&c.fixes_acked)
+            n(&c.misrouted),
+            n(&c.fixes_acked),
+            updates,
+            window.as_ref().map_or(0, |w| w.dropped)
         ));
     }
     Ok(LiveEnd {

@@ -2,6 +2,7 @@
 //! with its maps.
 
 pub mod live;
+pub mod window;
 
 use super::{GuidanceArgs, method, values};
 use crate::estimate::options::{LocateOptions, PARTICLES};
@@ -155,6 +156,17 @@ pub struct Args {
         requires = "mqtt"
     )]
     pub mqtt_client_id: String,
+    /// With --mqtt: fuse only shard K of N (`K/N`): the channels whose name hashes to K,
+    /// published by `foxhunt publish --shards N` to PREFIX/bearings/K/CHANNEL/STATION. Run
+    /// one worker per K, each with its own --mqtt-client-id.
+    #[arg(long, value_name = "K/N", requires = "mqtt",
+          value_parser = |s: &str| crate::inputs::mqtt::Shard::parse(s))]
+    pub mqtt_shard: Option<crate::inputs::mqtt::Shard>,
+    /// With --mqtt: bearings kept per channel, the latest: the fix of a long run is that of
+    /// its last N bearings on each channel, in bounded memory and solve time.
+    #[arg(long, value_name = "N", default_value_t = window::KEEP, requires = "mqtt",
+          value_parser = super::values::count_at_least(2, "bearings per channel"))]
+    pub mqtt_keep: usize,
     /// Send each fix to TAK (ATAK, WinTAK, iTAK, a TAK server) as Cursor-on-Target events:
     /// `udp://HOST:PORT` (a LAN's multicast is udp://239.2.3.1:6969) or `tcp://HOST:PORT`;
     /// live: every update. Each emitter with its 95 % ellipse, each station with its latest
@@ -512,6 +524,8 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
                     LiveSource::Mqtt {
                         url,
                         client_id: a.mqtt_client_id.clone(),
+                        shard: a.mqtt_shard,
+                        keep: a.mqtt_keep,
                     },
                     None,
                 ),

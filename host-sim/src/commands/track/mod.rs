@@ -206,6 +206,10 @@ fn live_source(a: &Args) -> Result<Option<LiveSource>, Stop> {
         return Ok(Some(LiveSource::Mqtt {
             url: MqttUrl::parse(url).map_err(Stop::Usage)?,
             client_id: a.mqtt_client_id.clone(),
+            // Every channel; the tracker keeps no bearing it has stepped, so `keep` (what a
+            // fusing worker holds per channel) bounds nothing here.
+            shard: None,
+            keep: crate::commands::locate::window::KEEP,
         }));
     }
     if !a.kraken.is_empty() {

@@ -1,0 +1,117 @@
+//! A live worker's memory bound: each channel keeps its latest bearings, a fixed number of
+//! them (docs/src/networks.md, "Through an MQTT broker"). A network sends without end; a fix
+//! over every bearing ever heard would grow in memory and in solve time with the run, while
+//! a still emitter's fix from its latest few thousand bearings is as good and follows it
+//! when it moves or stops.
+
+use foxhunt_core::fix::locate::Observation;
+use std::collections::HashMap;
+
+/// The bearings kept per channel by default: minutes of a small network, seconds of a large
+/// one (200 stations at 2 Hz fill it in 10 s).
+pub const KEEP: usize = 4096;
+
+/// Each channel's latest `keep` bearings, the older dropped.
+#[derive(Debug, Clone)]
+pub struct ChannelWindow {
+    keep: usize,
+    /// Bearings dropped so far.
+    pub dropped: u64,
+}
+
+/// A bearing's channel as the topics name it ([`crate::inputs::mqtt::channel_name`]): its
+/// frequency to the kHz.
+fn channel_key(o: &Observation) -> i64 {
+    match o.freq_mhz {
+        Some(f) if f > 0.0 && f.is_finite() => (f64::from(f) * 1000.0).round() as i64,
+        _ => -1,
+    }
+}
+
+impl ChannelWindow {
+    /// Keep `keep` bearings per channel (at least 1).
+    pub fn new(keep: usize) -> Self {
+        Self {
+            keep: keep.max(1),
+            dropped: 0,
+        }
+    }
+
+    /// Drop each channel's oldest bearings beyond the bound, keeping the order of the rest;
+    /// how many were dropped. The observations are in arrival order, so a channel's oldest are
+    /// its first.
+    pub fn trim(&mut self, obs: &mut Vec<Observation>) -> usize {
+        if obs.len() <= self.keep {
+            return 0;
+        }
+        let mut count: HashMap<i64, usize> = HashMap::new();
+        for o in obs.iter() {
+            *count.entry(channel_key(o)).or_default() += 1;
+        }
+        // How many each channel still has to drop.
+        let mut excess: HashMap<i64, usize> = count
+            .into_iter()
+            .filter(|&(_, n)| n > self.keep)
+            .map(|(k, n)| (k, n - self.keep))
+            .collect();
+        if excess.is_empty() {
+            return 0;
+        }
+        let before = obs.len();
+        obs.retain(|o| match excess.get_mut(&channel_key(o)) {
+            Some(n) if *n > 0 => {
+                *n -= 1;
+                false
+            }
+            _ => true,
+        });
+        let gone = before - obs.len();
+        self.dropped += gone as u64;
+        gone
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use foxhunt_core::Bearing;
+
+    fn obs(freq: f32, t: f32) -> Observation {
+        Observation {
+            bearing: Bearing {
+                vehicle: [0.0, 0.0],
+                theta: 0.0,
+                sigma: 0.02,
+            },
+            time_s: t,
+            freq_mhz: Some(freq),
+            station: 0,
+            stamped: true,
+        }
+    }
+
+    #[test]
+    fn each_channel_keeps_its_latest_in_order() {
+        let mut v = Vec::new();
+        for i in 0..10 {
+            v.push(obs(145.5, i as f32));
+            if i % 2 == 0 {
+                v.push(obs(433.92, i as f32));
+            }
+        }
+        let mut w = ChannelWindow::new(3);
+        assert_eq!(w.trim(&mut v), 7 + 2);
+        let times = |f: f32| -> Vec<f32> {
+            v.iter()
+                .filter(|o| o.freq_mhz == Some(f))
+                .map(|o| o.time_s)
+                .collect()
+        };
+        assert_eq!(times(145.5), vec![7.0, 8.0, 9.0]);
+        assert_eq!(times(433.92), vec![4.0, 6.0, 8.0]);
+        // Arrival order kept across channels.
+        assert!(v.windows(2).all(|p| p[0].time_s <= p[1].time_s));
+        assert_eq!(w.trim(&mut v), 0);
+        assert_eq!(w.dropped, 9);
+    }
+}
