@@ -314,24 +314,7 @@ fn a_moving_emitter_s_track_reaches_tak_with_its_course_and_speed() {
     let dir = std::env::temp_dir().join(format!("foxhunt-cot-track-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("scratch");
     let xml = dir.join("drone.xml");
-    let sim = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
-        .args([
-            "simulate",
-            "--condition",
-            "move-fixed-turning",
-            "--run",
-            "1",
-            "--force",
-            "--out",
-        ])
-        .arg(&xml)
-        .output()
-        .expect("simulate");
-    assert!(
-        sim.status.success(),
-        "{}",
-        String::from_utf8_lossy(&sim.stderr)
-    );
+    common::simulate("move-fixed-turning", Some(1), &xml);
     // The track's last point and its ellipse: two datagrams.
     let ear = listener(&["udp", "2"]);
     let url = format!("udp://127.0.0.1:{}", ear.2);

@@ -10,6 +10,8 @@ use foxhunt_sim::runs::moving::bench::one;
 use serde_json::Value;
 use std::process::Command;
 
+mod common;
+
 fn foxhunt(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_foxhunt"))
         .args(args)
@@ -51,6 +53,24 @@ fn judge(points: &[Value], truth: &[(f64, [f64; 2])], warmup_s: f64) -> Vec<(f64
     out
 }
 
+/// (t_s, [column a, column b]) of every line of the truth beside capture `out`
+/// (`t_s,lat,lon,east_m,north_m,moving`).
+fn truth_columns(out: &std::path::Path, [a, b]: [usize; 2]) -> Vec<(f64, [f64; 2])> {
+    std::fs::read_to_string(out.with_extension("truth.csv"))
+        .expect("truth")
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let c: Vec<f64> = l
+                .split(',')
+                .take(5)
+                .map(|x| x.parse().expect("number"))
+                .collect();
+            (c[0], [c[a], c[b]])
+        })
+        .collect()
+}
+
 fn rmse_and_coverage(f: &[(f64, bool)]) -> (f64, f64) {
     let n = f.len() as f64;
     let rmse = (f.iter().map(|(e, _)| e * e).sum::<f64>() / n).sqrt();
@@ -68,33 +88,8 @@ fn a_simulated_drone_s_records_track_as_well_as_its_measurements() {
     for run in 1..=3usize {
         let out = dir.join(format!("{name}-{run}.xml"));
         let path = out.to_str().expect("path");
-        let sim = foxhunt(&[
-            "simulate",
-            "--condition",
-            name,
-            "--run",
-            &run.to_string(),
-            "--out",
-            path,
-        ]);
-        assert!(
-            sim.status.success(),
-            "{}",
-            String::from_utf8_lossy(&sim.stderr)
-        );
-        let truth: Vec<(f64, [f64; 2])> = std::fs::read_to_string(out.with_extension("truth.csv"))
-            .expect("truth")
-            .lines()
-            .skip(1)
-            .map(|l| {
-                let c: Vec<f64> = l
-                    .split(',')
-                    .take(5)
-                    .map(|x| x.parse().expect("number"))
-                    .collect();
-                (c[0], [c[3], c[4]])
-            })
-            .collect();
+        common::simulate(name, Some(run), &out);
+        let truth: Vec<(f64, [f64; 2])> = truth_columns(&out, [3, 4]);
         assert_eq!(truth.len(), s.steps());
         let stations = out.with_extension("stations.toml");
         let t = foxhunt(&[
@@ -206,34 +201,9 @@ fn an_indoor_walker_s_records_track_as_well_as_its_measurements() {
     for run in 1..=3usize {
         let out = dir.join(format!("{name}-{run}.xml"));
         let path = out.to_str().expect("path");
-        let sim = foxhunt(&[
-            "simulate",
-            "--condition",
-            name,
-            "--run",
-            &run.to_string(),
-            "--out",
-            path,
-        ]);
-        assert!(
-            sim.status.success(),
-            "{}",
-            String::from_utf8_lossy(&sim.stderr)
-        );
+        common::simulate(name, Some(run), &out);
         // (t_s, [lat, lon]) every report.
-        let truth: Vec<(f64, [f64; 2])> = std::fs::read_to_string(out.with_extension("truth.csv"))
-            .expect("truth")
-            .lines()
-            .skip(1)
-            .map(|l| {
-                let c: Vec<f64> = l
-                    .split(',')
-                    .take(3)
-                    .map(|x| x.parse().expect("number"))
-                    .collect();
-                (c[0], [c[1], c[2]])
-            })
-            .collect();
+        let truth: Vec<(f64, [f64; 2])> = truth_columns(&out, [1, 2]);
         let stations = out.with_extension("stations.toml");
         let t = foxhunt(&[
             "track",

@@ -13,6 +13,8 @@ use std::process::{Child, Command, Stdio};
 use std::sync::mpsc::{Receiver, channel};
 use std::time::{Duration, Instant};
 
+mod common;
+
 const FOXHUNT: &str = env!("CARGO_BIN_EXE_foxhunt");
 
 /// One broker at a time: a port freed by one test's broker restart could otherwise be handed
@@ -701,24 +703,7 @@ fn a_drone_s_stations_through_the_broker_track_as_the_recording_does() {
     let _one_broker = serial();
     let broker = Broker::start("track");
     let xml = broker.dir.join("drone.xml");
-    let sim = Command::new(FOXHUNT)
-        .args([
-            "simulate",
-            "--condition",
-            "move-fixed-turning",
-            "--run",
-            "1",
-            "--force",
-            "--out",
-        ])
-        .arg(&xml)
-        .output()
-        .expect("simulate");
-    assert!(
-        sim.status.success(),
-        "{}",
-        String::from_utf8_lossy(&sim.stderr)
-    );
+    common::simulate("move-fixed-turning", Some(1), &xml);
     let stations = broker.dir.join("drone.stations.toml");
     let stations = stations.to_str().expect("path");
     let url = broker.url("drone");

@@ -269,20 +269,7 @@ fn bad_options_are_one_line_refusals() {
 /// stations file: (capture, stations file).
 fn drone(dir: &std::path::Path) -> (PathBuf, PathBuf) {
     let xml = dir.join("drone.xml");
-    let out = foxhunt(&[
-        "simulate",
-        "--condition",
-        "move-fixed-turning",
-        "--run",
-        "1",
-        "--out",
-        xml.to_str().expect("path"),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::simulate("move-fixed-turning", Some(1), &xml);
     (xml, dir.join("drone.stations.toml"))
 }
 

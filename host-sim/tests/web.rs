@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 
 mod common;
-use common::grid_osm;
+use common::{grid_osm, simulate};
 
 fn chromium() -> PathBuf {
     for c in ["chromium", "chromium-browser"] {
@@ -262,22 +262,7 @@ fn the_live_map_draws_fixed_stations_as_squares() {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("web-stations");
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("network.xml");
-    let out = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
-        .args([
-            "simulate",
-            "--condition",
-            "network-mobile",
-            "--force",
-            "--out",
-        ])
-        .arg(&path)
-        .output()
-        .expect("run foxhunt simulate");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    simulate("network-mobile", None, &path);
     let osm = dir.join("grid.osm");
     grid_osm(&osm);
     let dom = page_dom(&dir, &path, &osm);
@@ -302,24 +287,7 @@ fn the_live_map_tracks_an_emitter_that_moves_with_its_ellipse_and_velocity() {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("drone.xml");
     // A drone flying east at 12 m/s over its last minutes, seen by four masts.
-    let out = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
-        .args([
-            "simulate",
-            "--condition",
-            "move-fixed-turning",
-            "--run",
-            "1",
-            "--force",
-            "--out",
-        ])
-        .arg(&path)
-        .output()
-        .expect("run foxhunt simulate");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    simulate("move-fixed-turning", Some(1), &path);
     let osm = dir.join("grid.osm");
     grid_osm(&osm);
     let dom = page_dom(&dir, &path, &osm);

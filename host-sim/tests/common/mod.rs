@@ -92,3 +92,21 @@ pub fn json_lines(args: &[String]) -> Vec<serde_json::Value> {
         .map(|l| serde_json::from_str(&l.expect("line")).expect("JSON"))
         .collect()
 }
+
+/// `foxhunt simulate --condition CONDITION [--run RUN] --force --out OUT`, which must
+/// succeed: the stations' records at `out`, their stations file and the emitter's true track
+/// beside it (`*.stations.toml`, `*.truth.csv`).
+pub fn simulate(condition: &str, run: Option<usize>, out: &Path) {
+    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_foxhunt"));
+    c.args(["simulate", "--condition", condition, "--force", "--out"])
+        .arg(out);
+    if let Some(r) = run {
+        c.args(["--run", &r.to_string()]);
+    }
+    let sim = c.output().expect("run foxhunt simulate");
+    assert!(
+        sim.status.success(),
+        "{}",
+        String::from_utf8_lossy(&sim.stderr)
+    );
+}
