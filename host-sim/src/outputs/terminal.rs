@@ -116,3 +116,16 @@ pub fn write_error(e: std::io::Error) -> Stop {
         Stop::Error(format!("cannot write to standard output: {e}"))
     }
 }
+
+/// Peak resident memory of this process, bytes (`VmHWM` of /proc/self/status; 0 where the
+/// system has none): what `--stats` and the benchmarks report.
+pub fn peak_bytes() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find_map(|l| l.strip_prefix("VmHWM:"))
+                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
+        })
+        .map_or(0, |kb| kb * 1024)
+}

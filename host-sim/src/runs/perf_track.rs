@@ -74,19 +74,6 @@ impl TrackTiming {
     }
 }
 
-/// Peak resident memory of this process, bytes (`VmHWM` of /proc/self/status; 0 where the
-/// system has none).
-fn peak_bytes() -> u64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find_map(|l| l.strip_prefix("VmHWM:"))
-                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
-        })
-        .map_or(0, |kb| kb * 1024)
-}
-
 /// CPU seconds this thread has run (0 where the system does not say).
 fn thread_cpu_s() -> f64 {
     std::fs::read_to_string("/proc/thread-self/schedstat")
@@ -147,7 +134,7 @@ pub fn measure(mut progress: impl FnMut(usize)) -> Result<Vec<TrackTiming>, Stri
             sir_step: sir_cpu / ((sir_runs + 1) * 60) as f64,
             rmse: (f.errors.iter().map(|e| f64::from(*e).powi(2)).sum::<f64>() / k).sqrt(),
             coverage: f.covered.iter().filter(|c| **c).count() as f64 / k,
-            peak_bytes: peak_bytes(),
+            peak_bytes: crate::outputs::terminal::peak_bytes(),
             // States, log-weights and weights.
             state_bytes: n * (size + 2) * 4,
         });

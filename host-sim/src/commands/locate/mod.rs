@@ -382,18 +382,6 @@ fn line_input(a: &Args) -> Result<Input, Stop> {
     })
 }
 
-/// Peak resident memory of this process, bytes (Linux; 0 where unknown).
-fn peak_bytes() -> u64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find_map(|l| l.strip_prefix("VmHWM:"))
-                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
-        })
-        .map_or(0, |kb| kb * 1024)
-}
-
 /// Particles of fa-pf unless `--particles` says otherwise: its firefly move pairs every
 /// particle with every brighter one at each bearing, so its time grows with their square (1000
 /// on 60 bearings: over 20 s).
@@ -661,7 +649,7 @@ fn finish(a: &Args, d: &Decoded, started: Instant) {
             "stats: bearings {}, seconds {:.3}, peak_bytes {}",
             d.observations.len(),
             started.elapsed().as_secs_f64(),
-            peak_bytes()
+            crate::outputs::terminal::peak_bytes()
         ));
     }
 }
