@@ -767,3 +767,88 @@ fn a_drone_s_stations_through_the_broker_track_as_the_recording_does() {
         "{live_rmse} against {file_rmse}"
     );
 }
+
+/// `GET path` of a local HTTP server at `addr` (`http://HOST:PORT/`): the body.
+fn http_get(addr: &str, path: &str) -> String {
+    use std::io::{Read, Write};
+    let host = addr.trim_start_matches("http://").trim_end_matches('/');
+    let mut s = std::net::TcpStream::connect(host).expect("connect to serve");
+    write!(s, "GET {path} HTTP/1.0\r\nHost: {host}\r\n\r\n").expect("request");
+    let mut text = String::new();
+    s.read_to_string(&mut text).expect("response");
+    text.split_once("\r\n\r\n")
+        .map(|(_, b)| b.to_string())
+        .expect("a body")
+}
+
+#[test]
+fn the_live_map_follows_three_stations_through_the_broker() {
+    let _one_broker = serial();
+    let broker = Broker::start("serve");
+    let files = station_files(&broker.dir);
+    let url = broker.url("map");
+    let mut child = Command::new(FOXHUNT)
+        .args([
+            "serve",
+            "--addr",
+            "127.0.0.1:0",
+            "--mqtt",
+            &url,
+            "--mqtt-client-id",
+        ])
+        .args(["serve-test", "--quiet-exit", "3", "--linger", "60"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run serve --mqtt");
+    let stderr = lines_of(child.stderr.take().expect("stderr"));
+    let next = || {
+        stderr
+            .recv_timeout(Duration::from_secs(30))
+            .expect("serve's notes")
+    };
+    // It subscribes before it serves: every bearing published from now on reaches the map.
+    let addr = loop {
+        let l = next();
+        if let Some(a) = l.strip_prefix("foxhunt serve: ") {
+            break a.to_string();
+        }
+    };
+    for p in files
+        .iter()
+        .map(|f| publish(f, &url, None))
+        .collect::<Vec<_>>()
+    {
+        published(p);
+    }
+    loop {
+        let l = next();
+        if l.contains("input ended") {
+            assert!(l.contains("after 1800 bearings"), "{l}");
+            break;
+        }
+    }
+    let state: Value = serde_json::from_str(&http_get(&addr, "/state")).expect("JSON state");
+    let _ = child.kill();
+    let _ = child.wait();
+    assert_eq!(state["bearings"], 1800);
+    assert_eq!(state["done"], true);
+    // The three masts on the map, and the fix the recorded files give.
+    assert_eq!(
+        state["stations"].as_array().map(Vec::len),
+        Some(3),
+        "{state}"
+    );
+    let file = recorded(&files);
+    let (at, f) = (&state["emitters"][0]["at"], &file["emitters"][0]);
+    let num = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
+    let apart = ((num(&at[0]) - num(&f["lat"])) * 111_200.0)
+        .hypot((num(&at[1]) - num(&f["lon"])) * 75_800.0);
+    println!("the map's fix {apart:.3} m from the recorded files'");
+    // The broker's bearings pass the bridge's clock hold as the files' do (the fusion is the
+    // same): the same fix, within 1 % of its ellipse's minor axis.
+    assert!(
+        apart < 0.01 * num(&f["ellipse"]["minor_m"]),
+        "{apart} m apart"
+    );
+}

@@ -1,7 +1,11 @@
-//! `foxhunt serve`: the live map of a replayed capture or of standard input.
+//! `foxhunt serve`: the live map of a replayed capture, of standard input, or of a live line
+//! (KrakenSDRs' web pages, an MQTT broker).
 
 use super::{GuidanceArgs, values};
+use crate::commands::locate::kraken_urls;
+use crate::commands::locate::live::{LiveSource, reader};
 use crate::inputs::files::{InputKind, Source};
+use crate::inputs::mqtt::MqttUrl;
 use crate::outputs::serve::{Input, ServeOptions, serve};
 use crate::outputs::terminal::{Outcome, Stop};
 use std::path::PathBuf;
@@ -11,8 +15,27 @@ use std::time::Duration;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Capture files replayed in order, or `-` for standard input (read as it arrives).
-    #[arg(required = true)]
     pub captures: Vec<PathBuf>,
+    /// Live: poll a KrakenSDR's web page, `http://HOST:8081` (repeatable: every unit polled
+    /// at once, each a station of its own); no CAPTURE.
+    #[arg(long, value_name = "URL")]
+    pub kraken: Vec<String>,
+    /// Live: every station's bearings from an MQTT broker, `mqtt://HOST[:PORT]/PREFIX` (as
+    /// `locate --mqtt` reads them); no CAPTURE.
+    #[arg(long, value_name = "URL")]
+    pub mqtt: Option<String>,
+    /// With --mqtt: the client id of the broker session.
+    #[arg(
+        long,
+        value_name = "ID",
+        default_value = "foxhunt-serve",
+        requires = "mqtt"
+    )]
+    pub mqtt_client_id: String,
+    /// Live: the input ends after this many seconds without a bearing's bytes (default: the
+    /// line is followed until stopped).
+    #[arg(long, value_parser = values::seconds())]
+    pub quiet_exit: Option<f64>,
     /// Address to listen on (port 0: any free port; the address is printed on stderr).
     #[arg(long, default_value = "127.0.0.1:8080")]
     pub addr: String,
@@ -33,9 +56,71 @@ pub struct Args {
     pub linger: Option<f64>,
 }
 
+/// The live line `--kraken` or `--mqtt` asks for, read as `locate` reads it.
+fn line(a: &Args) -> Result<Option<Input>, Stop> {
+    let source = match (&a.mqtt, a.kraken.is_empty()) {
+        (None, true) => return Ok(None),
+        (Some(_), false) => {
+            return Err(Stop::usage("give --kraken or --mqtt, not both"));
+        }
+        (Some(url), true) => {
+            if !a.captures.is_empty() {
+                return Err(Stop::usage("--mqtt reads the broker: give no CAPTURE"));
+            }
+            LiveSource::Mqtt {
+                url: MqttUrl::parse(url).map_err(Stop::Usage)?,
+                client_id: a.mqtt_client_id.clone(),
+                shard: None,
+                keep: crate::commands::locate::window::KEEP,
+            }
+        }
+        (None, false) => {
+            LiveSource::Kraken(kraken_urls(&a.kraken, !a.captures.is_empty(), "CAPTURE")?)
+        }
+    };
+    let names: Vec<String> = match &source {
+        LiveSource::Kraken(urls) if urls.len() > 1 => urls
+            .iter()
+            .map(|u| u.base.trim_start_matches("http://").to_string())
+            .collect(),
+        _ => Vec::new(),
+    };
+    let quiet = a.quiet_exit.map(Duration::from_secs_f64);
+    let mut line = reader(&source, None, None)?;
+    let mut started = false;
+    Ok(Some(Input::Line(Box::new(move |dec| {
+        if !started {
+            started = true;
+            // Several KrakenSDRs: each URL an input, so a unit without a STATION_ID is a
+            // station of its own.
+            for n in &names {
+                dec.begin_input(n)?;
+            }
+        }
+        line.take(dec, quiet).map_err(|s| match s {
+            Stop::Error(e) | Stop::Usage(e) => e,
+            Stop::Closed => "the line closed".into(),
+        })
+    }))))
+}
+
 /// Run `foxhunt serve`.
 pub fn run(a: &Args) -> Outcome {
-    let input = match a.captures.as_slice() {
+    let input = match (line(a)?, a.captures.as_slice()) {
+        (Some(live), _) => live,
+        (None, []) => {
+            return Err(Stop::usage(
+                "give a CAPTURE, - for standard input, --kraken or --mqtt",
+            ));
+        }
+        (None, captures) => replayed(a, captures)?,
+    };
+    serve_input(a, input)
+}
+
+/// Capture files to replay, or standard input.
+fn replayed(a: &Args, captures: &[PathBuf]) -> Result<Input, Stop> {
+    Ok(match captures {
         [one] if one.as_os_str() == "-" => Input::Stdin,
         many if many.iter().any(|p| p.as_os_str() == "-") => {
             return Err(Stop::usage(
@@ -62,7 +147,11 @@ pub fn run(a: &Args) -> Outcome {
                 pace: Duration::from_secs_f64(a.pace),
             }
         }
-    };
+    })
+}
+
+/// Serve `input`.
+fn serve_input(a: &Args, input: Input) -> Outcome {
     let linger = a.linger.map(Duration::from_secs_f64);
     serve(ServeOptions {
         addr: a.addr.clone(),

@@ -44,7 +44,6 @@ const LEAFLET_CSS: &str = include_str!("../../../web/leaflet/leaflet.css");
 const LEAFLET_LICENSE: &str = include_str!("../../../web/leaflet/LICENSE");
 
 /// Where the serve loop reads from.
-#[derive(Debug, Clone, PartialEq)]
 pub enum Input {
     /// Capture files replayed in order: `lines` lines per chunk, `pace` between chunks.
     Replay {
@@ -57,10 +56,32 @@ pub enum Input {
     },
     /// Standard input, as it arrives.
     Stdin,
+    /// A live line (KrakenSDRs' web pages, a broker): each call feeds the decoder what the
+    /// line brought and says whether it ended.
+    Line(LineFeed),
+}
+
+/// A live line's reader, as `foxhunt serve` hands it over: feed the decoder what arrived
+/// (blocking a moment when nothing did); `Ok(true)` once the line has ended.
+pub type LineFeed = Box<dyn FnMut(&mut Decoder) -> Result<bool, String> + Send>;
+
+impl std::fmt::Debug for Input {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Input::Replay { files, lines, pace } => f
+                .debug_struct("Replay")
+                .field("files", files)
+                .field("lines", lines)
+                .field("pace", pace)
+                .finish(),
+            Input::Stdin => f.write_str("Stdin"),
+            Input::Line(_) => f.write_str("Line"),
+        }
+    }
 }
 
 /// Settings of the server.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct ServeOptions {
     /// Address to listen on (port 0: any free port, printed on stderr).
     pub addr: String,
@@ -209,6 +230,13 @@ fn feed(
                 }
             }
         }
+        Input::Line(mut take) => loop {
+            let ended = take(&mut dec)?;
+            if ended {
+                break;
+            }
+            publish(&mut dec, false);
+        },
         Input::Stdin => {
             let mut buf = vec![0u8; 4096];
             let mut stdin = std::io::stdin();
@@ -304,7 +332,7 @@ pub fn serve(o: ServeOptions) -> Result<(), String> {
             )
             .with_state(shared.clone());
         let done = Arc::new(Notify::new());
-        let (feeder_done, input, guide) = (done.clone(), o.input.clone(), o.guide);
+        let (feeder_done, input, guide) = (done.clone(), o.input, o.guide);
         let feeder = std::thread::Builder::new()
             .name("foxhunt-serve-input".into())
             .spawn(move || {
