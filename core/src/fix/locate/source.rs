@@ -494,7 +494,9 @@ fn noise_used(
     let tau = consistency::correlation_time(
         members.iter().map(|it| {
             let b = it.bearing();
-            let bias = stations.get(it.station()).map_or(0.0, |s| s.offset().0);
+            let bias = stations
+                .get(it.station())
+                .map_or(0.0, |s| s.correction(it.relative()));
             wrap(b.theta - predicted(&fix.position, &b.vehicle) - bias) / (norm * b.sigma)
         }),
         refined.kept,
