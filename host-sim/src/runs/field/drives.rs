@@ -354,20 +354,20 @@ fn direction_dependent(rng: &mut XorShiftRng) -> FieldDrive {
     }
 }
 
-/// 60 s at 20 m/s along an arc of 2 km radius (1.2 km, turning 34 degrees), 5 reports a second,
-/// each the running mean of the last 10 raw bearings (6 degrees each; the unit states 2), the
-/// emitter 2.5 km off the arc's inside: `correlated-5hz` on a curved track, where the range is
-/// barely observed.
+/// `correlated-5hz` on a curved track: 9 km at 20 m/s (450 s) along an arc of 2 km radius
+/// (258 degrees) round (0, 0), 5 reports a second, each the running mean of the last 10 raw
+/// bearings (6 degrees each; the unit states 2), the emitter at (400, 300), off the arc's
+/// centre.
 fn correlated_curved(rng: &mut XorShiftRng) -> FieldDrive {
     let (radius, speed, rate) = (2000.0f32, 20.0f32, 5.0f32);
-    let n = (60.0 * rate) as usize;
+    let n = (450.0 * rate) as usize;
     let route: Vec<[f32; 2]> = (0..n)
         .map(|k| {
             let a = speed * k as f32 / rate / radius;
-            [radius * a.sin(), radius * (1.0 - a.cos())]
+            [radius * a.sin(), -radius * a.cos()]
         })
         .collect();
-    let emitter = [600.0f32, 2500.0];
+    let emitter = [400.0f32, 300.0];
     let raw_sigma = 6.0 * DEG;
     let mut window = [0.0f32; 10];
     for w in window.iter_mut() {

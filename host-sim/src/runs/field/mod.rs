@@ -108,9 +108,9 @@ pub enum Condition {
     /// drawn from 2-5 degrees with a random phase, an offset from the default prior; its
     /// stations file states the harmonics' prior ([`DIRECTION_ERROR_DEG`] each).
     DirectionDependent,
-    /// `correlated-5hz` on a curved track: 60 s at 20 m/s along an arc of 2 km radius, 5
-    /// running-mean reports a second (the last 10 raw bearings of 6 degrees; the unit states 2),
-    /// the emitter 2.5 km off the arc's inside.
+    /// `correlated-5hz` on a curved track: 9 km at 20 m/s along an arc of 2 km radius (258
+    /// degrees), 5 running-mean reports a second (the last 10 raw bearings of 6 degrees; the
+    /// unit states 2), the emitter 500 m off the arc's centre.
     CorrelatedCurved,
 }
 
