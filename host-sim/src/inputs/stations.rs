@@ -507,6 +507,51 @@ mod tests {
     }
 
     #[test]
+    fn a_direction_dependent_error_reads_back_and_bad_values_are_one_line() {
+        let text = r#"
+[default]
+direction_error_deg = 2.0
+
+[[station]]
+id = "mast"
+direction_deg = [1.0, -0.5, 0.25, 0.0]
+direction_error_deg = 0.0
+boresight_deg = 90.0
+
+[[station]]
+id = "car"
+"#;
+        let n = parse(text).expect("a network");
+        let mast = n.station("mast").expect("mast");
+        let d = mast.direction.expect("stated");
+        assert!((d.mean[0].to_degrees() - 1.0).abs() < 1e-5 && d.sd == 0.0);
+        // Boresight east: theta 0.
+        assert!(mast.front.expect("stated").abs() < 1e-6);
+        assert_eq!(n.station("car").and_then(|s| s.direction), None);
+        let default = n.default_direction.expect("default");
+        assert!((default.sd.to_degrees() - 2.0).abs() < 1e-5);
+        let again = parse(&n.to_toml()).expect("its own text");
+        assert_eq!(again.station("mast").and_then(|s| s.direction), Some(d));
+        assert_eq!(again.default_direction, Some(default));
+        assert!(
+            again
+                .station("mast")
+                .and_then(|s| s.front)
+                .expect("front")
+                .abs()
+                < 1e-5
+        );
+        for bad in [
+            "[[station]]\nid = \"a\"\ndirection_error_deg = -1.0\n",
+            "[[station]]\nid = \"a\"\ndirection_deg = [90.0, 0.0, 0.0, 0.0]\n",
+            "[[station]]\nid = \"a\"\nboresight_deg = 1000.0\n",
+        ] {
+            let e = parse(bad).expect_err(bad);
+            assert!(!e.contains('\n') && e.contains("station 1"), "{e}");
+        }
+    }
+
+    #[test]
     fn a_network_reads_back_what_it_writes() {
         let text = r#"
 [default]

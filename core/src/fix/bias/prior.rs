@@ -79,7 +79,7 @@ impl BiasPrior {
     /// tau / I_data) (I_data = 1 / sd^2 - 1 / tau_p^2), not sqrt(tau_p^2 - sd^2). Without
     /// correlation (tau = 1) this is [`BiasPrior::surprise`].
     pub fn surprise_correlated(&self, estimate: f32, sd: f32, tau: f32) -> f32 {
-        if !(tau > 1.0) || !(self.is_free() && self.sd.is_finite()) {
+        if !(tau > 1.0 && self.is_free() && self.sd.is_finite()) {
             return self.surprise(estimate, sd);
         }
         let info_prior = self.information();
