@@ -165,7 +165,7 @@ fn a_direction_dependent_error_is_integrated_out_where_it_is_stated() {
     // direction-dependent-2-5deg: first and second harmonics of 2-5 degrees each on the U
     // drive, the stations file stating 3 degrees per coefficient. Bars over 400 runs: an
     // emitter in every run but a few (the consensus sees bearings bent by up to 10 degrees
-    // beside 2 degrees of noise; observed 98-100 % at 100 runs), coverage 90-98 % (the
+    // beside 2 degrees of noise; observed 400 of 400), coverage 90-98 % (the
     // common bar, in `coverage_is_honest_in_every_field_condition`), and the rmse within
     // 1.3x the bound with the harmonics' prior integrated out (the bar of the offset drives;
     // 400 runs know an rmse to +-3.5 %). Ignoring the harmonics (plain ML) misses by
