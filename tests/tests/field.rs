@@ -76,9 +76,9 @@ fn coverage_is_honest_in_every_field_condition() {
         ) {
             continue;
         }
-        // The open-range conditions leave few fixes: their answers (fixes and regions) are
-        // judged together.
-        let open = Condition::OPEN_RANGE.contains(&s.condition);
+        // The open-range conditions leave few fixes, and the curved correlated drive's range
+        // is barely observed: their answers (fixes and regions) are judged together.
+        let open = Condition::ANSWERS_JUDGED.contains(&s.condition);
         for e in &s.per_emitter {
             let c = if open {
                 e.answer_coverage()
@@ -158,6 +158,74 @@ fn a_mounting_offset_is_estimated_to_the_bias_aware_bound() {
             shown()
         );
     }
+}
+
+#[test]
+fn a_direction_dependent_error_is_integrated_out_where_it_is_stated() {
+    // direction-dependent-2-5deg: first and second harmonics of 2-5 degrees each on the U
+    // drive, the stations file stating 3 degrees per coefficient. Bars over 400 runs: an
+    // emitter in every run but a few (the consensus sees bearings bent by up to 10 degrees
+    // beside 2 degrees of noise; observed 400 of 400), coverage 90-98 % (the
+    // common bar, in `coverage_is_honest_in_every_field_condition`), and the rmse within
+    // 1.3x the bound with the harmonics' prior integrated out (the bar of the offset drives;
+    // 400 runs know an rmse to +-3.5 %). Ignoring the harmonics (plain ML) misses by
+    // 166 m at 100 runs: the pipeline's fix is the one to beat.
+    let s = summary(Condition::DirectionDependent);
+    let e = &s.per_emitter[0];
+    assert!(
+        e.found as f64 >= 0.97 * RUNS as f64,
+        "found {} of {RUNS}{}",
+        e.found,
+        shown()
+    );
+    assert!(
+        e.ratio() <= 1.3,
+        "rmse / bound {:.2} (rmse {:.1} m, bound {:.1} m){}",
+        e.ratio(),
+        e.rmse,
+        e.bound,
+        shown()
+    );
+    println!(
+        "direction-dependent-2-5deg: found {} of {RUNS}, coverage {:.1} %, rmse {:.1} m, bound {:.1} m",
+        e.found,
+        100.0 * e.coverage(),
+        e.rmse,
+        e.bound
+    );
+}
+
+#[test]
+fn correlated_reports_on_a_curved_track_are_honest() {
+    // correlated-5hz-curved: the 5 Hz running-mean unit of `correlated-5hz` on a 258 degree
+    // arc. Its answers (fixes and regions) are held to the common 90-98 % bar; here, that the
+    // offset check does not read the correlated reports as evidence against the prior (on a
+    // 34 degree arc it did: runs relaxed the prior onto a spurious minimum 50-60 degrees
+    // off, 11 of 100 beyond 3 sigma): an answer in every run but 1 % and the mean offset
+    // within 0.5 degrees of the truth (0; one run's offset has an sd well under 1 degree on
+    // a drive that turns 258 degrees, so a mean of 400 is good to 0.05, while one run
+    // relaxed 50 degrees off shifts it by 0.13).
+    let s = summary(Condition::CorrelatedCurved);
+    let e = &s.per_emitter[0];
+    assert!(
+        (e.found + e.regions) as f64 >= 0.99 * RUNS as f64,
+        "answers {} of {RUNS}{}",
+        e.found + e.regions,
+        shown()
+    );
+    assert!(
+        e.mean_bias_deg.abs() <= 0.5,
+        "mean offset {:.2} deg{}",
+        e.mean_bias_deg,
+        shown()
+    );
+    println!(
+        "correlated-5hz-curved: found {}, regions {}, answers held {:.1} %, mean offset {:.2} deg",
+        e.found,
+        e.regions,
+        100.0 * e.answer_coverage(),
+        e.mean_bias_deg
+    );
 }
 
 #[test]

@@ -10,7 +10,7 @@ pub mod stations;
 pub mod window;
 
 use foxhunt_core::estimator::{batch_fix, with_bearing_filter};
-use foxhunt_core::fix::bias::{BiasPrior, StationSlot};
+use foxhunt_core::fix::bias::{BiasPrior, DirectionPrior, StationSlot};
 use foxhunt_core::fix::ellipse::cep50;
 use foxhunt_core::fix::init::initial_particles;
 use foxhunt_core::fix::intersection::MIN_CROSSING;
@@ -121,6 +121,9 @@ pub struct Priors {
     /// The widest noise ceiling of the stations' stated device classes, radians (`None`: no
     /// class stated, the configuration's holds).
     pub ceiling: Option<f32>,
+    /// Station index to its direction-dependent error's prior and its antenna's front where
+    /// it stands still (theta, radians); `None`: not modelled.
+    pub direction: Vec<Option<(DirectionPrior, f32)>>,
 }
 
 impl Priors {
@@ -152,7 +155,11 @@ impl Priors {
 
     /// Station `s`'s row of the station table: its prior and its unmodelled error.
     pub fn row(&self, s: usize) -> StationSlot {
-        StationSlot::new(self.of(s)).with_unmodelled(self.unmodelled_of(s))
+        let row = StationSlot::new(self.of(s)).with_unmodelled(self.unmodelled_of(s));
+        match self.direction.get(s).copied().flatten() {
+            Some((prior, front)) => row.with_direction(prior, front),
+            None => row,
+        }
     }
 
     /// `config` with the stated classes' ceiling, if any.

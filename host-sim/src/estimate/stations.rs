@@ -118,6 +118,14 @@ pub fn station_setup<'a>(
                 .or(network.and_then(|n| n.default_unmodelled))
                 .unwrap_or(of_class.unmodelled),
         ));
+        let direction = spec
+            .and_then(|s| s.direction)
+            .or(network.and_then(|n| n.default_direction));
+        let front = spec
+            .and_then(|s| s.front)
+            .or(network.and_then(|n| n.default_front))
+            .unwrap_or(std::f32::consts::FRAC_PI_2);
+        setup.priors.direction.push(direction.map(|d| (d, front)));
         if class.is_some() {
             let widest = setup.priors.ceiling.unwrap_or(0.0).max(of_class.ceiling);
             setup.priors.ceiling = Some(widest);

@@ -4,7 +4,7 @@
 //! checked whole when loaded; every error is one line naming the file and the entry.
 
 use foxhunt_bridge::nmea::LatLon;
-use foxhunt_core::fix::bias::{BiasPrior, DEFAULT_BIAS_SD};
+use foxhunt_core::fix::bias::{BiasPrior, DEFAULT_BIAS_SD, DirectionPrior, HARMONICS};
 use foxhunt_core::fix::device::DeviceClass;
 use serde::Deserialize;
 use std::collections::HashSet;
@@ -57,6 +57,9 @@ struct StationEntry {
     noise_deg: Option<f32>,
     antenna: Option<String>,
     unmodelled_deg: Option<f32>,
+    direction_deg: Option<[f32; HARMONICS]>,
+    direction_error_deg: Option<f32>,
+    boresight_deg: Option<f32>,
 }
 
 /// What applies to every station the file does not list.
@@ -68,6 +71,9 @@ struct DefaultEntry {
     noise_deg: Option<f32>,
     antenna: Option<String>,
     unmodelled_deg: Option<f32>,
+    direction_deg: Option<[f32; HARMONICS]>,
+    direction_error_deg: Option<f32>,
+    boresight_deg: Option<f32>,
 }
 
 /// A reference transmitter as the file describes it.
@@ -120,6 +126,11 @@ pub struct StationSpec {
     pub antenna: Option<DeviceClass>,
     /// Sd of its unmodelled systematic error, radians (else its class's).
     pub unmodelled: Option<f32>,
+    /// Its direction-dependent error's prior (`None`: not modelled).
+    pub direction: Option<DirectionPrior>,
+    /// Where its antenna faces when it stands still, theta (the file's `boresight_deg`;
+    /// `None`: north).
+    pub front: Option<f32>,
 }
 
 /// A reference transmitter: a known emitter whose bearings calibrate the stations.
@@ -147,6 +158,10 @@ pub struct Network {
     pub default_antenna: Option<DeviceClass>,
     /// Unmodelled error's sd of a station the file does not list, radians.
     pub default_unmodelled: Option<f32>,
+    /// Direction-dependent error of a station the file does not list.
+    pub default_direction: Option<DirectionPrior>,
+    /// Antenna front of a station the file does not list, theta.
+    pub default_front: Option<f32>,
     /// The reference transmitters.
     pub references: Vec<Reference>,
 }
@@ -158,6 +173,47 @@ fn lat_lon(p: [f64; 2]) -> Option<LatLon> {
             lon: p[1],
         },
     )
+}
+
+/// A direction-dependent error's prior from the keys (coefficients a_1, b_1, a_2, b_2 and the
+/// sd of each, degrees), checked; `None` when neither is given.
+pub fn direction_of(
+    mean: Option<[f32; HARMONICS]>,
+    sd: Option<f32>,
+    what: &str,
+) -> Result<Option<DirectionPrior>, String> {
+    if mean.is_none() && sd.is_none() {
+        return Ok(None);
+    }
+    let mean = mean.unwrap_or([0.0; HARMONICS]);
+    if !mean.iter().all(|c| c.is_finite() && c.abs() <= 45.0) {
+        return Err(format!(
+            "{what}: direction_deg wants four coefficients in [-45, 45] degrees (a1, b1, a2, b2), not {mean:?}"
+        ));
+    }
+    let sd = sd.unwrap_or(0.0);
+    if !(0.0..=45.0).contains(&sd) {
+        return Err(format!(
+            "{what}: direction_error_deg must lie in [0, 45] degrees (0: the table is known), not {sd}"
+        ));
+    }
+    Ok(Some(DirectionPrior {
+        mean: mean.map(f32::to_radians),
+        sd: sd.to_radians(),
+    }))
+}
+
+/// A fixed antenna's front from `boresight_deg` (true, clockwise from north), as theta.
+fn front_of(boresight: Option<f32>, what: &str) -> Result<Option<f32>, String> {
+    match boresight {
+        None => Ok(None),
+        Some(b) if b.is_finite() && (-360.0..=360.0).contains(&b) => {
+            Ok(Some(std::f32::consts::FRAC_PI_2 - b.to_radians()))
+        }
+        Some(b) => Err(format!(
+            "{what}: boresight_deg must lie in [-360, 360] degrees, not {b}"
+        )),
+    }
 }
 
 /// An offset prior from the keys (degrees), checked; `None` when neither is given.
@@ -300,6 +356,8 @@ impl Network {
                 noise: noise_of(s.noise_deg, &what)?,
                 antenna: class_of(s.antenna.as_deref(), &what)?,
                 unmodelled: unmodelled_of(s.unmodelled_deg, &what)?,
+                direction: direction_of(s.direction_deg, s.direction_error_deg, &what)?,
+                front: front_of(s.boresight_deg, &what)?,
             });
         }
         let mut references = Vec::with_capacity(t.reference.len());
@@ -329,6 +387,12 @@ impl Network {
             default_noise: noise_of(t.default.noise_deg, "default")?,
             default_antenna: class_of(t.default.antenna.as_deref(), "default")?,
             default_unmodelled: unmodelled_of(t.default.unmodelled_deg, "default")?,
+            default_direction: direction_of(
+                t.default.direction_deg,
+                t.default.direction_error_deg,
+                "default",
+            )?,
+            default_front: front_of(t.default.boresight_deg, "default")?,
             references,
         })
     }
@@ -371,6 +435,7 @@ impl Network {
         if let Some(u) = self.default_unmodelled {
             let _ = writeln!(default, "unmodelled_deg = {}", deg(u));
         }
+        write_direction(&mut default, self.default_direction, self.default_front);
         if !default.is_empty() {
             let _ = writeln!(out, "[default]\n{default}");
         }
@@ -394,6 +459,7 @@ impl Network {
             if let Some(u) = s.unmodelled {
                 let _ = writeln!(out, "unmodelled_deg = {}", deg(u));
             }
+            write_direction(&mut out, s.direction, s.front);
             out.push('\n');
         }
         for r in &self.references {
@@ -407,6 +473,30 @@ impl Network {
     }
 }
 
+/// The direction-dependent error's keys of a station (or the default) into `out`.
+pub fn write_direction(out: &mut String, direction: Option<DirectionPrior>, front: Option<f32>) {
+    use std::fmt::Write;
+    if let Some(d) = direction {
+        let c = d.mean.map(f32::to_degrees);
+        let _ = writeln!(
+            out,
+            "direction_deg = [{}, {}, {}, {}]\ndirection_error_deg = {}",
+            c[0],
+            c[1],
+            c[2],
+            c[3],
+            d.sd.to_degrees()
+        );
+    }
+    if let Some(f) = front {
+        let _ = writeln!(
+            out,
+            "boresight_deg = {}",
+            (std::f32::consts::FRAC_PI_2 - f).to_degrees()
+        );
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -414,6 +504,51 @@ mod tests {
     fn parse(text: &str) -> Result<Network, String> {
         let t: FileToml = crate::inputs::files::parse_toml(text)?;
         Network::from_toml(t, Path::new("."))
+    }
+
+    #[test]
+    fn a_direction_dependent_error_reads_back_and_bad_values_are_one_line() {
+        let text = r#"
+[default]
+direction_error_deg = 2.0
+
+[[station]]
+id = "mast"
+direction_deg = [1.0, -0.5, 0.25, 0.0]
+direction_error_deg = 0.0
+boresight_deg = 90.0
+
+[[station]]
+id = "car"
+"#;
+        let n = parse(text).expect("a network");
+        let mast = n.station("mast").expect("mast");
+        let d = mast.direction.expect("stated");
+        assert!((d.mean[0].to_degrees() - 1.0).abs() < 1e-5 && d.sd == 0.0);
+        // Boresight east: theta 0.
+        assert!(mast.front.expect("stated").abs() < 1e-6);
+        assert_eq!(n.station("car").and_then(|s| s.direction), None);
+        let default = n.default_direction.expect("default");
+        assert!((default.sd.to_degrees() - 2.0).abs() < 1e-5);
+        let again = parse(&n.to_toml()).expect("its own text");
+        assert_eq!(again.station("mast").and_then(|s| s.direction), Some(d));
+        assert_eq!(again.default_direction, Some(default));
+        assert!(
+            again
+                .station("mast")
+                .and_then(|s| s.front)
+                .expect("front")
+                .abs()
+                < 1e-5
+        );
+        for bad in [
+            "[[station]]\nid = \"a\"\ndirection_error_deg = -1.0\n",
+            "[[station]]\nid = \"a\"\ndirection_deg = [90.0, 0.0, 0.0, 0.0]\n",
+            "[[station]]\nid = \"a\"\nboresight_deg = 1000.0\n",
+        ] {
+            let e = parse(bad).expect_err(bad);
+            assert!(!e.contains('\n') && e.contains("station 1"), "{e}");
+        }
     }
 
     #[test]

@@ -79,14 +79,23 @@ pub fn crlb_stations<T: Sighting>(
     }
     // Centred: the information is translation-invariant, the f32 sums are not.
     let n = stations.len();
-    let geo = geometry_of(usable(items, n).map(|(b, _)| b))?;
+    let geo = geometry_of(usable(items, n).map(|(b, _, _)| b))?;
     let o = geo.origin;
     let centred = [p[0] - o[0], p[1] - o[1]];
     for s in stations.iter_mut() {
         s.n = 0;
         s.clear_blocks();
     }
-    for (b, s) in usable(items, n) {
+    for (_, s, _) in usable(items, n) {
+        if let Some(row) = stations.get_mut(s) {
+            row.n += 1;
+        }
+    }
+    for s in stations.iter_mut() {
+        s.hfree = s.n > 0 && s.direction().is_free();
+        s.n = 0;
+    }
+    for (b, s, u) in usable(items, n) {
         let Some(row) = stations.get_mut(s) else {
             continue;
         };
@@ -99,7 +108,7 @@ pub fn crlb_stations<T: Sighting>(
             return Err(Error::DegenerateGeometry);
         }
         row.n += 1;
-        row.add([-dy / d2, dx / d2], 1.0 / (b.sigma * b.sigma), 0.0);
+        row.add([-dy / d2, dx / d2], u, 1.0 / (b.sigma * b.sigma), 0.0);
     }
     for s in stations.iter_mut() {
         s.free = s.n > 0 && s.in_force.is_free();

@@ -30,6 +30,7 @@
 
 mod bound;
 mod calibration;
+mod direction;
 mod prior;
 mod problem;
 mod profile_likelihood;
@@ -40,10 +41,11 @@ mod tests;
 
 pub use bound::{BiasedCrlb, crlb, crlb_stations, information};
 pub use calibration::{Calibration, calibrate};
+pub use direction::{DirectionPrior, HARMONICS, harmonics};
 pub use prior::{BiasPrior, CONTRADICTED_Z};
 pub use profile_likelihood::{CIRCLE_STEPS, OffsetCircle, ProfilePoint, offset_circle, profile};
 pub use solve::{BiasedFix, BiasedOptions, Start, StartOffsets, ml, ml_sources, refit};
-pub use stations::StationSlot;
+pub use stations::{FRONT_STEP_M, StationSlot};
 
 use crate::model::bearing::Bearing;
 
@@ -58,6 +60,12 @@ pub trait Sighting {
     /// the table is not used).
     fn station(&self) -> usize {
         0
+    }
+    /// The bearing relative to its antenna's front (counter-clockwise, radians), the regressor
+    /// of the station's direction-dependent error ([`DirectionPrior`]): by default an antenna
+    /// facing north (a fixed array's usual reference).
+    fn relative(&self) -> f32 {
+        crate::model::bearing::wrap(self.bearing().theta - core::f32::consts::FRAC_PI_2)
     }
 }
 

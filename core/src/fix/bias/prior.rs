@@ -72,6 +72,27 @@ impl BiasPrior {
         if z.is_finite() { z } else { 0.0 }
     }
 
+    /// [`BiasPrior::surprise`] of a fit whose bearings' errors are correlated over `tau`
+    /// bearings (N / N_eff, >= 1): the fit weighed them as independent, so its offset moved
+    /// toward the data by w = 1 - sd^2 / tau_p^2 as if they held tau times the information
+    /// they hold, and the estimate's spread about the prior's mean is w sqrt(tau_p^2 +
+    /// tau / I_data) (I_data = 1 / sd^2 - 1 / tau_p^2), not sqrt(tau_p^2 - sd^2). Without
+    /// correlation (tau = 1) this is [`BiasPrior::surprise`].
+    pub fn surprise_correlated(&self, estimate: f32, sd: f32, tau: f32) -> f32 {
+        if !(tau > 1.0 && self.is_free() && self.sd.is_finite()) {
+            return self.surprise(estimate, sd);
+        }
+        let info_prior = self.information();
+        let info_data = 1.0 / (sd * sd) - info_prior;
+        if !(info_data > 0.0) {
+            return self.surprise(estimate, sd);
+        }
+        let w = info_data / (info_data + info_prior);
+        let spread = (w * libm::sqrtf(self.sd * self.sd + tau / info_data)).max(0.05 * self.sd);
+        let z = wrap(estimate - self.mean) / spread;
+        if z.is_finite() { z } else { 0.0 }
+    }
+
     /// [`BiasPrior::surprise`] of an offset `estimate` fitted without this prior (its sd `sd`,
     /// the data's alone): if the prior holds, the estimate's spread about its mean is the
     /// prior's variance plus the data's.
@@ -84,7 +105,7 @@ impl BiasPrior {
     }
 
     /// 1 / sd^2: the prior's information (0 for no prior).
-    pub(super) fn information(&self) -> f32 {
+    pub fn information(&self) -> f32 {
         if self.sd.is_finite() && self.sd > 0.0 {
             1.0 / (self.sd * self.sd)
         } else {

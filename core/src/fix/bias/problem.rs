@@ -3,28 +3,32 @@
 //! station table, centred on the drive.
 
 use super::super::{Geometry, geometry_of};
+use super::direction::{HARMONICS, dot, harmonics};
+use super::stations::HarmonicStart;
 use super::stations::StationSlot;
 use super::{BiasedOptions, Sighting, Start, StartOffsets};
 use crate::error::{Error, check_finite};
 use crate::likelihood::Likelihood;
 use crate::model::bearing::{Bearing, predicted, wrap};
 
-/// Residual z - h(p) - b of one sighting at centred position `p` with offset `bias`.
+/// Residual z - h(p) - b of one sighting at centred position `p` with correction `bias` (the
+/// offset and the direction-dependent error).
 #[inline]
 pub(super) fn residual(b: &Bearing, origin: [f32; 2], p: [f32; 2], bias: f32) -> f32 {
     let s = [b.vehicle[0] - origin[0], b.vehicle[1] - origin[1]];
     wrap(b.theta - predicted(&p, &s) - bias)
 }
 
-/// The usable sightings of a station the table holds, with that station.
+/// The usable sightings of a station the table holds, with that station and the harmonic
+/// regressors of its relative bearing.
 pub(super) fn usable<T: Sighting>(
     items: &[T],
     stations: usize,
-) -> impl Iterator<Item = (&Bearing, usize)> {
+) -> impl Iterator<Item = (&Bearing, usize, [f32; HARMONICS])> {
     items
         .iter()
-        .map(|t| (t.bearing(), t.station()))
-        .filter(move |(b, s)| *s < stations && b.check().is_ok())
+        .filter(move |t| t.station() < stations && t.bearing().check().is_ok())
+        .map(|t| (t.bearing(), t.station(), harmonics(t.relative())))
 }
 
 /// Which of a row's offsets a cost is taken at.
@@ -67,10 +71,16 @@ impl<T: Sighting, L: Likelihood> Problem<'_, T, L> {
             At::Current => s.x,
             At::Trial => s.trial,
         };
+        let trial = at == At::Trial;
         let mut c = 0.0f32;
-        for (b, s) in usable(self.items, stations.len()) {
+        for (b, s, u) in usable(self.items, stations.len()) {
             let Some(row) = stations.get(s) else { continue };
-            let r = residual(b, self.origin, p, offset(row));
+            let r = residual(
+                b,
+                self.origin,
+                p,
+                offset(row) + dot(row.harmonics_at(trial), &u),
+            );
             let sigma = self.sigma(b, p);
             c -= self.loss.ln(r, sigma);
             if self.position_sd > 0.0 {
@@ -81,6 +91,9 @@ impl<T: Sighting, L: Likelihood> Problem<'_, T, L> {
         for s in stations.iter().filter(|s| s.free) {
             let d = offset(s) - s.in_force.mean;
             c += 0.5 * d * d * s.in_force.information();
+        }
+        for s in stations.iter() {
+            c += s.harmonic_cost(trial);
         }
         c
     }
@@ -98,14 +111,14 @@ impl<T: Sighting, L: Likelihood> Problem<'_, T, L> {
             s.clear_blocks();
         }
         let n = stations.len();
-        for (b, s) in usable(self.items, n) {
+        for (b, s, u) in usable(self.items, n) {
             let Some(row) = stations.get_mut(s) else {
                 continue;
             };
             let v = [b.vehicle[0] - self.origin[0], b.vehicle[1] - self.origin[1]];
             let (dx, dy) = (p[0] - v[0], p[1] - v[1]);
             let d2 = (dx * dx + dy * dy).max(1e-6);
-            let r = wrap(b.theta - predicted(&p, &v) - row.x);
+            let r = wrap(b.theta - predicted(&p, &v) - row.x - dot(&row.hx, &u));
             let sigma = self.sigma(b, p);
             let w = self.loss.irls_weight(r, sigma) / (sigma * sigma);
             // d h / d [x, y] for h = atan2(dy, dx) + b_s.
@@ -114,7 +127,7 @@ impl<T: Sighting, L: Likelihood> Problem<'_, T, L> {
                 Some([a, c]) => [jac[0] * a + jac[1] * c, 0.0],
                 None => jac,
             };
-            row.add(jac, w, r);
+            row.add(jac, u, w, r);
         }
     }
 }
@@ -123,7 +136,7 @@ impl<T: Sighting, L: Likelihood> Problem<'_, T, L> {
 fn sighting_geometry<T: Sighting>(items: &[T], stations: usize) -> Result<Geometry, Error> {
     // The plain geometry check on the bearings of known stations; the others count as
     // skipped.
-    let mut g = geometry_of(usable(items, stations).map(|(b, _)| b))?;
+    let mut g = geometry_of(usable(items, stations).map(|(b, _, _)| b))?;
     g.skipped = items.len() as u32 - g.used;
     Ok(g)
 }
@@ -155,7 +168,7 @@ pub(super) fn set_up<'a, T: Sighting, L: Likelihood>(
     for s in stations.iter_mut() {
         s.n = 0;
     }
-    for (_, s) in usable(items, stations.len()) {
+    for (_, s, _) in usable(items, stations.len()) {
         if let Some(row) = stations.get_mut(s) {
             row.n += 1;
         }
@@ -174,6 +187,13 @@ pub(super) fn set_up<'a, T: Sighting, L: Likelihood>(
             }
         };
         check_finite(&[s.x])?;
+        s.start_harmonics(match start.offsets {
+            StartOffsets::Prior | StartOffsets::Common(_) => HarmonicStart::Prior,
+            StartOffsets::Fitted => HarmonicStart::Fitted,
+            StartOffsets::Saved => HarmonicStart::Saved,
+            StartOffsets::Current => HarmonicStart::Current,
+        });
+        check_finite(&s.hx)?;
     }
     let problem = Problem {
         items,

@@ -1,6 +1,7 @@
 //! The Levenberg-Marquardt fix of position and offsets, and what it reports.
 
 use super::super::{Geometry, geometry};
+use super::direction::dot;
 use super::problem::{At, Problem, residual, set_up, usable};
 use super::stations::{StationSlot, back_substitute, offset_variances, reduce};
 use super::{BiasPrior, Sighting};
@@ -201,6 +202,7 @@ pub(super) fn descend<T: Sighting, L: Likelihood>(
                 *p = next;
                 for s in stations.iter_mut() {
                     s.x = s.trial;
+                    s.hx = s.htrial;
                 }
                 current = c;
                 lambda = (lambda * 0.1).max(1e-7);
@@ -272,6 +274,10 @@ fn finish<T: Sighting, L: Likelihood>(
             s.sd = s.in_force.sd;
             s.measured = 0.0;
         }
+        s.hfit = s.hx;
+        if !s.hfree {
+            s.hsd = [s.direction().sd; super::HARMONICS];
+        }
     }
     let main = (0..stations.len())
         .max_by_key(|&i| (stations[i].n, core::cmp::Reverse(i)))
@@ -279,9 +285,9 @@ fn finish<T: Sighting, L: Likelihood>(
     let mut outliers = 0;
     let mut front = 0.0f32;
     let mut chi2 = 0.0f32;
-    for (b, s) in usable(problem.items, stations.len()) {
+    for (b, s, u) in usable(problem.items, stations.len()) {
         let Some(row) = stations.get(s) else { continue };
-        let r = residual(b, geo.origin, p, row.bias);
+        let r = residual(b, geo.origin, p, row.bias + dot(&row.hfit, &u));
         let u = r / (problem.scale * b.sigma);
         chi2 += u * u;
         // The bearing line points at the emitter, not away: the residual says which side.

@@ -83,7 +83,7 @@ pub use report::{
     ChannelOutcome, ChannelReport, NoEmitter, OffsetBeyond, OffsetCheck, OtherReason, OtherSource,
     Region, Rejected, Report, Source, StationOffset,
 };
-pub use workspace::{Buffers, Item, Workspace};
+pub use workspace::{Buffers, Item, Workspace, relative_bearings};
 
 use super::channel::{self, NO_CHANNEL};
 use super::evidence::{self, Verdict};
@@ -145,13 +145,11 @@ pub fn locate<const C: usize, const O: usize, R: Rng + ?Sized>(
         } else if n >= cap || i > u32::MAX as usize {
             rej.over_capacity += 1;
         } else if let Some(slot) = items.get_mut(n) {
-            *slot = Item {
-                obs: *o,
-                index: i as u32,
-            };
+            *slot = Item::new(*o, i as u32);
             n += 1;
         }
     }
+    workspace::relative_bearings(&mut items[..n], stations);
     // 2. Evidence counted once.
     let counts = {
         let seen = &items[..n];

@@ -115,12 +115,22 @@ struct Problem<'a, T> {
     /// Each station's prior mean and information (0: no prior; infinite: held).
     mean: [f32; MOTION_STATIONS],
     info: [f32; MOTION_STATIONS],
+    /// The station table: each station's direction-dependent error as the fix found it, held
+    /// (a property of the antenna, the same whether the emitter moves or not).
+    table: &'a [StationSlot],
 }
 
 impl<T: Sighting> Problem<'_, T> {
     /// Every bearing.
     fn items(&self) -> impl Iterator<Item = &T> {
         self.parts.iter().flat_map(|p| p.iter())
+    }
+
+    /// A sighting's direction-dependent error, the fix's.
+    fn direction_error(&self, t: &T) -> f32 {
+        self.table
+            .get(t.station())
+            .map_or(0.0, |row| row.direction_error(t.relative()))
     }
 
     /// The span of a bearing at `t` (the last span holds the end).
@@ -147,7 +157,8 @@ impl<T: Sighting> Problem<'_, T> {
                 bg.vehicle[0] - self.origin[0],
                 bg.vehicle[1] - self.origin[1],
             ];
-            let u = wrap(bg.theta - predicted(&p, &v) - x.b[s]) / (self.scale * bg.sigma);
+            let r = bg.theta - predicted(&p, &v) - x.b[s] - self.direction_error(it);
+            let u = wrap(r) / (self.scale * bg.sigma);
             c += f64::from(u * u);
         }
         for s in 0..MOTION_STATIONS {
@@ -190,7 +201,7 @@ impl<T: Sighting> Problem<'_, T> {
             ];
             let (dx, dy) = (p[0] - v[0], p[1] - v[1]);
             let d2 = (dx * dx + dy * dy).max(1e-6);
-            let r = wrap(bg.theta - predicted(&p, &v) - x.b[s]);
+            let r = wrap(bg.theta - predicted(&p, &v) - x.b[s] - self.direction_error(it));
             let sd = self.scale * bg.sigma;
             let w = 1.0 / (sd * sd);
             let j = [-dy / d2, dx / d2];
@@ -386,6 +397,7 @@ pub fn check<T: Sighting>(
         scale: noise.scale,
         mean: [0.0; MOTION_STATIONS],
         info: [0.0; MOTION_STATIONS],
+        table: stations,
     };
     let start_b: [f32; MOTION_STATIONS] = core::array::from_fn(|s| {
         let Some(row) = stations.get(s) else {

@@ -195,7 +195,11 @@ fn wedge(
         let p = at(e.outside);
         libm::hypotf(p[0], p[1]).max(min_range)
     });
-    let offset = |it: &Item| stations.get(it.station()).map_or(0.0, |s| s.offset().0);
+    let offset = |it: &Item| {
+        stations
+            .get(it.station())
+            .map_or(0.0, |s| s.correction(it.relative))
+    };
     let parallel = is_parallel(members, theta, offset);
     crate::error::check_finite(&[apex[0], apex[1], theta, half_width, min_range])?;
     Ok(Wedge {

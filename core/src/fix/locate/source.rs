@@ -55,7 +55,8 @@ pub(super) fn find_source<R: Rng + ?Sized>(
     let prior = stations
         .get(main)
         .map_or(BiasPrior::calibrated(0.0), StationSlot::prior_in_force);
-    let z = prior.surprise(source.bias, source.bias_sd);
+    let tau = correlation(&source);
+    let z = prior.surprise_correlated(source.bias, source.bias_sd, tau);
     source.offset_check = OffsetCheck {
         z,
         ..OffsetCheck::default()
@@ -71,8 +72,9 @@ pub(super) fn find_source<R: Rng + ?Sized>(
                 solver_at(&source, members, config),
             )
             .map_err(NoEmitter::Geometry)?;
+            // Deviances of correlated bearings count tau times what they hold.
             source.offset_check.ambiguous =
-                circle.rival(source.bias, RIVAL_APART, AMBIGUOUS_DEVIANCE);
+                circle.rival(source.bias, RIVAL_APART, AMBIGUOUS_DEVIANCE * tau);
         }
         return Ok(Found::Source(source, kept));
     }
@@ -122,7 +124,8 @@ fn past_prior<R: Rng + ?Sized>(
         prior,
         z: source.offset_check.z,
     };
-    if circle.second_gap() < AMBIGUOUS_DEVIANCE {
+    // Deviances of correlated bearings count tau times what they hold.
+    if circle.second_gap() < AMBIGUOUS_DEVIANCE * correlation(source) {
         beyond.second = circle.second.map(OffsetCircle::offset);
         return Err(NoEmitter::OffsetBeyondPrior(beyond));
     }
@@ -135,7 +138,9 @@ fn past_prior<R: Rng + ?Sized>(
     }
     let window = OffsetWindow::from_prior(relaxed);
     match attempt(set, scratch, stations, freq, config, window, rng) {
-        Ok(Found::Source(mut again, kept)) if again.bias_sd <= OBSERVED_SD => {
+        Ok(Found::Source(mut again, kept))
+            if again.bias_sd * libm::sqrtf(correlation(&again)) <= OBSERVED_SD =>
+        {
             again.offset_check = OffsetCheck {
                 z: source.offset_check.z,
                 relaxed: true,
@@ -200,7 +205,8 @@ fn round_the_circle<R: Rng + ?Sized>(
         let prior = stations
             .get(main)
             .map_or(BiasPrior::calibrated(0.0), |s| s.prior());
-        (prior, prior.surprise_unaided(found.bias, found.bias_sd))
+        let sd = found.bias_sd * libm::sqrtf(correlation(found));
+        (prior, prior.surprise_unaided(found.bias, sd))
     };
     let mut best: Option<(usize, u32)> = None;
     for k in 0..CIRCLE_WINDOWS {
@@ -254,6 +260,17 @@ fn solver_at(source: &Source, members: &[Item], config: &LocateConfig) -> Biased
     BiasedOptions {
         scale: noise_scale(source, members),
         ..config.solver
+    }
+}
+
+/// The correlation time of `source`'s residuals, in bearings (N / N_eff, at least 1): its
+/// likelihood counts its bearings this many times over, so its offset's sd and its deviances
+/// are read at that rate.
+fn correlation(source: &Source) -> f32 {
+    if source.effective > 0.0 {
+        (source.used as f32 / source.effective).max(1.0)
+    } else {
+        1.0
     }
 }
 
@@ -494,7 +511,9 @@ fn noise_used(
     let tau = consistency::correlation_time(
         members.iter().map(|it| {
             let b = it.bearing();
-            let bias = stations.get(it.station()).map_or(0.0, |s| s.offset().0);
+            let bias = stations
+                .get(it.station())
+                .map_or(0.0, |s| s.correction(it.relative()));
             wrap(b.theta - predicted(&fix.position, &b.vehicle) - bias) / (norm * b.sigma)
         }),
         refined.kept,

@@ -10,9 +10,22 @@ pub struct Item {
     pub(super) obs: Observation,
     /// Its index in the caller's input.
     pub(super) index: u32,
+    /// The bearing relative to its antenna's front (counter-clockwise, radians): the
+    /// regressor of its station's direction-dependent error ([`super::super::bias::DirectionPrior`]).
+    pub(super) relative: f32,
 }
 
 impl Item {
+    /// An observation as the pipeline holds it (`index`: its place in the caller's input),
+    /// its relative bearing not yet known ([`relative_bearings`]).
+    pub const fn new(obs: Observation, index: u32) -> Self {
+        Self {
+            obs,
+            index,
+            relative: 0.0,
+        }
+    }
+
     /// An empty slot, to fill working storage with.
     pub const EMPTY: Self = Self {
         obs: Observation::new(
@@ -24,6 +37,7 @@ impl Item {
             0.0,
         ),
         index: 0,
+        relative: 0.0,
     };
 }
 
@@ -33,6 +47,42 @@ impl Sighting for Item {
     }
     fn station(&self) -> usize {
         usize::from(self.obs.station)
+    }
+    fn relative(&self) -> f32 {
+        self.relative
+    }
+}
+
+/// Each item's bearing relative to its antenna (the items in input order, time order within
+/// a station): a moving station's front is its course (from where it last moved
+/// [`FRONT_STEP_M`](super::super::bias::FRONT_STEP_M) to where it is; before it first moves,
+/// its first course), a fixed station's the front its row states. A station whose
+/// direction-dependent error is not modelled is left alone.
+pub fn relative_bearings(items: &mut [Item], stations: &mut [StationSlot]) {
+    use crate::model::bearing::wrap;
+    let modelled = |s: &StationSlot| s.direction() != super::super::bias::DirectionPrior::NONE;
+    if !stations.iter().any(modelled) {
+        return;
+    }
+    for s in stations.iter_mut() {
+        s.start_track();
+    }
+    // NaN marks a bearing read before its station moved: it takes the station's first course
+    // (or fixed front) in a second pass.
+    for it in items.iter_mut() {
+        let Some(row) = stations.get_mut(it.station()) else {
+            continue;
+        };
+        it.relative = row
+            .course_at(it.obs.bearing.vehicle)
+            .map_or(f32::NAN, |front| wrap(it.obs.bearing.theta - front));
+    }
+    for it in items.iter_mut() {
+        if it.relative.is_nan()
+            && let Some(row) = stations.get(it.station())
+        {
+            it.relative = wrap(it.obs.bearing.theta - row.still_front());
+        }
     }
 }
 

@@ -70,10 +70,11 @@ impl Default for RefineOptions {
     }
 }
 
-/// The residual of a sighting at a fix, its station's offset (the table's) removed.
+/// The residual of a sighting at a fix, its station's offset and direction-dependent error
+/// (the table's) removed.
 fn residual_at<T: Sighting>(t: &T, fix: &BiasedFix, stations: &[StationSlot]) -> Option<f32> {
     let b = t.bearing();
-    let bias = stations.get(t.station())?.offset().0;
+    let bias = stations.get(t.station())?.correction(t.relative());
     b.check().ok()?;
     Some(wrap(b.theta - predicted(&fix.position, &b.vehicle) - bias))
 }

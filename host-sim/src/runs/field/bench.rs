@@ -15,7 +15,7 @@ use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
 use rayon::prelude::*;
 
-use super::judge::bound_at;
+use super::judge::bound_with;
 
 /// The estimators the field bench compares: the pipeline, and for context the plain fixes and
 /// filters a user could ask `locate` for (run as `locate` runs them: noise estimated from the
@@ -138,7 +138,8 @@ fn method_row(c: Condition, m: Method, runs: usize) -> Row {
                 let m =
                     mahalanobis(&f.covariance, &f.position, &t.position).unwrap_or(f32::INFINITY);
                 let error = (f.position[0] - t.position[0]).hypot(f.position[1] - t.position[1]);
-                let bound = f64::from(bound_at(&d, t, BiasPrior::default()));
+                let priors = c.priors(&d, BiasPrior::default());
+                let bound = f64::from(bound_with(&d, t, &priors));
                 Some((
                     error as f64,
                     m * m <= f.ellipse_scale,

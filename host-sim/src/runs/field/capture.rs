@@ -30,12 +30,12 @@ pub fn capture(
         ));
     }
     let d = simulate(condition, run);
-    if !d.stations.is_empty() {
-        // A calibration and a device class are a stations file's, which a capture of
-        // `$PFOXB` sentences does not carry.
+    if !d.stations.is_empty() || condition == Condition::DirectionDependent {
+        // A calibration, a device class and a direction-dependent error's prior are a
+        // stations file's, which a capture of `$PFOXB` sentences does not carry.
         return Err(format!(
-            "`{}` needs its stations' calibration and device class and is not written as a \
-             capture",
+            "`{}` needs its stations file (calibration, device class, direction-dependent \
+             error) and is not written as a capture",
             condition.name()
         ));
     }

@@ -4,7 +4,7 @@
 use super::{Condition, DEG, FieldDrive, StationTruth, Truth, rng};
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;
-use foxhunt_core::fix::bias::BiasPrior;
+use foxhunt_core::fix::bias::{BiasPrior, DirectionPrior};
 use foxhunt_core::fix::device::DeviceClass;
 use foxhunt_core::fix::locate::Observation;
 use foxhunt_core::model::bearing::{Bearing, predicted, wrap};
@@ -303,6 +303,98 @@ fn aoa_array(rng: &mut XorShiftRng) -> FieldDrive {
     }
 }
 
+/// The course (theta) of the U drive at route point `v`: east, north, then west.
+fn u_course(v: [f32; 2]) -> f32 {
+    if v[1] <= 0.0 && v[0] < 1500.0 {
+        0.0
+    } else if v[0] >= 1500.0 && v[1] < 3000.0 {
+        PI / 2.0
+    } else {
+        PI
+    }
+}
+
+/// The U drive's 240 bearings (2 degrees) from a pseudo-Doppler unit whose error depends on
+/// the bearing relative to the vehicle: first and second harmonics of amplitude drawn from
+/// 2-5 degrees each with a random phase, an offset from the default prior.
+fn direction_dependent(rng: &mut XorShiftRng) -> FieldDrive {
+    let sigma = 2.0 * DEG;
+    let bias = foxhunt_core::fix::bias::DEFAULT_BIAS_SD * random::normal(rng);
+    let mut coefficients = [0.0f32; 4];
+    for k in 0..2 {
+        let amplitude = random::uniform_in(rng, 2.0, 5.0) * DEG;
+        let phase = random::uniform_in(rng, -PI, PI);
+        coefficients[2 * k] = amplitude * phase.cos();
+        coefficients[2 * k + 1] = amplitude * phase.sin();
+    }
+    let route = u_route(240);
+    let bearings: Vec<Bearing> = route
+        .iter()
+        .map(|v| {
+            let truth = predicted(&U_EMITTER, v);
+            // The antenna's error is a property of the true relative bearing.
+            let e = DirectionPrior {
+                mean: coefficients,
+                sd: 0.0,
+            }
+            .error_at(wrap(truth - u_course(*v)));
+            bearing_to(U_EMITTER, *v, bias + e + sigma * random::normal(rng), sigma)
+        })
+        .collect();
+    FieldDrive {
+        observations: timed(bearings, 1.0),
+        emitters: vec![Truth {
+            position: U_EMITTER,
+            freq_mhz: None,
+        }],
+        ghost: None,
+        stations: Vec::new(),
+        bias,
+        sigma,
+    }
+}
+
+/// `correlated-5hz` on a curved track: 9 km at 20 m/s (450 s) along an arc of 2 km radius
+/// (258 degrees) round (0, 0), 5 reports a second, each the running mean of the last 10 raw
+/// bearings (6 degrees each; the unit states 2), the emitter at (400, 300), off the arc's
+/// centre.
+fn correlated_curved(rng: &mut XorShiftRng) -> FieldDrive {
+    let (radius, speed, rate) = (2000.0f32, 20.0f32, 5.0f32);
+    let n = (450.0 * rate) as usize;
+    let route: Vec<[f32; 2]> = (0..n)
+        .map(|k| {
+            let a = speed * k as f32 / rate / radius;
+            [radius * a.sin(), -radius * a.cos()]
+        })
+        .collect();
+    let emitter = [400.0f32, 300.0];
+    let raw_sigma = 6.0 * DEG;
+    let mut window = [0.0f32; 10];
+    for w in window.iter_mut() {
+        *w = raw_sigma * random::normal(rng);
+    }
+    let bearings: Vec<Bearing> = route
+        .iter()
+        .enumerate()
+        .map(|(k, v)| {
+            window[k % 10] = raw_sigma * random::normal(rng);
+            let mean = window.iter().sum::<f32>() / 10.0;
+            bearing_to(emitter, *v, mean, 2.0 * DEG)
+        })
+        .collect();
+    FieldDrive {
+        observations: timed(bearings, 1.0 / rate),
+        emitters: vec![Truth {
+            position: emitter,
+            freq_mhz: None,
+        }],
+        ghost: None,
+        stations: Vec::new(),
+        bias: 0.0,
+        sigma: raw_sigma / 10f32.sqrt(),
+    }
+}
+
 /// The observations of run `run` of `condition`.
 pub fn simulate(condition: Condition, run: usize) -> FieldDrive {
     let mut rng = rng(condition, run);
@@ -423,6 +515,8 @@ pub fn simulate(condition: Condition, run: usize) -> FieldDrive {
         Condition::OpenCorrelatedCurved => open_correlated_curved(rng),
         Condition::Systematic => systematic(run, rng),
         Condition::AoaArray15 => aoa_array(rng),
+        Condition::DirectionDependent => direction_dependent(rng),
+        Condition::CorrelatedCurved => correlated_curved(rng),
         Condition::AoaAfsaWild | Condition::AoaAfsa | Condition::AoaDrive => {
             let name = match condition {
                 Condition::AoaAfsaWild => "aoa-afsa-wild",

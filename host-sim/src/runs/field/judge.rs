@@ -2,12 +2,12 @@
 
 use super::drives::simulate;
 use super::{CHANNELS, Condition, DEG, FieldDrive, OTHERS, Truth};
-use crate::estimate::PipelineRun;
+use crate::estimate::{PipelineRun, Priors};
 use foxhunt_core::Error;
 use foxhunt_core::fix::bias::{self, BiasPrior, StationSlot};
 use foxhunt_core::fix::ellipse::mahalanobis;
 use foxhunt_core::fix::locate::{
-    ChannelOutcome, LocateConfig, Observation, Region, Report, Source,
+    ChannelOutcome, Item, LocateConfig, Observation, Region, Report, Source, relative_bearings,
 };
 use foxhunt_core::model::bearing::{Bearing, predicted};
 use rayon::prelude::*;
@@ -60,15 +60,27 @@ pub(super) fn truth_geometry(d: &FieldDrive, t: &Truth) -> Vec<Observation> {
 
 /// The bias-aware bound at truth `t`: every station's offset with the prior the run gave it.
 pub fn bound_at(d: &FieldDrive, t: &Truth, prior: BiasPrior) -> f32 {
+    bound_with(d, t, &d.priors(prior))
+}
+
+/// The bias-aware bound at truth `t` with the stations' `priors` (their offsets' and
+/// direction-dependent errors' priors integrated out).
+pub fn bound_with(d: &FieldDrive, t: &Truth, priors: &Priors) -> f32 {
     let geometry = truth_geometry(d, t);
-    let priors = d.priors(prior);
     let n = geometry
         .iter()
         .map(|o| usize::from(o.station) + 1)
         .max()
         .unwrap_or(0);
     let mut table: Vec<StationSlot> = (0..n).map(|s| priors.row(s)).collect();
-    bias::crlb_stations(&t.position, &geometry, &mut table)
+    // Each bearing relative to its antenna, as the pipeline takes it.
+    let mut items: Vec<Item> = geometry
+        .iter()
+        .enumerate()
+        .map(|(i, o)| Item::new(*o, i as u32))
+        .collect();
+    relative_bearings(&mut items, &mut table);
+    bias::crlb_stations(&t.position, &items, &mut table)
         .map(|b| b.rmse)
         .unwrap_or(f32::INFINITY)
 }
@@ -80,7 +92,18 @@ pub fn run_locate(
     prior: BiasPrior,
     seed: u64,
 ) -> Result<PipelineRun, Error> {
-    crate::estimate::pipeline(&d.observations, config, &d.priors(prior), seed)
+    run_with(d, config, &d.priors(prior), seed)
+}
+
+/// Run the pipeline on one drive with the stations' `priors` (a condition's,
+/// [`Condition::priors`]).
+pub fn run_with(
+    d: &FieldDrive,
+    config: &LocateConfig,
+    priors: &Priors,
+    seed: u64,
+) -> Result<PipelineRun, Error> {
+    crate::estimate::pipeline(&d.observations, config, priors, seed)
 }
 
 /// The emitter reported for the channel of truth `t`.
@@ -133,10 +156,19 @@ pub fn judge(
     r: Option<&Report<CHANNELS, OTHERS>>,
     prior: BiasPrior,
 ) -> Vec<RunOutcome> {
+    judge_with(d, r, &d.priors(prior))
+}
+
+/// [`judge`] with the bound taken at the stations' `priors`.
+pub fn judge_with(
+    d: &FieldDrive,
+    r: Option<&Report<CHANNELS, OTHERS>>,
+    priors: &Priors,
+) -> Vec<RunOutcome> {
     d.emitters
         .iter()
         .map(|t| {
-            let bound = bound_at(d, t, prior);
+            let bound = bound_with(d, t, priors);
             let ghost_reported = d.ghost.is_some_and(|g| {
                 r.into_iter().flat_map(|r| r.others()).any(|o| {
                     let (inside, _) = sigmas_of(&o.source, &g);
@@ -244,9 +276,10 @@ pub fn measure(
         .into_par_iter()
         .map(|run| {
             let d = simulate(condition, run);
-            let r = run_locate(&d, config, prior, run as u64).ok();
+            let priors = condition.priors(&d, prior);
+            let r = run_with(&d, config, &priors, run as u64).ok();
             let none = r.as_ref().is_none_or(|r| r.emitters().is_empty());
-            (judge(&d, r.as_ref().map(|r| &r.report), prior), none)
+            (judge_with(&d, r.as_ref().map(|r| &r.report), &priors), none)
         })
         .collect();
     let emitters = outcomes.first().map(|o| o.0.len()).unwrap_or(0);

@@ -29,12 +29,12 @@ pub use bench::{BENCH_METHODS, bench};
 pub use capture::capture;
 pub use drives::{l600, simulate, u_route};
 pub use judge::{
-    EmitterSummary, RunOutcome, Summary, THREE_SIGMA_TAIL, bound_at, emitter_for, judge, measure,
-    region_for, run_locate,
+    EmitterSummary, RunOutcome, Summary, THREE_SIGMA_TAIL, bound_at, bound_with, emitter_for,
+    judge, judge_with, measure, region_for, run_locate, run_with,
 };
 
 use crate::estimate::Priors;
-use foxhunt_core::fix::bias::BiasPrior;
+use foxhunt_core::fix::bias::{BiasPrior, DirectionPrior};
 use foxhunt_core::fix::device::{DeviceClass, class_noise};
 use foxhunt_core::fix::locate::Observation;
 use rand_core::SeedableRng;
@@ -103,11 +103,25 @@ pub enum Condition {
     /// each for 30 s (4440 bearings), each array's offset drawn from the default prior and its
     /// unmodelled error from its class (2 degrees); the stations file states the class.
     AoaArray15,
+    /// The U drive's 240 bearings (2 degrees) from a pseudo-Doppler unit whose error depends on
+    /// the bearing relative to the vehicle: first and second harmonics, each of an amplitude
+    /// drawn from 2-5 degrees with a random phase, an offset from the default prior; its
+    /// stations file states the harmonics' prior ([`DIRECTION_ERROR_DEG`] each).
+    DirectionDependent,
+    /// `correlated-5hz` on a curved track: 9 km at 20 m/s along an arc of 2 km radius (258
+    /// degrees), 5 running-mean reports a second (the last 10 raw bearings of 6 degrees; the
+    /// unit states 2), the emitter 500 m off the arc's centre.
+    CorrelatedCurved,
 }
+
+/// The sd of each harmonic coefficient the `direction-dependent-2-5deg` condition's stations
+/// file states, degrees: amplitudes uniform in 2-5 degrees with a random phase give each
+/// coefficient an rms of 2.55 degrees (sqrt(E[A^2] / 2), E[A^2] = 13), which 3 holds.
+pub const DIRECTION_ERROR_DEG: f32 = 3.0;
 
 impl Condition {
     /// Every condition, in report order.
-    pub const ALL: [Condition; 20] = [
+    pub const ALL: [Condition; 22] = [
         Condition::Bias2,
         Condition::Bias4,
         Condition::Bias4Short,
@@ -128,6 +142,8 @@ impl Condition {
         Condition::OpenCorrelatedCurved,
         Condition::Systematic,
         Condition::AoaArray15,
+        Condition::DirectionDependent,
+        Condition::CorrelatedCurved,
     ];
 
     /// The conditions made to leave the range open: judged by their regions too (a region
@@ -135,6 +151,15 @@ impl Condition {
     /// interval).
     pub const OPEN_RANGE: [Condition; 2] =
         [Condition::OpenNoisyFew, Condition::OpenCorrelatedCurved];
+
+    /// The conditions whose answers (fixes and regions) are judged together: the open ranges,
+    /// and the curved correlated drive, whose range is barely observed (a reported region
+    /// counts when it holds the truth).
+    pub const ANSWERS_JUDGED: [Condition; 3] = [
+        Condition::OpenNoisyFew,
+        Condition::OpenCorrelatedCurved,
+        Condition::CorrelatedCurved,
+    ];
 
     /// The name printed in reports.
     pub fn name(&self) -> &'static str {
@@ -159,7 +184,24 @@ impl Condition {
             Condition::OpenCorrelatedCurved => "open-5hz-curved",
             Condition::Systematic => "systematic-0.2-1deg",
             Condition::AoaArray15 => "aoa-array-15deg",
+            Condition::DirectionDependent => "direction-dependent-2-5deg",
+            Condition::CorrelatedCurved => "correlated-5hz-curved",
         }
+    }
+
+    /// What its stations file says of each station (as `locate --stations` reads it), the
+    /// offset prior `default` where it states none: the drive's ([`FieldDrive::priors`]), and
+    /// the direction-dependent error's prior where the condition states one.
+    pub fn priors(&self, d: &FieldDrive, default: BiasPrior) -> Priors {
+        let mut p = d.priors(default);
+        if *self == Condition::DirectionDependent {
+            let stated = DirectionPrior {
+                mean: [0.0; 4],
+                sd: DIRECTION_ERROR_DEG * DEG,
+            };
+            p.direction = vec![Some((stated, std::f32::consts::FRAC_PI_2))];
+        }
+        p
     }
 }
 

@@ -1,0 +1,92 @@
+//! A station's direction-dependent error: what its antenna adds to a bearing as a function of
+//! the bearing relative to the antenna (a vehicle's heading, a fixed array's front), on top of
+//! the constant offset (docs/src/field.md, "Direction-dependent error").
+//!
+//! e(phi) = a_1 cos phi + b_1 sin phi + a_2 cos 2 phi + b_2 sin 2 phi, phi the measured bearing
+//! less the antenna's front (both counter-clockwise, like the model bearing theta), added to
+//! theta as the offset is. Pseudo-Doppler units and small arrays show mostly these two
+//! harmonics, 2-5 degrees in amplitude. With phi taken from the measured bearing the
+//! coefficients enter linearly, so they are nuisance parameters like the offset: a Gaussian
+//! prior each (one sd for the four), estimated with the position and eliminated per station
+//! ([`super::StationSlot`]).
+
+use crate::error::{Error, check_finite};
+
+/// Coefficients of the model: a_1, b_1, a_2, b_2 (first and second harmonic).
+pub const HARMONICS: usize = 4;
+
+/// The regressors of the coefficients at relative bearing `phi` (radians): cos phi, sin phi,
+/// cos 2 phi, sin 2 phi.
+#[inline]
+pub fn harmonics(phi: f32) -> [f32; HARMONICS] {
+    let (s, c) = (libm::sinf(phi), libm::cosf(phi));
+    [c, s, c * c - s * s, 2.0 * s * c]
+}
+
+/// What is known of a station's direction-dependent error before the drive.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DirectionPrior {
+    /// Expected coefficients a_1, b_1, a_2, b_2, radians (a calibration's table; 0 where
+    /// nothing is known).
+    pub mean: [f32; HARMONICS],
+    /// Standard deviation of each coefficient about its mean, radians: 0 when the table is
+    /// known exactly (or the station has no such error), finite otherwise (an unbounded
+    /// coefficient is never identified by a drive that does not circle the emitter).
+    pub sd: f32,
+}
+
+impl Default for DirectionPrior {
+    /// None: no direction-dependent error modelled.
+    fn default() -> Self {
+        Self::NONE
+    }
+}
+
+impl DirectionPrior {
+    /// No direction-dependent error.
+    pub const NONE: Self = Self {
+        mean: [0.0; HARMONICS],
+        sd: 0.0,
+    };
+
+    /// `Ok` when the means are finite and the sd finite and >= 0.
+    pub fn check(&self) -> Result<(), Error> {
+        check_finite(&self.mean)?;
+        check_finite(&[self.sd])?;
+        if self.sd >= 0.0 {
+            Ok(())
+        } else {
+            Err(Error::OutOfRange)
+        }
+    }
+
+    /// Whether the coefficients are unknowns (sd > 0).
+    pub fn is_free(&self) -> bool {
+        self.sd > 0.0 && self.sd.is_finite()
+    }
+
+    /// 1 / sd^2 (0 when not free).
+    pub(super) fn information(&self) -> f32 {
+        if self.is_free() {
+            1.0 / (self.sd * self.sd)
+        } else {
+            0.0
+        }
+    }
+
+    /// The error the mean coefficients give at relative bearing `phi`, radians.
+    pub fn error_at(&self, phi: f32) -> f32 {
+        error(&self.mean, phi)
+    }
+}
+
+/// The error coefficients `c` give at relative bearing `phi`, radians.
+#[inline]
+pub fn error(c: &[f32; HARMONICS], phi: f32) -> f32 {
+    dot(c, &harmonics(phi))
+}
+
+#[inline]
+pub(super) fn dot(a: &[f32; HARMONICS], b: &[f32; HARMONICS]) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3]
+}
