@@ -19,7 +19,7 @@
 
 use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::fix::locate::{ChannelOutcome, LocateConfig, NoEmitter, Report};
-use foxhunt_sim::runs::field::{Condition, run_locate, simulate};
+use foxhunt_sim::runs::field::{Condition, run_with, simulate};
 use foxhunt_sim::runs::moving::MovingScenario;
 use foxhunt_sim::runs::moving::locate::{Said, locate_runs};
 use foxhunt_sim::runs::network::{NetworkCondition, locate_network};
@@ -122,7 +122,10 @@ fn an_emitter_that_stands_still_is_not_called_moving() {
         for run in 0..FIELD_RUNS {
             let d = simulate(c, run);
             let config = LocateConfig::default();
-            if let Ok(r) = run_locate(&d, &config, BiasPrior::default(), run as u64) {
+            // Each condition as the field bench runs it: with what its stations file states
+            // (a direction-dependent error, where a condition has one).
+            let priors = c.priors(&d, BiasPrior::default());
+            if let Ok(r) = run_with(&d, &config, &priors, run as u64) {
                 tally(&r.report, &mut moving, &mut p);
             }
         }
