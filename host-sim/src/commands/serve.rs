@@ -2,10 +2,9 @@
 //! (KrakenSDRs' web pages, an MQTT broker).
 
 use super::{GuidanceArgs, values};
-use crate::commands::locate::kraken_urls;
 use crate::commands::locate::live::{LiveSource, reader};
+use crate::commands::locate::network_line;
 use crate::inputs::files::{InputKind, Source};
-use crate::inputs::mqtt::MqttUrl;
 use crate::outputs::serve::{Input, ServeOptions, serve};
 use crate::outputs::terminal::{Outcome, Stop};
 use std::path::PathBuf;
@@ -58,25 +57,9 @@ pub struct Args {
 
 /// The live line `--kraken` or `--mqtt` asks for, read as `locate` reads it.
 fn line(a: &Args) -> Result<Option<Input>, Stop> {
-    let source = match (&a.mqtt, a.kraken.is_empty()) {
-        (None, true) => return Ok(None),
-        (Some(_), false) => {
-            return Err(Stop::usage("give --kraken or --mqtt, not both"));
-        }
-        (Some(url), true) => {
-            if !a.captures.is_empty() {
-                return Err(Stop::usage("--mqtt reads the broker: give no CAPTURE"));
-            }
-            LiveSource::Mqtt {
-                url: MqttUrl::parse(url).map_err(Stop::Usage)?,
-                client_id: a.mqtt_client_id.clone(),
-                shard: None,
-                keep: crate::commands::locate::window::KEEP,
-            }
-        }
-        (None, false) => {
-            LiveSource::Kraken(kraken_urls(&a.kraken, !a.captures.is_empty(), "CAPTURE")?)
-        }
+    let other = !a.captures.is_empty();
+    let Some(source) = network_line(&a.kraken, a.mqtt.as_deref(), &a.mqtt_client_id, other)? else {
+        return Ok(None);
     };
     let names: Vec<String> = match &source {
         LiveSource::Kraken(urls) if urls.len() > 1 => urls

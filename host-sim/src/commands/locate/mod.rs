@@ -314,6 +314,38 @@ pub(crate) fn kraken_urls(
         .map_err(Stop::Usage)
 }
 
+/// The whole network's line that `--kraken URLS` or `--mqtt URL` asks a command that follows
+/// every channel (`track`, `serve`) for, on a broker session of `client_id`; none when neither
+/// is given. `other`: a CAPTURE or `--baud` was given too (a usage error beside either).
+pub(crate) fn network_line(
+    kraken: &[String],
+    mqtt: Option<&str>,
+    client_id: &str,
+    other: bool,
+) -> Result<Option<LiveSource>, Stop> {
+    if let Some(url) = mqtt {
+        if other || !kraken.is_empty() {
+            return Err(Stop::usage(
+                "--mqtt reads the broker: give no CAPTURE, --baud or --kraken",
+            ));
+        }
+        return Ok(Some(LiveSource::Mqtt {
+            url: MqttUrl::parse(url).map_err(Stop::Usage)?,
+            client_id: client_id.to_string(),
+            // Every channel; these commands keep no bearing per channel, so `keep` (what a
+            // fusing worker holds) bounds nothing here.
+            shard: None,
+            keep: window::KEEP,
+        }));
+    }
+    if kraken.is_empty() {
+        return Ok(None);
+    }
+    Ok(Some(LiveSource::Kraken(kraken_urls(
+        kraken, other, "CAPTURE",
+    )?)))
+}
+
 /// What a command's CAPTURE arguments and `--baud` ask to read: nothing (the command's
 /// default), recorded files, or a live line.
 pub(crate) enum Given {

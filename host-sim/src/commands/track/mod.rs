@@ -5,10 +5,9 @@
 mod live;
 
 use crate::commands::locate::live::LiveSource;
-use crate::commands::locate::{Given, given, kraken_urls};
+use crate::commands::locate::{Given, given, network_line};
 use crate::commands::values;
 use crate::inputs::files::{Source, stream};
-use crate::inputs::mqtt::MqttUrl;
 use crate::inputs::stations::Network;
 use crate::outputs::cot::{self, CotSender, CotUrl};
 use crate::outputs::files::Outputs;
@@ -197,25 +196,9 @@ fn no_anchor(m: &Measured, file: &AnchorsFile) -> Option<String> {
 
 /// The live line the arguments ask for, if any.
 fn live_source(a: &Args) -> Result<Option<LiveSource>, Stop> {
-    if let Some(url) = &a.mqtt {
-        if !a.captures.is_empty() || a.baud.is_some() || !a.kraken.is_empty() {
-            return Err(Stop::usage(
-                "--mqtt reads the broker: give no CAPTURE, --baud or --kraken",
-            ));
-        }
-        return Ok(Some(LiveSource::Mqtt {
-            url: MqttUrl::parse(url).map_err(Stop::Usage)?,
-            client_id: a.mqtt_client_id.clone(),
-            // Every channel; the tracker keeps no bearing it has stepped, so `keep` (what a
-            // fusing worker holds per channel) bounds nothing here.
-            shard: None,
-            keep: crate::commands::locate::window::KEEP,
-        }));
-    }
-    if !a.kraken.is_empty() {
-        let other = !a.captures.is_empty() || a.baud.is_some();
-        let urls = kraken_urls(&a.kraken, other, "CAPTURE")?;
-        return Ok(Some(LiveSource::Kraken(urls)));
+    let other = !a.captures.is_empty() || a.baud.is_some();
+    if let Some(line) = network_line(&a.kraken, a.mqtt.as_deref(), &a.mqtt_client_id, other)? {
+        return Ok(Some(line));
     }
     match given(a.baud, &a.captures)? {
         Given::Nothing => Err(Stop::usage(
