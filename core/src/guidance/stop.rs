@@ -1,9 +1,11 @@
 //! When to stop, and otherwise what the fix lacks.
 //!
-//! "Good enough" needs four things at once (docs/src/guidance.md, "The stop rule"): the predicted CEP50 from
+//! "Good enough" needs five things at once (docs/src/guidance.md, "The stop rule"): the predicted CEP50 from
 //! the bias-aware bound at the fix below the target radius; residuals consistent with the noise
-//! model; enough independent bearings behind the fix; and a DF unit whose offset is not in
-//! doubt (below). What limits a fix that is not yet good
+//! model; enough independent bearings behind the fix; a DF unit whose offset is not in doubt
+//! (below); and an offset known to [`KNOWN_SD`], by its prior (a calibration) or by the drive.
+//! A fix that rests on an unchecked prior is right only while the prior is: an offset far
+//! outside it moves the fix by range x offset with nothing in the residuals to show it. What limits a fix that is not yet good
 //! enough is read off the same bound:
 //! - the **offset**, when the bound with the offset known would already be much smaller (an
 //!   unmodelled offset floors any drive that does not surround the emitter at about r b): drive a
@@ -18,7 +20,7 @@
 
 use super::belief::Belief;
 use crate::error::{Error, check_finite};
-use crate::fix::bias::BiasPrior;
+use crate::fix::bias::{BiasPrior, KNOWN_SD};
 use crate::model::bearing::Bearing;
 use core::fmt;
 
@@ -104,12 +106,18 @@ pub struct Missing {
     pub bearings: bool,
     /// A DF unit whose offset agrees with its prior.
     pub offset: bool,
+    /// An offset known to [`KNOWN_SD`]: the prior is wider and the drive has not measured it.
+    pub offset_measurement: bool,
 }
 
 impl Missing {
     /// Nothing is missing.
     pub fn none(&self) -> bool {
-        !(self.precision || self.consistency || self.bearings || self.offset)
+        !(self.precision
+            || self.consistency
+            || self.bearings
+            || self.offset
+            || self.offset_measurement)
     }
 }
 
@@ -141,6 +149,9 @@ pub enum Reason {
     GetCloser,
     /// The unknown offset limits the fix: drive a calibration leg (or round the emitter).
     CalibrationLeg,
+    /// The drive has not measured the offset and its prior is an assumption: turn, or
+    /// calibrate.
+    MeasureOffset,
     /// Too few independent bearings yet: keep collecting.
     MoreBearings,
     /// The residuals do not fit the noise model: check the DF unit (or a reflection).
@@ -158,6 +169,7 @@ impl Reason {
             Reason::WidenAngle => "widen-angle",
             Reason::GetCloser => "get-closer",
             Reason::CalibrationLeg => "calibration-leg",
+            Reason::MeasureOffset => "measure-offset",
             Reason::MoreBearings => "more-bearings",
             Reason::CheckUnit => "check-unit",
             Reason::CheckOffset => "check-offset",
@@ -172,6 +184,10 @@ impl fmt::Display for Reason {
             Reason::WidenAngle => "widen the angle",
             Reason::GetCloser => "get closer",
             Reason::CalibrationLeg => "drive a calibration leg (the offset limits the fix)",
+            Reason::MeasureOffset => {
+                "the drive has not measured the DF unit's offset (the fix assumes its prior): \
+                 turn, or drive a calibration leg"
+            }
             Reason::MoreBearings => "more bearings",
             Reason::CheckUnit => "residuals inconsistent: check the DF unit",
             Reason::CheckOffset => {
@@ -184,7 +200,7 @@ impl fmt::Display for Reason {
 
 impl Verdict {
     /// The one reason to give the driver: what is missing first (consistency, precision with
-    /// its limit, bearings, then the offset).
+    /// its limit, bearings, the offset's doubt, then its measurement).
     pub fn reason(&self) -> Reason {
         if self.good_enough {
             Reason::GoodEnough
@@ -198,10 +214,12 @@ impl Verdict {
             }
         } else if self.missing.bearings {
             Reason::MoreBearings
-        } else {
-            // Last: early in a drive the offset is often in doubt only because the bearings
+        } else if self.missing.offset {
+            // Late: early in a drive the offset is often in doubt only because the bearings
             // have not turned yet, and the move that turns them serves both.
             Reason::CheckOffset
+        } else {
+            Reason::MeasureOffset
         }
     }
 }
@@ -238,6 +256,7 @@ pub fn verdict(
         consistency: !quality.consistent,
         bearings: !(quality.effective >= rule.min_effective),
         offset: quality.offset_beyond_prior,
+        offset_measurement: !(aware.bias_sd() <= KNOWN_SD),
     };
     let limit = if offset_known_cep50_m < rule.offset_share * cep50_m {
         Limit::Offset
@@ -321,6 +340,34 @@ mod tests {
             "{v:?}"
         );
         assert!(v.offset_known_cep50_m < 0.6 * v.cep50_m);
+    }
+
+    #[test]
+    fn an_offset_the_drive_has_not_measured_is_never_good_enough() {
+        // A short straight leg: the bearings turn 28 degrees, too little to tell a 6 degree
+        // prior's offset from a cross-range shift. A generous target isolates the offset.
+        let rule = StopRule {
+            target_cep50_m: 1000.0,
+            ..StopRule::default()
+        };
+        let e = [0.0, 400.0];
+        let short = leg(e, [-100.0, 0.0], [100.0, 0.0]);
+        let v = verdict(e, &short, BiasPrior::default(), GOOD, &rule).unwrap();
+        assert!(
+            v.missing.offset_measurement && !v.good_enough && v.reason() == Reason::MeasureOffset,
+            "{v:?}"
+        );
+        // A calibration states the offset: the same leg is good enough.
+        let cal = BiasPrior {
+            mean: 0.0,
+            sd: 0.5 * DEG,
+        };
+        let v = verdict(e, &short, cal, GOOD, &rule).unwrap();
+        assert!(v.good_enough, "{v:?}");
+        // A leg past the emitter turns the bearings 127 degrees: the drive measures it.
+        let long = leg(e, [-800.0, 0.0], [800.0, 0.0]);
+        let v = verdict(e, &long, BiasPrior::default(), GOOD, &rule).unwrap();
+        assert!(!v.missing.offset_measurement && v.good_enough, "{v:?}");
     }
 
     #[test]

@@ -432,6 +432,7 @@ pub fn missing_names(verdict: Option<&Verdict>) -> Vec<&'static str> {
                 (m.consistency, "consistency"),
                 (m.bearings, "bearings"),
                 (m.offset, "offset"),
+                (m.offset_measurement, "offset-measurement"),
             ]
             .into_iter()
             .filter(|(on, _)| *on)

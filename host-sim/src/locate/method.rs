@@ -160,6 +160,7 @@ pub(crate) fn located_by(
         consistent,
         time_span_s: None,
         why: None,
+        offset_measured: None,
         offset_check: None,
     };
     let channel = ChannelSummary {

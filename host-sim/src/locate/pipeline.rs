@@ -42,6 +42,7 @@ fn source_report(s: &Source, frame: &LocalFrame, why: Option<&'static str>) -> S
         consistent: Some(s.consistent),
         time_span_s: Some(s.time_span),
         why,
+        offset_measured: Some(!s.offset_check.unmeasured),
         offset_check: s.offset_check.doubtful().then_some(OffsetCheckReport {
             z: s.offset_check.z,
             relaxed: s.offset_check.relaxed,

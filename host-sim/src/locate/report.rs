@@ -90,6 +90,11 @@ pub struct SourceReport {
     /// Why an other source is not the emitter (other sources only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub why: Option<&'static str>,
+    /// Whether the bearings measured the DF unit's offset (its sd within 3 degrees, by them or
+    /// by a calibrated prior); false: the fix holds only while the offset lies within its
+    /// prior, which these bearings cannot check (docs/src/field.md, "Past the prior"; null:
+    /// the method does not estimate the offset).
+    pub offset_measured: Option<bool>,
     /// Present only when the DF unit's offset needs checking (docs/src/field.md, "Past the
     /// prior"): it contradicted its prior and the fix is the one with the offset free, or
     /// another offset far from the fit's is about as likely.

@@ -105,6 +105,13 @@ impl SourceReport {
             "  {offset}noise {:.2} deg ({how}); {} bearings{effective}{consistent}",
             self.sigma_deg, self.used,
         );
+        if self.offset_measured == Some(false) && self.offset_check.is_none() {
+            let _ = writeln!(
+                out,
+                "  offset not measured by these bearings: the fix holds while it lies within its \
+                 prior; turn (or calibrate) to check"
+            );
+        }
         if let Some(c) = self.offset_check {
             let what = if c.relaxed {
                 format!(

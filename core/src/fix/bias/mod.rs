@@ -42,7 +42,7 @@ mod tests;
 pub use bound::{BiasedCrlb, crlb, crlb_stations, information};
 pub use calibration::{Calibration, calibrate};
 pub use direction::{DirectionPrior, HARMONICS, harmonics};
-pub use prior::{BiasPrior, CONTRADICTED_Z};
+pub use prior::{BiasPrior, CONTRADICTED_Z, KNOWN_SD};
 pub use profile_likelihood::{CIRCLE_STEPS, OffsetCircle, ProfilePoint, offset_circle, profile};
 pub use solve::{BiasedFix, BiasedOptions, Start, StartOffsets, ml, ml_sources, refit};
 pub use stations::{FRONT_STEP_M, StationSlot};

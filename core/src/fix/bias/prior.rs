@@ -10,6 +10,15 @@ use crate::model::bearing::wrap;
 /// array indexed one element off (72 degrees) always is.
 pub const CONTRADICTED_Z: f32 = 3.0;
 
+/// An offset known to this sd (radians: 3 degrees, half the default prior's) or better is
+/// measured: by a calibration, a surveyed station, or the drive itself. A wider one is the
+/// prior's assumption, which the drive has not checked: an offset several of its sds off (a
+/// swapped cable, an array indexed one element off) moves such a fix by about range x offset
+/// with nothing in the residuals to show it, and only a turn or a calibration can tell
+/// (docs/src/field.md, "Past the prior"). Measured to 3 degrees, a unit whose 6 degree prior is
+/// 21 degrees wrong lies 3 of the sds the prior predicts out, which the offset check flags.
+pub const KNOWN_SD: f32 = 3.0 * core::f32::consts::PI / 180.0;
+
 /// What is known of one station's offset before the drive.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BiasPrior {

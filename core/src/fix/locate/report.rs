@@ -97,6 +97,11 @@ pub struct OffsetCheck {
     /// the prior alone chose between them, and a swapped cable or an array indexed off would
     /// give the other.
     pub ambiguous: bool,
+    /// The bearings did not measure the main station's offset (its sd, read at the
+    /// residuals' correlation, above [`KNOWN_SD`](crate::fix::bias::KNOWN_SD)) and its prior
+    /// does not state it that well: the fix holds only while the offset lies within its prior,
+    /// which these bearings cannot check (a straight road, a fixed station).
+    pub unmeasured: bool,
 }
 
 impl OffsetCheck {
@@ -338,6 +343,7 @@ const EMPTY_SOURCE: Source = Source {
         z: 0.0,
         relaxed: false,
         ambiguous: false,
+        unmeasured: false,
     },
     index_span: [0; 2],
     time_span: [0.0; 2],

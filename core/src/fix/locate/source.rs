@@ -4,7 +4,8 @@
 //! ([`super::region`]).
 
 use super::super::bias::{
-    self, BiasPrior, BiasedFix, BiasedOptions, CONTRADICTED_Z, OffsetCircle, Sighting, StationSlot,
+    self, BiasPrior, BiasedFix, BiasedOptions, CONTRADICTED_Z, KNOWN_SD, OffsetCircle, Sighting,
+    StationSlot,
 };
 use super::super::consistency;
 use super::super::noise::median_sigma;
@@ -59,6 +60,7 @@ pub(super) fn find_source<R: Rng + ?Sized>(
     let z = prior.surprise_correlated(source.bias, source.bias_sd, tau);
     source.offset_check = OffsetCheck {
         z,
+        unmeasured: unmeasured(&source),
         ..OffsetCheck::default()
     };
     if z.abs() <= CONTRADICTED_Z {
@@ -145,6 +147,7 @@ fn past_prior<R: Rng + ?Sized>(
                 z: source.offset_check.z,
                 relaxed: true,
                 ambiguous: false,
+                unmeasured: unmeasured(&again),
             };
             Ok(Found::Source(again, kept))
         }
@@ -274,6 +277,12 @@ fn correlation(source: &Source) -> f32 {
     }
 }
 
+/// Whether `source`'s bearings left its main station's offset unmeasured: its sd, read at
+/// their correlation, above [`KNOWN_SD`].
+fn unmeasured(source: &Source) -> bool {
+    !(source.bias_sd * libm::sqrtf(correlation(source)) <= KNOWN_SD)
+}
+
 /// The noise scale `source` used: its sigma over its bearings' (`members`) median sigma.
 pub(super) fn noise_scale(source: &Source, members: &[Item]) -> f32 {
     let median = median_sigma(members);
@@ -293,9 +302,12 @@ pub const RIVAL_APART: f32 = 30.0 * core::f32::consts::PI / 180.0;
 /// likelihood ratio of 1 in 90) are both possible: the data do not choose between them.
 pub const AMBIGUOUS_DEVIANCE: f32 = 9.0;
 
-/// A relaxed fit whose offset sd exceeds this (radians: 15 degrees) did not measure the offset:
-/// its fix would rest on an offset the drive cannot show.
-pub const OBSERVED_SD: f32 = 15.0 * core::f32::consts::PI / 180.0;
+/// A relaxed fit whose offset sd exceeds this (radians: 6 degrees, the default prior's) did not
+/// measure the offset: relaxing a prior the data contradict is honest only where the data pin
+/// the offset at least as well as the prior claimed to. Wider, the fix rests on an offset the
+/// drive cannot show, and its linearised ellipse misses: at 15 degrees, on a straight road with
+/// the unit 30-105 degrees off, a fifth to half of such fixes missed the truth beyond 3 sigma.
+pub const OBSERVED_SD: f32 = 6.0 * core::f32::consts::PI / 180.0;
 
 /// One pass of the search for a source in `set`, the consensus' common offsets searched in
 /// `window`.
