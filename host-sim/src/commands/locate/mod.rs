@@ -441,8 +441,16 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
              drive's CAPTURE",
         ));
     }
-    let offset = match (&a.calibration, calibrating) {
-        (Some(f), false) => Some(Calibration::load(f)?.prior()),
+    let calibration = match (&a.calibration, calibrating) {
+        // A file that cannot be read fails (exit 1); one that reads but is no calibration (a
+        // value no calibration gives) is a usage error (exit 2), like a bad option value.
+        (Some(f), false) => {
+            let text = crate::inputs::files::read_text(f)?;
+            Some(
+                Calibration::from_toml(&text)
+                    .map_err(|e| Stop::Usage(format!("{}: {e}", f.display())))?,
+            )
+        }
         _ => None,
     };
     let options = LocateOptions {
@@ -450,7 +458,8 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
         particles,
         sigma_deg: a.sigma_deg,
         seed: a.seed,
-        offset,
+        offset: calibration.as_ref().map(Calibration::prior),
+        direction: calibration.as_ref().and_then(Calibration::direction),
         channel_width_mhz: a.channel_width_mhz,
         network: network(a)?,
     };
