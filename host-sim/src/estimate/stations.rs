@@ -11,9 +11,10 @@
 //! degree after a few minutes of a beacon. Each update recomputes it from every reference
 //! bearing so far: the calibration is continuous. Where a station's bearings of a reference
 //! span enough directions relative to its antenna (a vehicle that turns in view of it:
-//! [`MIN_SPAN`](foxhunt_core::fix::bias::MIN_SPAN)), the same bearings measure its direction-dependent error too
-//! ([`calibrate_direction`]), and that table with its sd is combined with the station's stated
-//! one; a fixed station sees a reference from one direction and measures the offset only.
+//! [`MIN_SPAN`](foxhunt_core::fix::bias::MIN_SPAN)), the same bearings measure its
+//! direction-dependent error too ([`calibrate_direction`]), and that table with its sd is
+//! combined with the station's stated one; a fixed station sees a reference from one
+//! direction and measures the offset only.
 
 use super::Priors;
 use crate::inputs::stations::{Network, PriorFrom};
@@ -359,5 +360,90 @@ mod tests {
         assert_eq!(combine(none, &cal(2.0, 1.0)), cal(2.0, 1.0).prior());
         let exact = BiasPrior::calibrated(0.5);
         assert_eq!(combine(exact, &cal(2.0, 1.0)), exact);
+    }
+
+    #[test]
+    fn a_station_that_turns_in_view_of_a_reference_measures_its_harmonics_a_fixed_one_its_offset() {
+        use foxhunt_core::fix::bias::DirectionPrior;
+        use foxhunt_core::model::bearing::predicted;
+        use foxhunt_core::random;
+        use rand_core::SeedableRng;
+        let reference = LocalReference {
+            position: [0.0, 0.0],
+            freq_mhz: 145.5,
+        };
+        let table = [3.0f32, -2.0, 1.5, 2.5].map(f32::to_radians);
+        let unit = DirectionPrior {
+            mean: table,
+            sd: 0.0,
+        };
+        let mut rng = rand_xorshift::XorShiftRng::seed_from_u64(3);
+        let mut observations = Vec::new();
+        // Station 0 drives a lap of a 600 m circle 2.5 km from the reference (400 bearings);
+        // station 1 stands still 3 km north of it.
+        for k in 0..400 {
+            let a = 2.0 * std::f32::consts::PI * k as f32 / 400.0;
+            let v = [2500.0 + 600.0 * a.cos(), 600.0 * a.sin()];
+            let truth = predicted(&reference.position, &v);
+            // Model-consistent: the error of the reported bearing relative to the course.
+            let plain = truth + 0.05 + 0.02 * random::normal(&mut rng);
+            let course = a + std::f32::consts::FRAC_PI_2;
+            let mut theta = plain;
+            for _ in 0..8 {
+                theta = plain + unit.error_at(wrap(theta - course));
+            }
+            for (station, vehicle, theta) in [
+                (0u16, v, theta),
+                (
+                    1,
+                    [0.0, 3000.0],
+                    -std::f32::consts::FRAC_PI_2 + 0.02 * random::normal(&mut rng),
+                ),
+            ] {
+                observations.push(Observation {
+                    bearing: Bearing {
+                        vehicle,
+                        theta: wrap(theta),
+                        sigma: 0.02,
+                    },
+                    time_s: k as f32,
+                    freq_mhz: Some(145.5),
+                    station,
+                    stamped: true,
+                });
+            }
+        }
+        let mut setup = station_setup(
+            ["car", "mast"].into_iter(),
+            None,
+            BiasPrior::default(),
+            false,
+        );
+        let (rest, fixes) = calibrate_on_references(&observations, &[reference], 0.05, &mut setup);
+        assert!(rest.is_empty());
+        let car = fixes.iter().find(|f| f.station == 0).expect("car");
+        let mast = fixes.iter().find(|f| f.station == 1).expect("mast");
+        let measured = car.direction.expect("the car turned");
+        // 400 bearings of 1.15 degrees: each coefficient to about 0.08 degrees; 0.4 is five of
+        // those, beyond noise.
+        for k in 0..4 {
+            assert!(
+                (measured.mean[k] - table[k]).abs() < 0.4f32.to_radians(),
+                "{:?}",
+                measured.mean.map(f32::to_degrees)
+            );
+        }
+        assert!(
+            measured.sd > 0.0 && measured.sd < 0.2f32.to_radians(),
+            "{}",
+            measured.sd
+        );
+        // The car's table is applied to its emitter bearings, with the measurement's sd.
+        let (applied, _) = setup.priors.direction[0].expect("applied");
+        assert_eq!(applied, measured);
+        // The mast sees the reference from one direction: its offset only.
+        // (Its relative bearings are all one: the fit is degenerate, no span at all.)
+        assert!(mast.direction.is_none() && mast.span.is_none_or(|s| s < 0.01));
+        assert!(setup.priors.direction.get(1).copied().flatten().is_none());
     }
 }

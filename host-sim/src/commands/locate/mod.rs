@@ -47,8 +47,9 @@ pub struct Args {
           value_parser = values::f32_where(|w| w >= 0.0 && w.is_finite(), "a number of MHz >= 0"))]
     pub channel_width_mhz: f32,
     /// Measure the DF unit's mounting offset on the CAPTURE of a drive past a transmitter at
-    /// LAT,LON (decimal degrees) and save it to --calibration FILE, instead of locating. The
-    /// transmitter must lie 100 m to 50 km from the bearings, which must agree with it; an
+    /// LAT,LON (decimal degrees), and its direction-dependent error where the drive turned
+    /// through enough directions, and save them to --calibration FILE, instead of locating.
+    /// The transmitter must lie 100 m to 50 km from the bearings, which must agree with it; an
     /// offset beyond --max-offset-deg is reported, not saved.
     #[arg(long, allow_hyphen_values = true, requires = "calibration", value_name = "LAT,LON",
           value_parser = values::lat_lon)]
@@ -59,7 +60,8 @@ pub struct Args {
           requires = "calibrate", value_name = "DEG",
           value_parser = values::f32_where(|d| (0.0..=180.0).contains(&d), "a number of degrees from 0 to 180"))]
     pub max_offset_deg: f32,
-    /// A calibration file: with --calibrate where to save it; otherwise the offset to apply.
+    /// A calibration file: with --calibrate where to save it; otherwise the offset (and the
+    /// direction-dependent error, where it holds one) to apply.
     #[arg(long)]
     pub calibration: Option<PathBuf>,
     /// Particles of the particle methods (sir, gpf, the swarms; a compiled count): 1000, or
