@@ -413,7 +413,7 @@ fn a_calibration_drive_measures_the_offset_and_later_runs_use_it() {
         let broken = scratch_file(
             &dir,
             name,
-            &format!(
+            format!(
                 "offset_deg = 1.0\noffset_sd_deg = 0.1\nnoise_deg = 1.0\nbearings = 60\n\
                  rejected = 0\ndirection_deg = {table}\ndirection_error_deg = 0.2\n\
                  transmitter = [47.0, 8.0]\n"

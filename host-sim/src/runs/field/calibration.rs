@@ -85,6 +85,10 @@ fn loop_drive(unit: &DirectionUnit, rng: &mut XorShiftRng) -> Vec<foxhunt_core::
     unit.bearings(TRANSMITTER, &route, |k| angle(k) + FRAC_PI_2, rng)
 }
 
+/// One way on one run: the error if an emitter was found, whether its ellipse held the truth,
+/// the plain bound, and whether the calibration file held the harmonics.
+type WayOutcome = (Option<f32>, bool, f32, bool);
+
 /// The three ways over `runs` seeded runs, each run's unit calibrated on its own loop and
 /// located on its own U drive.
 pub fn calibration_runs(runs: usize) -> [CalibrationRow; 3] {
@@ -93,7 +97,7 @@ pub fn calibration_runs(runs: usize) -> [CalibrationRow; 3] {
         Calibrated::OffsetOnly,
         Calibrated::Direction,
     ];
-    let outcomes: Vec<[(Option<f32>, bool, f32, bool); 3]> = (0..runs)
+    let outcomes: Vec<[WayOutcome; 3]> = (0..runs)
         .into_par_iter()
         .map(|run| {
             let mut rng = XorShiftRng::seed_from_u64(0xCA11_B8A7 + run as u64);
