@@ -126,6 +126,25 @@ pub fn inverse_scaled<const D: usize>(m: &[[f32; D]; D]) -> Option<[[f32; D]; D]
     inv.iter().flatten().all(|v| v.is_finite()).then_some(inv)
 }
 
+/// The largest eigenvalue of a symmetric positive semi-definite matrix, by power iteration
+/// (the matrices here are 4 x 4 and well separated enough that 64 steps settle to f32).
+pub fn largest_eigenvalue<const D: usize>(m: &[[f32; D]; D]) -> f32 {
+    // A start no symmetry of the matrix makes orthogonal to its leading eigenvector.
+    let mut v: [f32; D] = core::array::from_fn(|i| 1.0 + 0.37 * i as f32);
+    let mut lambda = 0.0f32;
+    for _ in 0..64 {
+        let w = mat_vec(m, &v);
+        let norm = libm::sqrtf(w.iter().map(|x| x * x).sum());
+        if !(norm > 0.0) || !norm.is_finite() {
+            return norm;
+        }
+        let vv: f32 = v.iter().map(|x| x * x).sum();
+        lambda = v.iter().zip(&w).map(|(a, b)| a * b).sum::<f32>() / vv;
+        v = w.map(|x| x / norm);
+    }
+    lambda
+}
+
 /// The product of a D x D matrix and a vector.
 pub fn mat_vec<const D: usize>(m: &[[f32; D]; D], v: &[f32; D]) -> [f32; D] {
     core::array::from_fn(|i| (0..D).map(|j| m[i][j] * v[j]).sum())

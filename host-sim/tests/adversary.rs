@@ -487,7 +487,8 @@ fn bad_calibrations_are_refused_and_nothing_is_saved() {
         saved.contains("offset_deg = 5") || saved.contains("offset_deg = 6"),
         "{saved}"
     );
-    // Calibration files no calibration gives: refused on load, naming the key.
+    // Calibration files no calibration gives: refused on load, naming the key, as a usage
+    // error (exit 2).
     let good = "offset_deg = 4.0\noffset_sd_deg = 0.5\nnoise_deg = 1.0\nbearings = 60\n\
                 rejected = 0\ntransmitter = [47.007, 8.0176]\n";
     run(&[
@@ -518,7 +519,7 @@ fn bad_calibrations_are_refused_and_nothing_is_saved() {
             r.code,
             r.stderr.trim()
         );
-        r.expect(1, &[key]);
+        r.expect(2, &[key]);
         assert_eq!(r.stderr.trim().lines().count(), 1, "{r:?}");
     }
 }

@@ -400,10 +400,30 @@ fn a_calibration_drive_measures_the_offset_and_later_runs_use_it() {
         "broken.toml",
         "offset_deg = nan\noffset_sd_deg = 0.1\nnoise_deg = 1.0\nbearings = 1\nrejected = 0\ntransmitter = [47.0, 8.0]\n",
     );
-    refused(
+    // A file that is no calibration: one line, exit 2 (a usage error).
+    misused(
         &foxhunt(&["locate", c, "--calibration", &broken]),
         &["offset_deg"],
     );
+    // Harmonics beyond a working antenna's, or not numbers: refused on one line, exit 2.
+    for (name, table) in [
+        ("absurd.toml", "[25.0, 0.0, 1.0, 0.0]"),
+        ("nan.toml", "[1.0, nan, 1.0, 0.0]"),
+    ] {
+        let broken = scratch_file(
+            &dir,
+            name,
+            format!(
+                "offset_deg = 1.0\noffset_sd_deg = 0.1\nnoise_deg = 1.0\nbearings = 60\n\
+                 rejected = 0\ndirection_deg = {table}\ndirection_error_deg = 0.2\n\
+                 transmitter = [47.0, 8.0]\n"
+            ),
+        );
+        misused(
+            &foxhunt(&["locate", c, "--calibration", &broken]),
+            &["direction_deg"],
+        );
+    }
 }
 
 #[test]

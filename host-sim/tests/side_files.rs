@@ -17,6 +17,12 @@ const ANCHORS: &str = include_str!("../../serial-bridge/captures/rssi-sim.anchor
 const CALIBRATION: &str = "offset_deg = 4.0\noffset_sd_deg = 0.5\nnoise_deg = 1.0\n\
     bearings = 60\nrejected = 0\ntransmitter = [47.007, 8.0176]\n";
 
+/// A calibration whose drive turned: the direction-dependent error's table with its sd.
+const CALIBRATION_DIRECTION: &str = "offset_deg = -2.5\noffset_sd_deg = 0.12\nnoise_deg = 2.0\n\
+    bearings = 480\nrejected = 2\ndirection_span = 0.47\n\
+    direction_deg = [3.1, -1.2, 0.4, 2.2]\ndirection_error_deg = 0.15\n\
+    transmitter = [47.007, 8.0176]\n";
+
 const SCENARIO: &str = "name = \"my-drive\"\nemitter = [1200.0, 800.0]\nroute = \"loop300\"\n\
     bearing_sigma_deg = 1.117\nwild_fraction = 0.0\nprocess_var = 1.0\nparticles = 100\n\
     runs = 100\nseed = 1\n";
@@ -105,8 +111,8 @@ proptest! {
     }
 
     #[test]
-    fn toml_side_files_never_panic_on_edited_files(e in edits(), which in 0..3usize) {
-        let valid = [ANCHORS, CALIBRATION, SCENARIO][which];
+    fn toml_side_files_never_panic_on_edited_files(e in edits(), which in 0..4usize) {
+        let valid = [ANCHORS, CALIBRATION, SCENARIO, CALIBRATION_DIRECTION][which];
         let text = String::from_utf8_lossy(&apply(valid.as_bytes(), &e)).into_owned();
         toml_readers(&text)?;
     }
@@ -127,6 +133,49 @@ proptest! {
 fn the_valid_side_files_read() {
     AnchorsFile::from_toml(ANCHORS).expect("anchors");
     Calibration::from_toml(CALIBRATION).expect("calibration");
+    let turned = Calibration::from_toml(CALIBRATION_DIRECTION).expect("calibration");
+    assert!(turned.direction().is_some_and(|d| d.sd > 0.0));
+    // Absurd or broken harmonics are one line naming the key.
+    for (bad, key) in [
+        ("direction_deg = [20.0, 0.0, 0.4, 2.2]", "direction_deg"),
+        ("direction_deg = [nan, -1.2, 0.4, 2.2]", "direction_deg"),
+        ("direction_deg = [3.1, -1.2, inf, 2.2]", "direction_deg"),
+        (
+            "direction_error_deg = 0.15\ndirection_error_deg = 0.15",
+            "duplicate",
+        ),
+    ] {
+        let text = CALIBRATION_DIRECTION.replace("direction_deg = [3.1, -1.2, 0.4, 2.2]", bad);
+        let e = Calibration::from_toml(&text).expect_err(bad);
+        assert!(e.contains(key) && !e.contains('\n'), "{bad}: {e}");
+    }
+    for (from, bad, key) in [
+        (
+            "direction_error_deg = 0.15",
+            "direction_error_deg = nan",
+            "direction_error_deg",
+        ),
+        (
+            "direction_error_deg = 0.15",
+            "direction_error_deg = 0.0",
+            "direction_error_deg",
+        ),
+        (
+            "direction_error_deg = 0.15",
+            "direction_error_deg = 40.0",
+            "direction_error_deg",
+        ),
+        ("direction_error_deg = 0.15", "", "come together"),
+        (
+            "direction_span = 0.47",
+            "direction_span = -1.0",
+            "direction_span",
+        ),
+    ] {
+        let text = CALIBRATION_DIRECTION.replace(from, bad);
+        let e = Calibration::from_toml(&text).expect_err(bad);
+        assert!(e.contains(key) && !e.contains('\n'), "{bad}: {e}");
+    }
     Scenario::from_toml(SCENARIO).expect("scenario");
     let p = scratch("valid.osm");
     std::fs::write(&p, grid()).expect("write");

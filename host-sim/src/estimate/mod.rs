@@ -124,6 +124,9 @@ pub struct Priors {
     /// Station index to its direction-dependent error's prior and its antenna's front where
     /// it stands still (theta, radians); `None`: not modelled.
     pub direction: Vec<Option<(DirectionPrior, f32)>>,
+    /// The direction-dependent error of every station without its own (a `--calibration`
+    /// file's) and the front of one that stands still; `None`: not modelled.
+    pub default_direction: Option<(DirectionPrior, f32)>,
 }
 
 impl Priors {
@@ -156,7 +159,13 @@ impl Priors {
     /// Station `s`'s row of the station table: its prior and its unmodelled error.
     pub fn row(&self, s: usize) -> StationSlot {
         let row = StationSlot::new(self.of(s)).with_unmodelled(self.unmodelled_of(s));
-        match self.direction.get(s).copied().flatten() {
+        match self
+            .direction
+            .get(s)
+            .copied()
+            .flatten()
+            .or(self.default_direction)
+        {
             Some((prior, front)) => row.with_direction(prior, front),
             None => row,
         }

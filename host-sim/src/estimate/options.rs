@@ -5,7 +5,7 @@
 use super::Priors;
 use crate::inputs::stations::Network;
 use foxhunt_core::Method;
-use foxhunt_core::fix::bias::BiasPrior;
+use foxhunt_core::fix::bias::{BiasPrior, DirectionPrior};
 use foxhunt_core::fix::locate::{LocateConfig, NoiseModel};
 
 /// Particles of the sequential methods unless `--particles` says otherwise.
@@ -29,6 +29,9 @@ pub struct LocateOptions {
     /// The DF unit's offset, as a calibration measured it (`None`: unknown, estimated with
     /// the default prior).
     pub offset: Option<BiasPrior>,
+    /// The DF unit's direction-dependent error, where a calibration measured it: a known
+    /// table with its sd, for every station whose stations file states none.
+    pub direction: Option<DirectionPrior>,
     /// Bearings within this many MHz share a channel.
     pub channel_width_mhz: f32,
     /// What is known of the network's stations and reference transmitters (`--stations`,
@@ -44,6 +47,7 @@ impl Default for LocateOptions {
             sigma_deg: None,
             seed: 1,
             offset: None,
+            direction: None,
             channel_width_mhz: LocateConfig::default().channel_width_mhz,
             network: None,
         }
@@ -91,7 +95,17 @@ impl LocateOptions {
 
     /// Each station's offset prior for these options: the calibration's, else the default.
     pub fn priors(&self) -> Priors {
-        Priors::same(self.offset.unwrap_or_default())
+        let mut p = Priors::same(self.offset.unwrap_or_default());
+        self.calibrated_direction(&mut p);
+        p
+    }
+
+    /// The calibration's direction-dependent error as the default of `priors`: every station
+    /// whose stations file states none takes it (a vehicle's front is its course).
+    pub fn calibrated_direction(&self, priors: &mut Priors) {
+        if let Some(d) = self.direction {
+            priors.default_direction = Some((d, std::f32::consts::FRAC_PI_2));
+        }
     }
 
     /// Tell `decoder` where the stations file's surveyed stations stand (before their

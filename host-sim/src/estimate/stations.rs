@@ -9,16 +9,25 @@
 //! (precision-weighted) into the prior its emitter bearings are fixed with, so a fixed
 //! station, whose offset its own emitter bearings cannot show, is known to a tenth of a
 //! degree after a few minutes of a beacon. Each update recomputes it from every reference
-//! bearing so far: the calibration is continuous.
+//! bearing so far: the calibration is continuous. Where a station's bearings of a reference
+//! span enough directions relative to its antenna (a vehicle that turns in view of it:
+//! [`MIN_SPAN`](foxhunt_core::fix::bias::MIN_SPAN)), the same bearings measure its
+//! direction-dependent error too ([`calibrate_direction`]), and that table with its sd is
+//! combined with the station's stated one; a fixed station sees a reference from one
+//! direction and measures the offset only.
 
 use super::Priors;
 use crate::inputs::stations::{Network, PriorFrom};
-use foxhunt_core::fix::bias::{BiasPrior, Calibration, calibrate};
+use foxhunt_core::fix::bias::{
+    BiasPrior, Calibration, DirectionPrior, HARMONICS, calibrate, calibrate_direction,
+    relative_to_course,
+};
 use foxhunt_core::fix::channel;
 use foxhunt_core::fix::device::class_noise;
 use foxhunt_core::fix::locate::Observation;
 use foxhunt_core::model::bearing::{Bearing, wrap};
 use serde::Serialize;
+use std::f32::consts::FRAC_PI_2;
 
 /// Where a station's offset prior came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -54,6 +63,43 @@ pub struct ReferenceFix {
     pub reference: usize,
     /// The measurement.
     pub calibration: Calibration,
+    /// Its direction-dependent error measured with the offset, where the bearings spanned
+    /// enough directions ([`MIN_SPAN`](foxhunt_core::fix::bias::MIN_SPAN)).
+    pub direction: Option<DirectionPrior>,
+    /// How evenly they spanned them (the smallest eigenvalue of the harmonics' information
+    /// per bearing; 0.5 an even full turn), where it could be computed.
+    pub span: Option<f32>,
+}
+
+/// A harmonic table more uncertain than this (sd, radians) is no measurement worth applying:
+/// the calibration file's limit ([`crate::inputs::calibration::MAX_HARMONIC_DEG`]).
+fn max_direction_sd() -> f32 {
+    crate::inputs::calibration::MAX_HARMONIC_DEG.to_radians()
+}
+
+/// `prior` and a measured table combined coefficient by coefficient, precision-weighted with
+/// the one sd of each (the measurement alone where nothing was stated).
+pub fn combine_direction(
+    prior: Option<DirectionPrior>,
+    measured: DirectionPrior,
+) -> DirectionPrior {
+    let Some(p) = prior.filter(DirectionPrior::is_free) else {
+        return match prior {
+            // A table stated exact stays.
+            Some(p) if p != DirectionPrior::NONE => p,
+            _ => measured,
+        };
+    };
+    if !(measured.sd > 0.0) {
+        return measured;
+    }
+    let (wp, wm) = (1.0 / (p.sd * p.sd), 1.0 / (measured.sd * measured.sd));
+    let mean: [f32; HARMONICS] =
+        std::array::from_fn(|k| (p.mean[k] * wp + measured.mean[k] * wm) / (wp + wm));
+    DirectionPrior {
+        mean,
+        sd: 1.0 / (wp + wm).sqrt(),
+    }
 }
 
 /// Each station's prior and unmodelled error (with the stated classes' ceiling), where the
@@ -178,17 +224,22 @@ pub fn calibrate_on_references(
         .map(|o| usize::from(o.station) + 1)
         .max()
         .unwrap_or(0);
-    // Per reference and station, its bearings in time order.
-    let mut heard: Vec<Vec<Vec<Bearing>>> = vec![vec![Vec::new(); stations]; references.len()];
+    // Each bearing relative to its station's antenna: a moving station's course over all its
+    // bearings (every channel's), a fixed one's stated front.
+    let relative = relative_bearings(observations, stations, setup);
+    // Per reference and station, its bearings in time order, with their relative bearings.
+    type Heard = (Vec<Bearing>, Vec<f32>);
+    let mut heard: Vec<Vec<Heard>> = vec![vec![Heard::default(); stations]; references.len()];
     let mut rest = Vec::with_capacity(observations.len());
-    for o in observations {
+    for (o, phi) in observations.iter().zip(&relative) {
         match on(o) {
             Some(r) => {
-                if let Some(list) = heard
+                if let Some((list, phis)) = heard
                     .get_mut(r)
                     .and_then(|h| h.get_mut(usize::from(o.station)))
                 {
                     list.push(o.bearing);
+                    phis.push(*phi);
                 }
             }
             None => rest.push(*o),
@@ -196,14 +247,25 @@ pub fn calibrate_on_references(
     }
     let mut fixes = Vec::new();
     for (r, per_station) in heard.iter().enumerate() {
-        for (s, bearings) in per_station.iter().enumerate() {
-            let Ok(c) = calibrate(bearings, references[r].position) else {
-                continue;
+        for (s, (bearings, phis)) in per_station.iter().enumerate() {
+            let at = references[r].position;
+            let joint = calibrate_direction(bearings, phis, at).ok();
+            let span = joint.map(|j| j.span);
+            let (calibration, direction) = match joint {
+                Some(j) if j.measured() && j.sd() <= max_direction_sd() => {
+                    (j.offset, Some(j.prior()))
+                }
+                _ => match calibrate(bearings, at) {
+                    Ok(c) => (c, None),
+                    Err(_) => continue,
+                },
             };
             fixes.push(ReferenceFix {
                 station: s as u16,
                 reference: r,
-                calibration: c,
+                calibration,
+                direction,
+                span,
             });
         }
     }
@@ -216,8 +278,49 @@ pub fn calibrate_on_references(
         let prior = setup.priors.of(s);
         setup.priors.stations[s] = Some(combine(prior, &f.calibration));
         setup.origins[s] = PriorOrigin::Reference;
+        if let Some(measured) = f.direction {
+            if setup.priors.direction.len() <= s {
+                setup.priors.direction.resize(s + 1, None);
+            }
+            let stated = setup.priors.direction[s].or(setup.priors.default_direction);
+            let front = stated.map_or(FRAC_PI_2, |(_, front)| front);
+            let table = combine_direction(stated.map(|(p, _)| p), measured);
+            setup.priors.direction[s] = Some((table, front));
+        }
     }
     (rest, fixes)
+}
+
+/// Each observation's bearing relative to its station's antenna, as the fix takes it: a
+/// station's bearings in time order, its front its course where it moves, else the front
+/// `setup` states for it (north where none).
+fn relative_bearings(
+    observations: &[Observation],
+    stations: usize,
+    setup: &StationSetup,
+) -> Vec<f32> {
+    let mut by_station: Vec<Vec<usize>> = vec![Vec::new(); stations];
+    for (k, o) in observations.iter().enumerate() {
+        by_station[usize::from(o.station)].push(k);
+    }
+    let mut relative = vec![0.0f32; observations.len()];
+    for (s, indices) in by_station.iter().enumerate() {
+        let front = setup
+            .priors
+            .direction
+            .get(s)
+            .copied()
+            .flatten()
+            .or(setup.priors.default_direction)
+            .map_or(FRAC_PI_2, |(_, front)| front);
+        let bearings: Vec<Bearing> = indices.iter().map(|&k| observations[k].bearing).collect();
+        let mut phis = vec![0.0f32; bearings.len()];
+        relative_to_course(&bearings, front, &mut phis);
+        for (&k, phi) in indices.iter().zip(phis) {
+            relative[k] = phi;
+        }
+    }
+    relative
 }
 
 #[cfg(test)]
@@ -257,5 +360,90 @@ mod tests {
         assert_eq!(combine(none, &cal(2.0, 1.0)), cal(2.0, 1.0).prior());
         let exact = BiasPrior::calibrated(0.5);
         assert_eq!(combine(exact, &cal(2.0, 1.0)), exact);
+    }
+
+    #[test]
+    fn a_station_that_turns_in_view_of_a_reference_measures_its_harmonics_a_fixed_one_its_offset() {
+        use foxhunt_core::fix::bias::DirectionPrior;
+        use foxhunt_core::model::bearing::predicted;
+        use foxhunt_core::random;
+        use rand_core::SeedableRng;
+        let reference = LocalReference {
+            position: [0.0, 0.0],
+            freq_mhz: 145.5,
+        };
+        let table = [3.0f32, -2.0, 1.5, 2.5].map(f32::to_radians);
+        let unit = DirectionPrior {
+            mean: table,
+            sd: 0.0,
+        };
+        let mut rng = rand_xorshift::XorShiftRng::seed_from_u64(3);
+        let mut observations = Vec::new();
+        // Station 0 drives a lap of a 600 m circle 2.5 km from the reference (400 bearings);
+        // station 1 stands still 3 km north of it.
+        for k in 0..400 {
+            let a = 2.0 * std::f32::consts::PI * k as f32 / 400.0;
+            let v = [2500.0 + 600.0 * a.cos(), 600.0 * a.sin()];
+            let truth = predicted(&reference.position, &v);
+            // Model-consistent: the error of the reported bearing relative to the course.
+            let plain = truth + 0.05 + 0.02 * random::normal(&mut rng);
+            let course = a + std::f32::consts::FRAC_PI_2;
+            let mut theta = plain;
+            for _ in 0..8 {
+                theta = plain + unit.error_at(wrap(theta - course));
+            }
+            for (station, vehicle, theta) in [
+                (0u16, v, theta),
+                (
+                    1,
+                    [0.0, 3000.0],
+                    -std::f32::consts::FRAC_PI_2 + 0.02 * random::normal(&mut rng),
+                ),
+            ] {
+                observations.push(Observation {
+                    bearing: Bearing {
+                        vehicle,
+                        theta: wrap(theta),
+                        sigma: 0.02,
+                    },
+                    time_s: k as f32,
+                    freq_mhz: Some(145.5),
+                    station,
+                    stamped: true,
+                });
+            }
+        }
+        let mut setup = station_setup(
+            ["car", "mast"].into_iter(),
+            None,
+            BiasPrior::default(),
+            false,
+        );
+        let (rest, fixes) = calibrate_on_references(&observations, &[reference], 0.05, &mut setup);
+        assert!(rest.is_empty());
+        let car = fixes.iter().find(|f| f.station == 0).expect("car");
+        let mast = fixes.iter().find(|f| f.station == 1).expect("mast");
+        let measured = car.direction.expect("the car turned");
+        // 400 bearings of 1.15 degrees: each coefficient to about 0.08 degrees; 0.4 is five of
+        // those, beyond noise.
+        for k in 0..4 {
+            assert!(
+                (measured.mean[k] - table[k]).abs() < 0.4f32.to_radians(),
+                "{:?}",
+                measured.mean.map(f32::to_degrees)
+            );
+        }
+        assert!(
+            measured.sd > 0.0 && measured.sd < 0.2f32.to_radians(),
+            "{}",
+            measured.sd
+        );
+        // The car's table is applied to its emitter bearings, with the measurement's sd.
+        let (applied, _) = setup.priors.direction[0].expect("applied");
+        assert_eq!(applied, measured);
+        // The mast sees the reference from one direction: its offset only.
+        // (Its relative bearings are all one: the fit is degenerate, no span at all.)
+        assert!(mast.direction.is_none() && mast.span.is_none_or(|s| s < 0.01));
+        assert!(setup.priors.direction.get(1).copied().flatten().is_none());
     }
 }

@@ -1,11 +1,17 @@
 //! A DF unit's mounting offset measured on a drive past a transmitter whose position is known
 //! (`foxhunt locate --calibrate LAT,LON --calibration FILE`), kept in a small TOML file that
 //! later runs load (`--calibration FILE`): the offset then enters every fix as a prior with
-//! the measured spread, instead of being estimated from geometry that may not show it.
+//! the measured spread, instead of being estimated from geometry that may not show it. Where
+//! the drive turned through enough directions relative to the vehicle ([`MIN_SPAN`]), the
+//! file also holds the unit's direction-dependent error (docs/src/field.md, "Calibration"),
+//! which later fixes take as a known table with its sd.
 
 use crate::inputs::capture::Decoded;
 use foxhunt_core::Bearing;
-use foxhunt_core::fix::bias::{BiasPrior, calibrate};
+use foxhunt_core::fix::bias::{
+    BiasPrior, DirectionCalibration, DirectionPrior, HARMONICS, MIN_SPAN, calibrate,
+    calibrate_direction, relative_to_course,
+};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
 use std::path::Path;
@@ -25,8 +31,57 @@ pub struct Calibration {
     pub bearings: u32,
     /// Bearings left out as wild or unusable.
     pub rejected: u32,
+    /// How evenly the drive's bearings spanned the directions relative to the vehicle: the
+    /// smallest eigenvalue of the harmonics' information per bearing (0.5 for an even full
+    /// turn; the harmonics are measured from [`MIN_SPAN`]). Absent in files written before
+    /// it was measured.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub direction_span: Option<f32>,
+    /// The direction-dependent error's coefficients a_1, b_1, a_2, b_2, degrees (as the
+    /// stations file's `direction_deg`), where the drive turned enough to measure them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub direction_deg: Option<[f32; HARMONICS]>,
+    /// One sd for the four coefficients, degrees (the stations file's
+    /// `direction_error_deg`): the largest along any combination of them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub direction_error_deg: Option<f32>,
     /// Where the transmitter was, [latitude, longitude] degrees.
     pub transmitter: [f64; 2],
+}
+
+/// A harmonic of larger amplitude (sqrt(a^2 + b^2)), degrees, is refused, measured or
+/// loaded: pseudo-Doppler units and small arrays show 2-5 degrees; 15 is a broken antenna or
+/// array, a reflection near the calibration drive, or a file gone wrong.
+pub const MAX_HARMONIC_DEG: f32 = 15.0;
+
+/// Whether a calibration drive turned enough for its harmonics: the joint fit's table when
+/// the span reaches [`MIN_SPAN`] and its sd stays within [`MAX_HARMONIC_DEG`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Turned {
+    /// Measured: the table with its sd.
+    Enough(DirectionPrior),
+    /// Not enough directions, or too uncertain to be worth a table.
+    Not,
+}
+
+impl Turned {
+    fn of(joint: &DirectionCalibration) -> Self {
+        let p = joint.prior();
+        if joint.measured() && p.sd.to_degrees() <= MAX_HARMONIC_DEG {
+            Self::Enough(p)
+        } else {
+            Self::Not
+        }
+    }
+}
+
+/// The larger of the two harmonics' amplitudes of coefficients `c` (degrees); `None` when
+/// one is not finite.
+fn largest_amplitude_deg(c: &[f32; HARMONICS]) -> Option<f32> {
+    // f32::max passes over a NaN: every coefficient is checked first.
+    c.iter()
+        .all(|v| v.is_finite())
+        .then(|| c[0].hypot(c[1]).max(c[2].hypot(c[3])))
 }
 
 /// What a calibration drive must show before its offset is saved.
@@ -88,8 +143,23 @@ impl Calibration {
             })
             .map_err(|_| format!("the transmitter {at} cannot be put in the drive's frame"))?;
         let tx = [local[0] as f32, local[1] as f32];
-        let range = |b: &Bearing| (b.vehicle[0] - tx[0]).hypot(b.vehicle[1] - tx[1]);
         let all: Vec<Bearing> = d.bearings().copied().collect();
+        Self::measure_local(&all, tx, target, check)
+    }
+
+    /// [`Calibration::measure`] on bearings `all` in the drive's local frame (time order),
+    /// the transmitter at `tx` there and at `target` ([lat, lon]) on the map.
+    pub fn measure_local(
+        all: &[Bearing],
+        tx: [f32; 2],
+        target: [f64; 2],
+        check: &CalibrationCheck,
+    ) -> Result<Self, String> {
+        let at = format!("{:.6},{:.6}", target[0], target[1]);
+        let range = |b: &Bearing| (b.vehicle[0] - tx[0]).hypot(b.vehicle[1] - tx[1]);
+        // Each bearing relative to the vehicle's course, from the whole drive's track.
+        let mut relative = vec![0.0f32; all.len()];
+        relative_to_course(all, std::f32::consts::FRAC_PI_2, &mut relative);
         let nearest = all.iter().map(range).fold(f32::INFINITY, f32::min);
         if nearest > FARTHEST_M {
             return Err(format!(
@@ -98,11 +168,12 @@ impl Calibration {
                 nearest / 1000.0
             ));
         }
-        let bearings: Vec<Bearing> = all
+        let (bearings, relative): (Vec<Bearing>, Vec<f32>) = all
             .iter()
-            .filter(|b| range(b) >= NEAREST_M)
-            .copied()
-            .collect();
+            .zip(&relative)
+            .filter(|(b, _)| range(b) >= NEAREST_M)
+            .map(|(b, r)| (*b, *r))
+            .unzip();
         if bearings.len() < MIN_BEARINGS {
             return Err(format!(
                 "{} of the drive's {} bearings were taken at least {NEAREST_M:.0} m from the \
@@ -112,8 +183,13 @@ impl Calibration {
                 all.len()
             ));
         }
-        let c =
-            calibrate(&bearings, tx).map_err(|e| format!("cannot calibrate on this drive: {e}"))?;
+        let fail = |e: foxhunt_core::Error| format!("cannot calibrate on this drive: {e}");
+        let joint = calibrate_direction(&bearings, &relative, tx).map_err(fail)?;
+        let turned = Turned::of(&joint);
+        let c = match turned {
+            Turned::Enough(_) => joint.offset,
+            _ => calibrate(&bearings, tx).map_err(fail)?,
+        };
         let (offset, sd, noise) = (c.bias.to_degrees(), c.sd.to_degrees(), c.sigma.to_degrees());
         let n = bearings.len() as f32;
         let disagree = |why: String| {
@@ -152,13 +228,54 @@ impl Calibration {
                 offset.abs().ceil()
             ));
         }
+        if let Turned::Enough(p) = turned
+            && let Some(a) = largest_amplitude_deg(&p.mean.map(f32::to_degrees))
+            && a > MAX_HARMONIC_DEG
+        {
+            return Err(format!(
+                "the measured direction-dependent error has a harmonic of {a:.1} degrees, \
+                 beyond {MAX_HARMONIC_DEG:.0}: a broken antenna or array, a reflection near \
+                 the drive, or the wrong transmitter position; nothing saved"
+            ));
+        }
+        let direction = match turned {
+            Turned::Enough(p) => Some(p),
+            _ => None,
+        };
         Ok(Self {
             offset_deg: offset,
             offset_sd_deg: sd,
             noise_deg: noise,
             bearings: c.used,
             rejected: c.rejected + (all.len() - bearings.len()) as u32,
+            direction_span: Some(joint.span),
+            direction_deg: direction.map(|p| p.mean.map(f32::to_degrees)),
+            direction_error_deg: direction.map(|p| p.sd.to_degrees()),
             transmitter: target,
+        })
+    }
+
+    /// The direction-dependent error as a prior for the fixes (a known table with its sd),
+    /// where the file holds one.
+    pub fn direction(&self) -> Option<DirectionPrior> {
+        Some(DirectionPrior {
+            mean: self.direction_deg?.map(f32::to_radians),
+            sd: self.direction_error_deg?.to_radians(),
+        })
+    }
+
+    /// Why the file holds the offset only, in one line, where it does.
+    pub fn offset_only(&self) -> Option<String> {
+        if self.direction_deg.is_some() {
+            return None;
+        }
+        Some(match self.direction_span {
+            Some(span) => format!(
+                "offset only: the drive did not turn through enough directions to measure \
+                 the direction-dependent error (span {span:.3}, wants {MIN_SPAN}; drive a loop \
+                 or turn where the transmitter is in view)"
+            ),
+            None => String::from("offset only"),
         })
     }
 
@@ -233,7 +350,39 @@ impl Calibration {
         }
         self.prior()
             .check()
-            .map_err(|e| format!("the offset is no usable prior: {e}"))
+            .map_err(|e| format!("the offset is no usable prior: {e}"))?;
+        if let Some(span) = self.direction_span {
+            within(
+                "direction_span",
+                span,
+                (0.0..=1.0).contains(&span),
+                "a number from 0 to 1",
+            )?;
+        }
+        match (self.direction_deg, self.direction_error_deg) {
+            (None, None) => Ok(()),
+            (Some(c), Some(sd)) => {
+                match largest_amplitude_deg(&c) {
+                    Some(a) if a <= MAX_HARMONIC_DEG => {}
+                    _ => {
+                        return Err(format!(
+                            "`direction_deg` must be four coefficients (a1, b1, a2, b2) whose \
+                             harmonics have amplitudes of at most {MAX_HARMONIC_DEG} degrees, \
+                             not {c:?}"
+                        ));
+                    }
+                }
+                within(
+                    "direction_error_deg",
+                    sd,
+                    sd > 0.0 && sd <= MAX_HARMONIC_DEG,
+                    "a number of degrees above 0, at most 15",
+                )
+            }
+            _ => Err(String::from(
+                "`direction_deg` and `direction_error_deg` come together (the table and its sd)",
+            )),
+        }
     }
 
     /// The calibration as the terminal shows it.
@@ -244,6 +393,24 @@ impl Calibration {
             "offset {:.2} +- {:.2} deg (counter-clockwise: the unit reports true azimuth - this); noise {:.2} deg; {} bearings used, {} left out",
             self.offset_deg, self.offset_sd_deg, self.noise_deg, self.bearings, self.rejected
         );
+        match (self.direction_deg, self.direction_error_deg) {
+            (Some(c), Some(sd)) => {
+                let _ = writeln!(
+                    out,
+                    "direction-dependent error: a1 {:.2}, b1 {:.2}, a2 {:.2}, b2 {:.2} deg, each +- {sd:.2} deg (span {:.3})",
+                    c[0],
+                    c[1],
+                    c[2],
+                    c[3],
+                    self.direction_span.unwrap_or(f32::NAN)
+                );
+            }
+            _ => {
+                if let Some(why) = self.offset_only() {
+                    let _ = writeln!(out, "{why}");
+                }
+            }
+        }
         out
     }
 }

@@ -329,6 +329,8 @@ impl Network {
                 })?),
             };
             let given = prior_of(s.offset_deg, s.offset_sd_deg, &what)?;
+            // A calibration file's direction-dependent error, where it measured one.
+            let mut calibrated_direction = None;
             let (prior, from) = match (&s.calibration_file, given) {
                 (Some(_), Some(_)) => {
                     return Err(format!(
@@ -338,6 +340,7 @@ impl Network {
                 (Some(f), None) => {
                     let c = crate::inputs::calibration::Calibration::load(&dir.join(f))
                         .map_err(|e| format!("{what}: {e}"))?;
+                    calibrated_direction = c.direction();
                     (c.prior(), PriorFrom::Calibration)
                 }
                 (None, Some(p)) => (p, PriorFrom::StationsFile),
@@ -356,7 +359,18 @@ impl Network {
                 noise: noise_of(s.noise_deg, &what)?,
                 antenna: class_of(s.antenna.as_deref(), &what)?,
                 unmodelled: unmodelled_of(s.unmodelled_deg, &what)?,
-                direction: direction_of(s.direction_deg, s.direction_error_deg, &what)?,
+                direction: match (
+                    direction_of(s.direction_deg, s.direction_error_deg, &what)?,
+                    calibrated_direction,
+                ) {
+                    (Some(_), Some(_)) => {
+                        return Err(format!(
+                            "{what}: its calibration_file measured the direction-dependent \
+                             error; give direction_deg/direction_error_deg or that file, not both"
+                        ));
+                    }
+                    (stated, measured) => stated.or(measured),
+                },
                 front: front_of(s.boresight_deg, &what)?,
             });
         }

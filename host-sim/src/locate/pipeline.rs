@@ -69,6 +69,7 @@ pub(crate) fn located_by_pipeline(
         o.offset.unwrap_or_default(),
         o.offset.is_some(),
     );
+    o.calibrated_direction(&mut setup.priors);
     let references: Vec<Reference> = network.map_or_else(Vec::new, |n| n.references.clone());
     let local: Vec<LocalReference> = references
         .iter()

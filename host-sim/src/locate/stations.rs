@@ -21,6 +21,14 @@ pub struct ReferenceReport {
     pub noise_deg: f32,
     /// Bearings used.
     pub bearings: u32,
+    /// Its direction-dependent error measured there, coefficients a1, b1, a2, b2, degrees
+    /// (null: its bearings did not span enough directions relative to its antenna).
+    pub direction_deg: Option<[f32; 4]>,
+    /// One sd for the four, degrees.
+    pub direction_error_deg: Option<f32>,
+    /// How evenly its bearings spanned the directions (0.5 an even full turn; the harmonics
+    /// are measured from 0.1).
+    pub direction_span: Option<f32>,
 }
 
 /// One station (field names are stable).
@@ -144,6 +152,9 @@ pub fn station_reports(
                         offset_sd_deg: f.calibration.sd.to_degrees(),
                         noise_deg: f.calibration.sigma.to_degrees(),
                         bearings: f.calibration.used,
+                        direction_deg: f.direction.map(|d| d.mean.map(f32::to_degrees)),
+                        direction_error_deg: f.direction.map(|d| d.sd.to_degrees()),
+                        direction_span: f.span,
                     })
                     .collect(),
             }
@@ -178,6 +189,16 @@ impl StationReport {
                 "; on {}: {:.2} +- {:.2} deg, {} bearings",
                 r.reference, r.offset_deg, r.offset_sd_deg, r.bearings
             );
+            match (r.direction_deg, r.direction_error_deg) {
+                (Some(c), Some(sd)) => {
+                    let _ = write!(
+                        out,
+                        ", direction-dependent a1 {:.2} b1 {:.2} a2 {:.2} b2 {:.2} +- {sd:.2} deg",
+                        c[0], c[1], c[2], c[3]
+                    );
+                }
+                _ => out.push_str(", offset only"),
+            }
         }
         out.push('\n');
     }

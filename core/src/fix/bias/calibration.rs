@@ -1,6 +1,8 @@
-//! A unit's offset measured on a drive past a transmitter at a known position.
+//! A unit's offset, and where the drive turns its direction-dependent error, measured on a
+//! drive past a transmitter at a known position.
 
 use super::BiasPrior;
+use super::direction::{DirectionPrior, HARMONICS, harmonics};
 use crate::error::{Error, check_finite};
 use crate::model::bearing::{Bearing, wrap};
 
@@ -102,4 +104,182 @@ pub fn calibrate(bearings: &[Bearing], emitter: [f32; 2]) -> Result<Calibration,
         rejected: n_all as u32 - n,
         effective,
     })
+}
+
+/// Per bearing, the least information the drive gives any combination of the four harmonic
+/// coefficients, relative to a full turn's best: the smallest eigenvalue of the harmonics'
+/// information per bearing (offset eliminated, unit noise) must reach this before they are
+/// said to be measured. Relative bearings spread evenly round the circle give 0.5 (each
+/// regressor's mean square), so 0.1 lets the worst-determined combination have five times the
+/// variance it would have on a full turn; a drive past the transmitter on a straight road,
+/// where the relative bearing sweeps half the circle once, stays far below it.
+pub const MIN_SPAN: f32 = 0.1;
+
+/// A unit's offset and direction-dependent error measured together on a drive past a
+/// transmitter at a known position (docs/src/field.md, "Calibration"): the residuals
+/// z_k - atan2(emitter - s_k) regressed on 1, cos phi_k, sin phi_k, cos 2 phi_k, sin 2 phi_k.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DirectionCalibration {
+    /// The offset with its sd (the harmonics integrated out), the noise, the counts.
+    pub offset: Calibration,
+    /// The harmonic coefficients a_1, b_1, a_2, b_2, radians.
+    pub coefficients: [f32; HARMONICS],
+    /// Their covariance, radians^2 (sigma^2 / N_eff times the inverse information).
+    pub covariance: [[f32; HARMONICS]; HARMONICS],
+    /// How well the relative bearings span the circle: the smallest eigenvalue of the
+    /// harmonics' information per bearing, offset eliminated ([`MIN_SPAN`]).
+    pub span: f32,
+}
+
+impl DirectionCalibration {
+    /// Whether the drive turned enough for the harmonics to count as measured ([`MIN_SPAN`]).
+    pub fn measured(&self) -> bool {
+        self.span >= MIN_SPAN
+    }
+
+    /// One sd for the four coefficients, radians: the largest along any combination of them
+    /// (the covariance's largest eigenvalue, square-rooted), so the isotropic prior a fix
+    /// takes ([`DirectionPrior`]) is never narrower than the measurement.
+    pub fn sd(&self) -> f32 {
+        libm::sqrtf(crate::linalg::largest_eigenvalue(&self.covariance).max(0.0))
+    }
+
+    /// The measured table as a prior for later drives: the coefficients with their sd.
+    pub fn prior(&self) -> DirectionPrior {
+        DirectionPrior {
+            mean: self.coefficients,
+            sd: self.sd(),
+        }
+    }
+}
+
+/// Unknowns of the direction calibration: the offset and the four coefficients.
+const UNKNOWNS: usize = 1 + HARMONICS;
+
+/// The regressors of bearing at relative bearing `phi`: 1 and the harmonics.
+fn regressors(phi: f32) -> [f32; UNKNOWNS] {
+    let h = harmonics(phi);
+    [1.0, h[0], h[1], h[2], h[3]]
+}
+
+/// The least-squares fit of residuals about `centre` on the regressors, over the bearings
+/// `keep` accepts: the normal matrix and the solution (`None`: too few or degenerate).
+fn fit_direction(
+    bearings: &[Bearing],
+    relative: &[f32],
+    emitter: &[f32; 2],
+    centre: f32,
+    keep: impl Fn(f32, f32) -> bool,
+) -> Option<([[f32; UNKNOWNS]; UNKNOWNS], [f32; UNKNOWNS], u32)> {
+    let mut a = [[0.0f32; UNKNOWNS]; UNKNOWNS];
+    let mut rhs = [0.0f32; UNKNOWNS];
+    let mut n = 0u32;
+    for (b, &phi) in bearings.iter().zip(relative) {
+        if b.check().is_err() || !phi.is_finite() {
+            continue;
+        }
+        let r = wrap(b.residual(emitter) - centre);
+        if !keep(r, phi) {
+            continue;
+        }
+        let x = regressors(phi);
+        for i in 0..UNKNOWNS {
+            rhs[i] += x[i] * r;
+            for j in 0..UNKNOWNS {
+                a[i][j] += x[i] * x[j];
+            }
+        }
+        n += 1;
+    }
+    if (n as usize) <= UNKNOWNS {
+        return None;
+    }
+    let inv = crate::linalg::inverse_scaled(&a)?;
+    Some((a, crate::linalg::mat_vec(&inv, &rhs), n))
+}
+
+/// Measure the offset and the direction-dependent error of one unit from `bearings` (time
+/// order) of a transmitter at `emitter`, `relative[k]` the bearing k relative to the antenna
+/// (the vehicle's course: [`relative_to_course`](super::relative_to_course)). Robustly as
+/// [`calibrate`]: a first fit about the residuals' median, then the fit of the bearings within
+/// 3.5 robust sigmas of it; the covariance sigma^2 / N_eff times the inverse information, N_eff
+/// from the residuals' autocorrelation. A drive that does not turn still gives its offset and
+/// a `span` below [`MIN_SPAN`]; then the offset-only [`calibrate`] is the one to use.
+pub fn calibrate_direction(
+    bearings: &[Bearing],
+    relative: &[f32],
+    emitter: [f32; 2],
+) -> Result<DirectionCalibration, Error> {
+    check_finite(&emitter)?;
+    if relative.len() != bearings.len() {
+        return Err(Error::OutOfRange);
+    }
+    // The median residual: a centre that keeps every residual away from the wrap.
+    let centre = calibrate(bearings, emitter)?.bias;
+    let all = |_: f32, _: f32| true;
+    let (_, first, _) = fit_direction(bearings, relative, &emitter, centre, all)
+        .ok_or(Error::TooFewMeasurements)?;
+    let misfit = |r: f32, phi: f32| wrap(r - dot5(&first, &regressors(phi)));
+    // The robust spread of the first fit's misfits, from a strided sample (no allocator).
+    const CAP: usize = 512;
+    let stride = bearings.len().div_ceil(CAP).max(1);
+    let mut sample = [0.0f32; CAP];
+    let mut k = 0;
+    for (b, &phi) in bearings.iter().zip(relative).step_by(stride) {
+        if b.check().is_ok()
+            && phi.is_finite()
+            && let Some(slot) = sample.get_mut(k)
+        {
+            *slot = libm::fabsf(misfit(wrap(b.residual(&emitter) - centre), phi));
+            k += 1;
+        }
+    }
+    let spread = (1.4826 * super::super::order::median(&mut sample[..k])).max(1e-5);
+    let inside = |r: f32, phi: f32| libm::fabsf(misfit(r, phi)) <= CALIBRATION_CUT * spread;
+    let (a, x, n) = fit_direction(bearings, relative, &emitter, centre, inside)
+        .ok_or(Error::TooFewMeasurements)?;
+    let inv = crate::linalg::inverse_scaled(&a).ok_or(Error::TooFewMeasurements)?;
+    // The fit's residuals, time order, for the noise and its correlation.
+    let kept = || {
+        bearings
+            .iter()
+            .zip(relative)
+            .filter(|(b, phi)| b.check().is_ok() && phi.is_finite())
+            .map(move |(b, &phi)| (wrap(b.residual(&emitter) - centre), phi))
+            .filter(move |&(r, phi)| inside(r, phi))
+            .map(move |(r, phi)| r - dot5(&x, &regressors(phi)))
+    };
+    let ss: f32 = kept().map(|r| r * r).sum();
+    let sigma = libm::sqrtf(ss / (n as usize - UNKNOWNS) as f32 / 0.9953);
+    let effective =
+        super::super::consistency::effective_count(kept().map(|r| r / sigma.max(1e-9)), n);
+    let scale = sigma * sigma * n as f32 / effective.max(1.0);
+    let covariance: [[f32; HARMONICS]; HARMONICS] =
+        core::array::from_fn(|i| core::array::from_fn(|j| scale * inv[i + 1][j + 1]));
+    // The harmonics' block of the inverse per bearing: its largest eigenvalue is 1 / span.
+    let block: [[f32; HARMONICS]; HARMONICS] =
+        core::array::from_fn(|i| core::array::from_fn(|j| n as f32 * inv[i + 1][j + 1]));
+    let span = 1.0 / crate::linalg::largest_eigenvalue(&block);
+    let bias = wrap(centre + x[0]);
+    let sd = libm::sqrtf(scale * inv[0][0]);
+    let coefficients = [x[1], x[2], x[3], x[4]];
+    check_finite(&[bias, sd, sigma, span])?;
+    check_finite(&coefficients)?;
+    Ok(DirectionCalibration {
+        offset: Calibration {
+            bias,
+            sd,
+            sigma,
+            used: n,
+            rejected: bearings.len() as u32 - n,
+            effective,
+        },
+        coefficients,
+        covariance,
+        span,
+    })
+}
+
+fn dot5(a: &[f32; UNKNOWNS], b: &[f32; UNKNOWNS]) -> f32 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }

@@ -11,6 +11,7 @@
 //! ([`super::StationSlot`]).
 
 use crate::error::{Error, check_finite};
+use crate::model::bearing::{Bearing, wrap};
 
 /// Coefficients of the model: a_1, b_1, a_2, b_2 (first and second harmonic).
 pub const HARMONICS: usize = 4;
@@ -89,4 +90,38 @@ pub fn error(c: &[f32; HARMONICS], phi: f32) -> f32 {
 #[inline]
 pub(super) fn dot(a: &[f32; HARMONICS], b: &[f32; HARMONICS]) -> f32 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3]
+}
+
+/// Each of one station's `bearings` (time order) relative to its antenna, into `out`, for a
+/// calibration (which reads the whole drive at once): the front its course, as the fix takes
+/// it (from where it last moved [`FRONT_STEP_M`](super::FRONT_STEP_M) to where it is; before it
+/// first moves, its first course), centred: the mean of the course arriving at the bearing and
+/// the next one, so a turning vehicle's course is its heading at the bearing and not half a
+/// step behind (on a 1 Hz loop that lag would bend the second harmonic by as much as its sd).
+/// `front` (theta) for a station that never moves. `out` shorter than `bearings` takes the
+/// first ones.
+pub fn relative_to_course(bearings: &[Bearing], front: f32, out: &mut [f32]) {
+    let mut row = super::StationSlot::new(super::BiasPrior::default())
+        .with_direction(DirectionPrior::NONE, front);
+    row.start_track();
+    // First each bearing's arriving course (NaN before the station moved) ...
+    for (b, r) in bearings.iter().zip(out.iter_mut()) {
+        *r = row.course_at(b.vehicle).unwrap_or(f32::NAN);
+    }
+    // ... then centred on the next one's, and turned into the relative bearing.
+    let n = bearings.len().min(out.len());
+    for k in 0..n {
+        let course = out[k];
+        let next = out.get(k + 1).copied().filter(|_| k + 1 < n);
+        let centred = match next {
+            Some(c) if c.is_finite() && course.is_finite() => course + 0.5 * wrap(c - course),
+            _ => course,
+        };
+        let at = if centred.is_finite() {
+            centred
+        } else {
+            row.still_front()
+        };
+        out[k] = wrap(bearings[k].theta - at);
+    }
 }

@@ -40,8 +40,10 @@ mod stations;
 mod tests;
 
 pub use bound::{BiasedCrlb, crlb, crlb_stations, information};
-pub use calibration::{Calibration, calibrate};
-pub use direction::{DirectionPrior, HARMONICS, harmonics};
+pub use calibration::{
+    Calibration, DirectionCalibration, MIN_SPAN, calibrate, calibrate_direction,
+};
+pub use direction::{DirectionPrior, HARMONICS, harmonics, relative_to_course};
 pub use prior::{BiasPrior, CONTRADICTED_Z, KNOWN_SD};
 pub use profile_likelihood::{CIRCLE_STEPS, OffsetCircle, ProfilePoint, offset_circle, profile};
 pub use solve::{BiasedFix, BiasedOptions, Start, StartOffsets, ml, ml_sources, refit};

@@ -47,8 +47,9 @@ pub struct Args {
           value_parser = values::f32_where(|w| w >= 0.0 && w.is_finite(), "a number of MHz >= 0"))]
     pub channel_width_mhz: f32,
     /// Measure the DF unit's mounting offset on the CAPTURE of a drive past a transmitter at
-    /// LAT,LON (decimal degrees) and save it to --calibration FILE, instead of locating. The
-    /// transmitter must lie 100 m to 50 km from the bearings, which must agree with it; an
+    /// LAT,LON (decimal degrees), and its direction-dependent error where the drive turned
+    /// through enough directions, and save them to --calibration FILE, instead of locating.
+    /// The transmitter must lie 100 m to 50 km from the bearings, which must agree with it; an
     /// offset beyond --max-offset-deg is reported, not saved.
     #[arg(long, allow_hyphen_values = true, requires = "calibration", value_name = "LAT,LON",
           value_parser = values::lat_lon)]
@@ -59,7 +60,8 @@ pub struct Args {
           requires = "calibrate", value_name = "DEG",
           value_parser = values::f32_where(|d| (0.0..=180.0).contains(&d), "a number of degrees from 0 to 180"))]
     pub max_offset_deg: f32,
-    /// A calibration file: with --calibrate where to save it; otherwise the offset to apply.
+    /// A calibration file: with --calibrate where to save it; otherwise the offset (and the
+    /// direction-dependent error, where it holds one) to apply.
     #[arg(long)]
     pub calibration: Option<PathBuf>,
     /// Particles of the particle methods (sir, gpf, the swarms; a compiled count): 1000, or
@@ -441,8 +443,16 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
              drive's CAPTURE",
         ));
     }
-    let offset = match (&a.calibration, calibrating) {
-        (Some(f), false) => Some(Calibration::load(f)?.prior()),
+    let calibration = match (&a.calibration, calibrating) {
+        // A file that cannot be read fails (exit 1); one that reads but is no calibration (a
+        // value no calibration gives) is a usage error (exit 2), like a bad option value.
+        (Some(f), false) => {
+            let text = crate::inputs::files::read_text(f)?;
+            Some(
+                Calibration::from_toml(&text)
+                    .map_err(|e| Stop::Usage(format!("{}: {e}", f.display())))?,
+            )
+        }
         _ => None,
     };
     let options = LocateOptions {
@@ -450,7 +460,8 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
         particles,
         sigma_deg: a.sigma_deg,
         seed: a.seed,
-        offset,
+        offset: calibration.as_ref().map(Calibration::prior),
+        direction: calibration.as_ref().and_then(Calibration::direction),
         channel_width_mhz: a.channel_width_mhz,
         network: network(a)?,
     };

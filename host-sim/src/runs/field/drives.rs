@@ -314,44 +314,87 @@ fn u_course(v: [f32; 2]) -> f32 {
     }
 }
 
-/// The U drive's 240 bearings (2 degrees) from a pseudo-Doppler unit whose error depends on
-/// the bearing relative to the vehicle: first and second harmonics of amplitude drawn from
-/// 2-5 degrees each with a random phase, an offset from the default prior.
+/// A pseudo-Doppler unit whose error depends on the bearing relative to the vehicle (the
+/// `direction-dependent-2-5deg` condition's): first and second harmonics of amplitude drawn
+/// from 2-5 degrees each with a random phase, an offset from the default prior, 2 degrees of
+/// noise.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DirectionUnit {
+    /// Its offset, radians.
+    pub bias: f32,
+    /// Its harmonic coefficients a_1, b_1, a_2, b_2, radians.
+    pub coefficients: [f32; 4],
+    /// Its bearing noise, radians.
+    pub sigma: f32,
+}
+
+impl DirectionUnit {
+    /// A unit drawn from `rng`.
+    pub fn draw(rng: &mut XorShiftRng) -> Self {
+        let sigma = 2.0 * DEG;
+        let bias = foxhunt_core::fix::bias::DEFAULT_BIAS_SD * random::normal(rng);
+        let mut coefficients = [0.0f32; 4];
+        for k in 0..2 {
+            let amplitude = random::uniform_in(rng, 2.0, 5.0) * DEG;
+            let phase = random::uniform_in(rng, -PI, PI);
+            coefficients[2 * k] = amplitude * phase.cos();
+            coefficients[2 * k + 1] = amplitude * phase.sin();
+        }
+        Self {
+            bias,
+            coefficients,
+            sigma,
+        }
+    }
+
+    /// Its bearings of `emitter` from `route`, the vehicle's course at point k `course(k)`.
+    pub fn bearings(
+        &self,
+        emitter: [f32; 2],
+        route: &[[f32; 2]],
+        course: impl Fn(usize) -> f32,
+        rng: &mut XorShiftRng,
+    ) -> Vec<Bearing> {
+        let table = DirectionPrior {
+            mean: self.coefficients,
+            sd: 0.0,
+        };
+        route
+            .iter()
+            .enumerate()
+            .map(|(k, v)| {
+                let truth = predicted(&emitter, v);
+                // The antenna's error is a property of the true relative bearing.
+                let e = table.error_at(wrap(truth - course(k)));
+                let error = self.bias + e + self.sigma * random::normal(rng);
+                bearing_to(emitter, *v, error, self.sigma)
+            })
+            .collect()
+    }
+
+    /// The first `points` of the U drive's 240 bearings of its emitter, 1 s apart (all 240:
+    /// the field condition's drive; 160: its first two legs, an L).
+    pub fn u_drive(&self, points: usize, rng: &mut XorShiftRng) -> FieldDrive {
+        let mut route = u_route(240);
+        route.truncate(points);
+        let bearings = self.bearings(U_EMITTER, &route, |k| u_course(route[k]), rng);
+        FieldDrive {
+            observations: timed(bearings, 1.0),
+            emitters: vec![Truth {
+                position: U_EMITTER,
+                freq_mhz: None,
+            }],
+            ghost: None,
+            stations: Vec::new(),
+            bias: self.bias,
+            sigma: self.sigma,
+        }
+    }
+}
+
+/// The U drive's 240 bearings (2 degrees) from a [`DirectionUnit`].
 fn direction_dependent(rng: &mut XorShiftRng) -> FieldDrive {
-    let sigma = 2.0 * DEG;
-    let bias = foxhunt_core::fix::bias::DEFAULT_BIAS_SD * random::normal(rng);
-    let mut coefficients = [0.0f32; 4];
-    for k in 0..2 {
-        let amplitude = random::uniform_in(rng, 2.0, 5.0) * DEG;
-        let phase = random::uniform_in(rng, -PI, PI);
-        coefficients[2 * k] = amplitude * phase.cos();
-        coefficients[2 * k + 1] = amplitude * phase.sin();
-    }
-    let route = u_route(240);
-    let bearings: Vec<Bearing> = route
-        .iter()
-        .map(|v| {
-            let truth = predicted(&U_EMITTER, v);
-            // The antenna's error is a property of the true relative bearing.
-            let e = DirectionPrior {
-                mean: coefficients,
-                sd: 0.0,
-            }
-            .error_at(wrap(truth - u_course(*v)));
-            bearing_to(U_EMITTER, *v, bias + e + sigma * random::normal(rng), sigma)
-        })
-        .collect();
-    FieldDrive {
-        observations: timed(bearings, 1.0),
-        emitters: vec![Truth {
-            position: U_EMITTER,
-            freq_mhz: None,
-        }],
-        ghost: None,
-        stations: Vec::new(),
-        bias,
-        sigma,
-    }
+    DirectionUnit::draw(rng).u_drive(240, rng)
 }
 
 /// `correlated-5hz` on a curved track: 9 km at 20 m/s (450 s) along an arc of 2 km radius

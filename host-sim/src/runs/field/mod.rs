@@ -21,13 +21,15 @@
 //!   convergence (what the bridge does; `uncorrected` leaves it out, as it did before).
 
 mod bench;
+mod calibration;
 mod capture;
 mod drives;
 mod judge;
 
 pub use bench::{BENCH_METHODS, bench};
+pub use calibration::{Calibrated, CalibrationRow, calibration_runs};
 pub use capture::capture;
-pub use drives::{l600, simulate, u_route};
+pub use drives::{DirectionUnit, l600, simulate, u_route};
 pub use judge::{
     EmitterSummary, RunOutcome, Summary, THREE_SIGMA_TAIL, bound_at, bound_with, emitter_for,
     judge, judge_with, measure, region_for, run_locate, run_with,
