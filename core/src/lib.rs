@@ -67,7 +67,6 @@ pub use fix::Fix;
 pub mod filter;
 pub mod roughen;
 
-
 pub use estimator::{Method, PARTICLE_COUNTS, WithFilter};
 pub use filter::ekf::{BearingEkf, BiasedBearingEkf};
 pub use filter::gpf::Gpf;

@@ -109,8 +109,8 @@ impl Roughening {
                 };
                 let d = m as f32;
                 let a_opt = libm::powf(4.0 / (d + 2.0), 1.0 / (d + 4.0));
-                let h = part
-                    * (scale * a_opt * libm::powf(N as f32, -1.0 / (d + 4.0))).clamp(0.0, 1.0);
+                let h =
+                    part * (scale * a_opt * libm::powf(N as f32, -1.0 / (d + 4.0))).clamp(0.0, 1.0);
                 let a = libm::sqrtf(1.0 - h * h);
                 let mut z = [0.0f32; D];
                 for x in set.states.iter_mut() {

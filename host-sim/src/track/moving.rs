@@ -31,7 +31,7 @@ pub const STATE_SIZES: [usize; 4] = [7, 10, 13, 18];
 pub const LAG: usize = 16;
 /// Seconds in which the parameters' statistics forget (chosen on the moving scenarios,
 /// docs/src/tracking.md).
-pub const MEMORY_S: f32 = 200.0;
+pub const MEMORY_S: f32 = 250.0;
 /// Particles unless told otherwise.
 pub const PARTICLES: usize = 1000;
 /// The default method: the tuned SIR with its shrinkage kernel (a regularised PF) and a
