@@ -410,7 +410,9 @@ impl<const D: usize, const K: usize> Model<D> for Mover<K> {
     /// resampling (measured: 10 Hz ellipses holding the drone 55 % of the time at N = 1000).
     fn regularised(&self) -> [bool; D] {
         let offsets = PARAMETERS..PARAMETERS + 2 * self.layout.sources as usize;
-        core::array::from_fn(|j| j < 2 || (offsets.contains(&j) && (j - PARAMETERS) % 2 == 0))
+        core::array::from_fn(|j| {
+            j < 2 || (offsets.contains(&j) && (j - PARAMETERS).is_multiple_of(2))
+        })
     }
 }
 
