@@ -6,6 +6,14 @@ use crate::particles::ParticleSet;
 use crate::random;
 use rand_core::Rng;
 
+/// Seconds of time one full kernel stands for, for a model whose steps are time (a tracker's
+/// epochs, [`crate::Model::elapsed_s`]): a resampling jitters by the share of a kernel owed
+/// since the last one, so the regularisation is a rate per second of the track, not per
+/// resampling, and a track reported ten times a second is not jittered (and shrunk toward its
+/// mean) ten times as much as one reported once a second (chosen: the 1 Hz the tracker was
+/// tuned at, so a 1 Hz track is jittered as before; docs/src/tracking.md).
+pub const KERNEL_PERIOD_S: f32 = 1.0;
+
 /// How to jitter the particles after resampling.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum Roughening {
@@ -40,22 +48,27 @@ impl Roughening {
         cov: &[[f32; D]; D],
         rng: &mut R,
     ) {
-        self.apply_to(set, mean, cov, &[true; D], rng);
+        self.apply_to(set, mean, cov, &[true; D], 1.0, rng);
     }
 
     /// [`Roughening::apply`] to the components `kernel` marks only (the model's
     /// [`Model::regularised`](crate::Model::regularised)): a component the motion model drives
     /// itself (a velocity) or keeps discrete (a motion mode) is left as it is. The kernel's
     /// bandwidth is that of the marked components' dimension; with every component marked this
-    /// is [`Roughening::apply`], to the bit.
+    /// is [`Roughening::apply`], to the bit. `share` in [0, 1] is the share of a full kernel
+    /// owed (its variance, and the shrinkage that offsets it, scaled by it: see
+    /// [`KERNEL_PERIOD_S`]); 1 is a full kernel, to the bit.
+    #[allow(clippy::too_many_arguments)]
     pub fn apply_to<R: Rng + ?Sized, const N: usize, const D: usize>(
         self,
         set: &mut ParticleSet<N, D>,
         mean: &[f32; D],
         cov: &[[f32; D]; D],
         kernel: &[bool; D],
+        share: f32,
         rng: &mut R,
     ) {
+        let part = libm::sqrtf(share.clamp(0.0, 1.0));
         let marked = kernel.iter().filter(|k| **k).count();
         if marked == 0 {
             return;
@@ -64,7 +77,7 @@ impl Roughening {
             Roughening::None => {}
             Roughening::Gordon { k } => {
                 let e = set.spread();
-                let f = k * libm::powf(N as f32, -1.0 / marked as f32);
+                let f = part * k * libm::powf(N as f32, -1.0 / marked as f32);
                 for x in set.states.iter_mut() {
                     for j in 0..D {
                         if kernel[j] {
@@ -96,7 +109,8 @@ impl Roughening {
                 };
                 let d = m as f32;
                 let a_opt = libm::powf(4.0 / (d + 2.0), 1.0 / (d + 4.0));
-                let h = (scale * a_opt * libm::powf(N as f32, -1.0 / (d + 4.0))).clamp(0.0, 1.0);
+                let h =
+                    part * (scale * a_opt * libm::powf(N as f32, -1.0 / (d + 4.0))).clamp(0.0, 1.0);
                 let a = libm::sqrtf(1.0 - h * h);
                 let mut z = [0.0f32; D];
                 for x in set.states.iter_mut() {

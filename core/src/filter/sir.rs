@@ -8,7 +8,7 @@ use crate::likelihood::Likelihood;
 use crate::model::Model;
 use crate::particles::ParticleSet;
 use crate::resample::{ResamplePolicy, Resampling};
-use crate::roughen::Roughening;
+use crate::roughen::{KERNEL_PERIOD_S, Roughening};
 use crate::swarm::{NoSwarm, Swarm};
 use rand_core::Rng;
 
@@ -75,6 +75,8 @@ pub struct Sir<M, L, const N: usize, const D: usize, S = NoSwarm> {
     /// Swarm move run between prediction and weighting ([`NoSwarm`] for the plain filter).
     pub swarm: S,
     state: ParticleState<N, D>,
+    /// Seconds of time since the last roughening (a model whose steps are time).
+    since_kernel_s: f32,
 }
 
 impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize> Sir<M, L, N, D> {
@@ -93,6 +95,7 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Si
             config,
             swarm,
             state: ParticleState::new(),
+            since_kernel_s: 0.0,
         }
     }
 
@@ -112,6 +115,7 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Fi
         cloud: &[[f32; D]],
         _rng: &mut R,
     ) -> Result<(), Error> {
+        self.since_kernel_s = 0.0;
         self.state.initialise(cloud)
     }
 
@@ -123,6 +127,10 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Fi
         self.config.check()?;
         self.state.ready(&self.model, z)?;
         self.model.propagate_all(&mut self.state.set.states, z, rng);
+        let elapsed = self.model.elapsed_s(z);
+        if let Some(dt) = elapsed {
+            self.since_kernel_s += dt.max(0.0);
+        }
         let (model, lik) = (&self.model, &self.likelihood);
         self.state.swarm_move(model, z, lik, &mut self.swarm, rng);
         let Some((ess, mean, covariance)) = self.state.weigh(model, z, lik)? else {
@@ -132,9 +140,12 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Fi
             let set = &mut self.state.set;
             set.resample(self.config.resampling, rng);
             let kernel = self.model.regularised();
+            // The kernel owed: a full one per resampling, or per KERNEL_PERIOD_S of time.
+            let share = elapsed.map_or(1.0, |_| self.since_kernel_s / KERNEL_PERIOD_S);
+            self.since_kernel_s = 0.0;
             self.config
                 .roughening
-                .apply_to(set, &mean, &covariance, &kernel, rng);
+                .apply_to(set, &mean, &covariance, &kernel, share, rng);
         }
         Ok(self.state.record(Estimate {
             mean,

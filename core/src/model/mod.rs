@@ -70,6 +70,14 @@ pub trait Model<const D: usize> {
     ) {
         self.add_ln_likelihoods(states, z, lik, log_weights);
     }
+    /// Seconds of time from the previous measurement to `z`, for a model whose steps are time
+    /// (a tracker's epochs): the roughening kernel is then owed per second of time
+    /// ([`crate::roughen::KERNEL_PERIOD_S`]), not per resampling. `None` (the default): a step
+    /// is not time, and every resampling is jittered by a full kernel.
+    fn elapsed_s(&self, _z: &Self::Measurement) -> Option<f32> {
+        None
+    }
+
     /// Which state components the roughening kernel may jitter after resampling
     /// ([`crate::Roughening::apply_to`]): those the motion does not diversify itself (a still
     /// emitter's position, a constant parameter). A component the model keeps discrete (a

@@ -34,6 +34,10 @@ pub struct Args {
     /// 1000) over every run, e.g. `--method sir-robust` for the default's row alone.
     #[arg(long, value_name = "NAME")]
     pub method: Vec<String>,
+    /// Moving scenarios: updates a second from every station (default: the scenario's, 1 Hz
+    /// outdoors), each update's bearings as noisy as at any rate.
+    #[arg(long, value_name = "HZ", value_parser = super::values::f32_where(|hz| hz > 0.0 && hz <= 100.0, "a rate in Hz above 0 and at most 100"))]
+    pub rate_hz: Option<f32>,
     /// Print JSON (an array of rows with stable field names).
     #[arg(long, conflicts_with = "markdown")]
     pub json: bool,
@@ -198,6 +202,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
             &a.scenario,
             a.runs,
             a.particles,
+            a.rate_hz,
             &only,
             !a.quiet,
         )?;

@@ -31,7 +31,11 @@ pub const STATE_SIZES: [usize; 4] = [7, 10, 13, 18];
 pub const LAG: usize = 16;
 /// Seconds in which the parameters' statistics forget (chosen on the moving scenarios,
 /// docs/src/tracking.md).
-pub const MEMORY_S: f32 = 120.0;
+pub const MEMORY_S: f32 = 250.0;
+/// The longest the IMM of EKFs' parameters remember, seconds: its ellipses never narrowed with
+/// a particle kernel, so it keeps the memory chosen for it before (a longer one left its last
+/// ellipse on the bundled one-vehicle drive short of the still emitter's fix).
+pub const EKF_MEMORY_S: f32 = 120.0;
 /// Particles unless told otherwise.
 pub const PARTICLES: usize = 1000;
 /// The default method: the tuned SIR with its shrinkage kernel (a regularised PF) and a
@@ -130,7 +134,11 @@ impl Settings {
             layout: self.layout,
             room: self.room,
             forgetting: Forgetting {
-                memory_s: self.memory_s,
+                memory_s: if self.method == Method::Ekf {
+                    self.memory_s.min(EKF_MEMORY_S)
+                } else {
+                    self.memory_s
+                },
                 offset_var,
                 power_var: var(self.power_sd),
                 exponent_var: var(self.exponent_sd),

@@ -396,10 +396,23 @@ impl<const D: usize, const K: usize> Model<D> for Mover<K> {
         }
     }
 
-    /// The position alone: the velocity and the mode are the motion's, the parameters'
-    /// statistics follow from the measurements.
+    /// The epoch's `dt`: the position's kernel is a rate per second of the track.
+    fn elapsed_s(&self, z: &Epoch<K>) -> Option<f32> {
+        Some(z.dt)
+    }
+
+    /// The position and the offsets' means, jointly: the velocity and the mode are the
+    /// motion's, the variances and the RSSI terms follow from the measurements. A particle's
+    /// offset means are what its position has learned (the bearings it saw, less their true
+    /// directions from there), so the kernel moves them together along the cloud's covariance:
+    /// a position jittered alone no longer agrees with its offsets, the next bearings weigh it
+    /// out, and only the kernel's shrinkage toward the mean stays, narrowing the cloud at each
+    /// resampling (measured: 10 Hz ellipses holding the drone 55 % of the time at N = 1000).
     fn regularised(&self) -> [bool; D] {
-        core::array::from_fn(|j| j < 2)
+        let offsets = PARAMETERS..PARAMETERS + 2 * self.layout.sources as usize;
+        core::array::from_fn(|j| {
+            j < 2 || (offsets.contains(&j) && (j - PARAMETERS).is_multiple_of(2))
+        })
     }
 }
 

@@ -179,7 +179,7 @@ fn still_stays_moving_moves_and_switches_happen_at_their_rates() {
 }
 
 #[test]
-fn the_kernel_moves_the_position_only_and_the_layout_must_fit() {
+fn the_kernel_moves_the_position_with_the_offset_means_and_the_layout_must_fit() {
     let m = Mover::<4>::new(
         Motion::OUTDOOR,
         Layout {
@@ -187,8 +187,9 @@ fn the_kernel_moves_the_position_only_and_the_layout_must_fit() {
             rssi: false,
         },
     );
+    // Position and source 0's offset mean (component 5); not its variance, nor unused room.
     let mask: [bool; 8] = m.regularised();
-    assert_eq!(mask, [true, true, false, false, false, false, false, false]);
+    assert_eq!(mask, [true, true, false, false, false, true, false, false]);
     let mut z = Epoch::<4>::new(1.0);
     z.push_bearing(bearing([0.0, 0.0], 0.0, 0)).unwrap();
     assert_eq!(

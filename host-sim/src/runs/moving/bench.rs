@@ -363,6 +363,7 @@ pub fn bench_named(
     name: &str,
     runs: Option<usize>,
     particles: Option<usize>,
+    rate_hz: Option<f32>,
     only: &[Method],
     show: bool,
 ) -> Result<Vec<Row>, String> {
@@ -387,6 +388,9 @@ pub fn bench_named(
     for s in list.iter_mut() {
         if let Some(r) = runs {
             s.runs = r;
+        }
+        if let Some(hz) = rate_hz {
+            s.rate_hz = hz;
         }
     }
     let progress = Progress::new(list.iter().map(|s| total_runs(s, only)).sum(), show);

@@ -18,6 +18,7 @@ use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::fix::observation::Observation;
 use foxhunt_core::likelihood::GaussianUniform;
 use foxhunt_core::model::bearing::{Bearing, predicted, wrap};
+use foxhunt_core::roughen::KERNEL_PERIOD_S;
 use foxhunt_core::track::init::{Prior, Start, initial_cloud};
 use foxhunt_core::track::{Epoch, Forgetting, Layout, Motion, Mover};
 use foxhunt_core::{Error, Filter, Model, ParticleSet, Sir, SirConfig, random};
@@ -305,9 +306,14 @@ fn staged<const N: usize>(
         let config = SirConfig::TUNED;
         set.resample(config.resampling, rng);
         let kernel = <Mover<STATIONS> as Model<D>>::regularised(model);
-        config
-            .roughening
-            .apply_to(set, &mean, &covariance, &kernel, rng);
+        config.roughening.apply_to(
+            set,
+            &mean,
+            &covariance,
+            &kernel,
+            z.dt / KERNEL_PERIOD_S,
+            rng,
+        );
     }
     [mean[0], mean[1]]
 }
