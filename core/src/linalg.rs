@@ -134,15 +134,19 @@ pub fn largest_eigenvalue<const D: usize>(m: &[[f32; D]; D]) -> f32 {
     let mut lambda = 0.0f32;
     for _ in 0..64 {
         let w = mat_vec(m, &v);
-        let norm = libm::sqrtf(w.iter().map(|x| x * x).sum());
+        let norm = libm::sqrtf(dot(&w, &w));
         if !(norm > 0.0) || !norm.is_finite() {
             return norm;
         }
-        let vv: f32 = v.iter().map(|x| x * x).sum();
-        lambda = v.iter().zip(&w).map(|(a, b)| a * b).sum::<f32>() / vv;
+        lambda = dot(&v, &w) / dot(&v, &v);
         v = w.map(|x| x / norm);
     }
     lambda
+}
+
+/// The dot product of two vectors, summed in index order.
+pub fn dot<const D: usize>(a: &[f32; D], b: &[f32; D]) -> f32 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// The product of a D x D matrix and a vector.

@@ -214,6 +214,11 @@ pub fn calibrate_on_references(
     width_mhz: f32,
     setup: &mut StationSetup,
 ) -> (Vec<Observation>, Vec<ReferenceFix>) {
+    // Without a reference nothing is taken out, and no station's course need be followed (a
+    // live update would otherwise walk every bearing so far).
+    if references.is_empty() {
+        return (observations.to_vec(), Vec::new());
+    }
     let on = |o: &Observation| {
         references.iter().position(|r| {
             channel::belongs(o.freq_mhz, Some(r.freq_mhz - width_mhz / 2.0), width_mhz)

@@ -219,7 +219,7 @@ pub fn calibrate_direction(
     let all = |_: f32, _: f32| true;
     let (_, first, _) = fit_direction(bearings, relative, &emitter, centre, all)
         .ok_or(Error::TooFewMeasurements)?;
-    let misfit = |r: f32, phi: f32| wrap(r - dot5(&first, &regressors(phi)));
+    let misfit = |r: f32, phi: f32| wrap(r - crate::linalg::dot(&first, &regressors(phi)));
     // The robust spread of the first fit's misfits, from a strided sample (no allocator).
     const CAP: usize = 512;
     let stride = bearings.len().div_ceil(CAP).max(1);
@@ -247,7 +247,7 @@ pub fn calibrate_direction(
             .filter(|(b, phi)| b.check().is_ok() && phi.is_finite())
             .map(move |(b, &phi)| (wrap(b.residual(&emitter) - centre), phi))
             .filter(move |&(r, phi)| inside(r, phi))
-            .map(move |(r, phi)| r - dot5(&x, &regressors(phi)))
+            .map(move |(r, phi)| r - crate::linalg::dot(&x, &regressors(phi)))
     };
     let ss: f32 = kept().map(|r| r * r).sum();
     let sigma = libm::sqrtf(ss / (n as usize - UNKNOWNS) as f32 / 0.9953);
@@ -278,8 +278,4 @@ pub fn calibrate_direction(
         covariance,
         span,
     })
-}
-
-fn dot5(a: &[f32; UNKNOWNS], b: &[f32; UNKNOWNS]) -> f32 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }

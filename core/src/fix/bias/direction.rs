@@ -84,12 +84,7 @@ impl DirectionPrior {
 /// The error coefficients `c` give at relative bearing `phi`, radians.
 #[inline]
 pub fn error(c: &[f32; HARMONICS], phi: f32) -> f32 {
-    dot(c, &harmonics(phi))
-}
-
-#[inline]
-pub(super) fn dot(a: &[f32; HARMONICS], b: &[f32; HARMONICS]) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3]
+    crate::linalg::dot(c, &harmonics(phi))
 }
 
 /// Each of one station's `bearings` (time order) relative to its antenna, into `out`, for a

@@ -3,12 +3,13 @@
 //! station table, centred on the drive.
 
 use super::super::{Geometry, geometry_of};
-use super::direction::{HARMONICS, dot, harmonics};
+use super::direction::{HARMONICS, harmonics};
 use super::stations::HarmonicStart;
 use super::stations::StationSlot;
 use super::{BiasedOptions, Sighting, Start, StartOffsets};
 use crate::error::{Error, check_finite};
 use crate::likelihood::Likelihood;
+use crate::linalg::dot;
 use crate::model::bearing::{Bearing, predicted, wrap};
 
 /// Residual z - h(p) - b of one sighting at centred position `p` with correction `bias` (the

@@ -1,12 +1,12 @@
 //! The Levenberg-Marquardt fix of position and offsets, and what it reports.
 
 use super::super::{Geometry, geometry};
-use super::direction::dot;
 use super::problem::{At, Problem, residual, set_up, usable};
 use super::stations::{StationSlot, back_substitute, offset_variances, reduce};
 use super::{BiasPrior, Sighting};
 use crate::error::{Error, check_finite};
 use crate::likelihood::{Gaussian, Likelihood};
+use crate::linalg::dot;
 use crate::linalg::inverse_scaled;
 use crate::model::bearing::{Bearing, wrap};
 

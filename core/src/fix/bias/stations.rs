@@ -19,8 +19,9 @@
 //!   shows the prior's share.
 
 use super::BiasPrior;
-use super::direction::{DirectionPrior, HARMONICS, dot};
+use super::direction::{DirectionPrior, HARMONICS};
 use crate::error::{Error, check_finite};
+use crate::linalg::dot;
 use crate::linalg::inverse_scaled;
 
 /// How far (metres) a station must move before its course gives the antenna's front: GPS
