@@ -91,41 +91,74 @@ fn simple(
 /// reports a second (the last 10 raw bearings of 8 degrees), the emitter 8 km off to the
 /// side of the drive's heading, an offset from the default prior.
 fn open_correlated_curved(rng: &mut XorShiftRng) -> FieldDrive {
-    let (radius, speed, rate) = (3000.0f32, 15.0f32, 5.0f32);
-    let n = (60.0 * rate) as usize;
-    let route: Vec<[f32; 2]> = (0..n)
-        .map(|k| {
-            let a = speed * k as f32 / rate / radius;
-            [radius * a.sin(), radius * (1.0 - a.cos())]
-        })
-        .collect();
-    let emitter = [6000.0f32, 5300.0];
-    let raw_sigma = 8.0 * DEG;
     let bias = foxhunt_core::fix::bias::DEFAULT_BIAS_SD * random::normal(rng);
-    let mut window = [0.0f32; 10];
-    for w in window.iter_mut() {
-        *w = raw_sigma * random::normal(rng);
-    }
-    let sigma = raw_sigma / 10f32.sqrt();
-    let bearings: Vec<Bearing> = route
-        .iter()
-        .enumerate()
-        .map(|(k, v)| {
-            window[k % 10] = raw_sigma * random::normal(rng);
-            let mean = window.iter().sum::<f32>() / 10.0;
-            bearing_to(emitter, *v, bias + mean, sigma)
-        })
-        .collect();
-    FieldDrive {
-        observations: timed(bearings, 1.0 / rate),
-        emitters: vec![Truth {
-            position: emitter,
-            freq_mhz: None,
-        }],
-        ghost: None,
-        stations: Vec::new(),
+    let (radius, speed) = (3000.0f32, 15.0f32);
+    let route = reports(60.0, |k| {
+        let a = speed * k / RunningMean::RATE_HZ / radius;
+        [radius * a.sin(), radius * (1.0 - a.cos())]
+    });
+    let drive = RunningMean {
+        route,
+        emitter: [6000.0, 5300.0],
+        raw_sigma: 8.0 * DEG,
         bias,
-        sigma,
+        stated: None,
+    };
+    drive.drive(rng)
+}
+
+/// A unit reporting 5 times a second the running mean of its last 10 raw bearings, from a
+/// vehicle on `route` (a position per report).
+struct RunningMean {
+    route: Vec<[f32; 2]>,
+    emitter: [f32; 2],
+    /// Sd of each raw bearing, radians.
+    raw_sigma: f32,
+    /// The unit's offset, radians.
+    bias: f32,
+    /// The sd the unit states (none: the running mean's own, raw_sigma / sqrt(10)).
+    stated: Option<f32>,
+}
+
+/// The vehicle's position at each report of `seconds` of driving, from `at(k)` (k the
+/// report's index).
+fn reports(seconds: f32, at: impl Fn(f32) -> [f32; 2]) -> Vec<[f32; 2]> {
+    let n = (seconds * RunningMean::RATE_HZ) as usize;
+    (0..n).map(|k| at(k as f32)).collect()
+}
+
+impl RunningMean {
+    const RATE_HZ: f32 = 5.0;
+    const WINDOW: usize = 10;
+
+    fn drive(&self, rng: &mut XorShiftRng) -> FieldDrive {
+        let mean_sigma = self.raw_sigma / (Self::WINDOW as f32).sqrt();
+        let mut window = [0.0f32; Self::WINDOW];
+        for w in window.iter_mut() {
+            *w = self.raw_sigma * random::normal(rng);
+        }
+        let stated = self.stated.unwrap_or(mean_sigma);
+        let bearings: Vec<Bearing> = self
+            .route
+            .iter()
+            .enumerate()
+            .map(|(k, v)| {
+                window[k % Self::WINDOW] = self.raw_sigma * random::normal(rng);
+                let mean = window.iter().sum::<f32>() / Self::WINDOW as f32;
+                bearing_to(self.emitter, *v, self.bias + mean, stated)
+            })
+            .collect();
+        FieldDrive {
+            observations: timed(bearings, 1.0 / Self::RATE_HZ),
+            emitters: vec![Truth {
+                position: self.emitter,
+                freq_mhz: None,
+            }],
+            ghost: None,
+            stations: Vec::new(),
+            bias: self.bias,
+            sigma: mean_sigma,
+        }
     }
 }
 
@@ -402,40 +435,19 @@ fn direction_dependent(rng: &mut XorShiftRng) -> FieldDrive {
 /// bearings (6 degrees each; the unit states 2), the emitter at (400, 300), off the arc's
 /// centre.
 fn correlated_curved(rng: &mut XorShiftRng) -> FieldDrive {
-    let (radius, speed, rate) = (2000.0f32, 20.0f32, 5.0f32);
-    let n = (450.0 * rate) as usize;
-    let route: Vec<[f32; 2]> = (0..n)
-        .map(|k| {
-            let a = speed * k as f32 / rate / radius;
-            [radius * a.sin(), -radius * a.cos()]
-        })
-        .collect();
-    let emitter = [400.0f32, 300.0];
-    let raw_sigma = 6.0 * DEG;
-    let mut window = [0.0f32; 10];
-    for w in window.iter_mut() {
-        *w = raw_sigma * random::normal(rng);
-    }
-    let bearings: Vec<Bearing> = route
-        .iter()
-        .enumerate()
-        .map(|(k, v)| {
-            window[k % 10] = raw_sigma * random::normal(rng);
-            let mean = window.iter().sum::<f32>() / 10.0;
-            bearing_to(emitter, *v, mean, 2.0 * DEG)
-        })
-        .collect();
-    FieldDrive {
-        observations: timed(bearings, 1.0 / rate),
-        emitters: vec![Truth {
-            position: emitter,
-            freq_mhz: None,
-        }],
-        ghost: None,
-        stations: Vec::new(),
+    let (radius, speed) = (2000.0f32, 20.0f32);
+    let route = reports(450.0, |k| {
+        let a = speed * k / RunningMean::RATE_HZ / radius;
+        [radius * a.sin(), -radius * a.cos()]
+    });
+    let drive = RunningMean {
+        route,
+        emitter: [400.0, 300.0],
+        raw_sigma: 6.0 * DEG,
         bias: 0.0,
-        sigma: raw_sigma / 10f32.sqrt(),
-    }
+        stated: Some(2.0 * DEG),
+    };
+    drive.drive(rng)
 }
 
 /// The observations of run `run` of `condition`.
