@@ -161,9 +161,44 @@ fn locate_on_a_drone_s_records_says_it_moves() {
         );
         let stations = out.with_extension("stations.toml");
         let stations = stations.to_str().expect("path");
-        let l = foxhunt(&["locate", path, "--stations", stations, "--json"]);
+        let maps = ["geojson", "kml", "svg"].map(|e| out.with_extension(format!("locate.{e}")));
+        let [g, k, s] = maps.each_ref().map(|p| p.to_str().expect("path"));
+        let l = foxhunt(&[
+            "locate",
+            path,
+            "--stations",
+            stations,
+            "--json",
+            "--geojson",
+            g,
+            "--kml",
+            k,
+            "--svg",
+            s,
+        ]);
         let v: Value = serde_json::from_slice(&l.stdout).expect("one JSON object");
         if moves {
+            // The maps asked for get the track `foxhunt track` draws (same defaults, seed and
+            // stations: the same bytes); no SVG of a still fix, and the user is told.
+            let tg = out.with_extension("track.geojson");
+            let tk = out.with_extension("track.kml");
+            let t = foxhunt(&[
+                "track",
+                path,
+                "--stations",
+                stations,
+                "--geojson",
+                tg.to_str().expect("path"),
+                "--kml",
+                tk.to_str().expect("path"),
+            ]);
+            assert!(t.status.success(), "{}", String::from_utf8_lossy(&t.stderr));
+            let read = |p: &std::path::Path| std::fs::read(p).expect("map written");
+            assert_eq!(read(&maps[0]), read(&tg), "GeoJSON of the track");
+            assert_eq!(read(&maps[1]), read(&tk), "KML of the track");
+            assert!(!maps[2].exists(), "no SVG for a moving emitter");
+            let err = String::from_utf8_lossy(&l.stderr);
+            assert!(err.contains("not written"), "{err}");
             assert_eq!(l.status.code(), Some(1), "{v}");
             assert_eq!(v["reason"], "moving", "{v}");
             assert!(

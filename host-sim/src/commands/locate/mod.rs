@@ -636,6 +636,8 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
             // No fix, but regions (an open range): printed and drawn; still exit status 1.
             if let Some(l) = &no_fix.located {
                 write_maps(l, &decoded, &paths, &outputs)?;
+            } else if no_fix.reason == Some(crate::locate::explain::MOVING) {
+                write_track_maps(a, &decoded, &options, &paths, &outputs)?;
             }
             if a.json {
                 let text = serde_json::to_string(&no_fix).map_err(|e| e.to_string())?;
@@ -681,6 +683,52 @@ fn write_maps(
     }
     if let Some(p) = svg {
         outputs.write(p, maps::svg(l, d).as_bytes(), true)?;
+    }
+    Ok(())
+}
+
+/// An emitter that moves has no still fix to draw: the maps asked for get its track instead,
+/// as `foxhunt track` (at its defaults, with this run's stations, noise, channel width and
+/// seed) draws it. An SVG (a still fix's picture) is not written, and the user is told.
+fn write_track_maps(
+    a: &Args,
+    decoded: &Decoded,
+    options: &LocateOptions,
+    paths: &[Option<PathBuf>; 3],
+    outputs: &Outputs,
+) -> Result<(), Stop> {
+    let [geojson, kml, svg] = paths;
+    if geojson.is_none() && kml.is_none() && svg.is_none() {
+        return Ok(());
+    }
+    let mut o = crate::commands::track::default_options()?;
+    o.network = options.network.as_deref().cloned();
+    o.sigma = a.sigma_deg.map(f32::to_radians);
+    o.width_mhz = a.channel_width_mhz;
+    o.seed = a.seed;
+    let measured = crate::track::capture::Measured {
+        decoded: decoded.clone(),
+        ..Default::default()
+    };
+    let t = crate::track::tracks::tracks(&measured, None, &o)?;
+    crate::commands::track::write_maps(&t, [geojson.as_deref(), kml.as_deref()], outputs)?;
+    let written: Vec<String> = [geojson, kml]
+        .into_iter()
+        .flatten()
+        .map(|p| p.display().to_string())
+        .collect();
+    if !written.is_empty() {
+        note(&format!(
+            "the emitter moves: its track (as `foxhunt track` gives it) is in {}",
+            written.join(" and ")
+        ));
+    }
+    if let Some(p) = svg {
+        note(&format!(
+            "{}: not written: an SVG draws a still fix; the emitter moves (--geojson or --kml \
+             draw its track)",
+            p.display()
+        ));
     }
     Ok(())
 }

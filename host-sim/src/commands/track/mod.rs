@@ -19,7 +19,7 @@ use crate::track::moving::{DEFAULT_METHOD, PARTICLES, TRACK_METHODS, TRACK_PARTI
 use crate::track::tracks::{Options, Tracks};
 use foxhunt_core::Method;
 use foxhunt_core::track::Motion;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Options of `foxhunt track`.
 #[derive(Debug, clap::Args)]
@@ -286,14 +286,14 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
     }
 }
 
-/// The files asked for.
-fn write_files(
-    a: &Args,
+/// The tracks and their 95 % ellipses on the earth, as GeoJSON and KML, to the paths given
+/// (also what `locate` writes for an emitter that moves).
+pub(crate) fn write_maps(
     t: &Tracks,
-    file: Option<&AnchorsFile>,
+    [geojson, kml]: [Option<&Path>; 2],
     outputs: &Outputs,
 ) -> Result<(), String> {
-    if let Some(p) = &a.geojson {
+    if let Some(p) = geojson {
         let g = tracks::geojson(t).ok_or(
             "--geojson needs the track on the earth: a capture with GPS positions, or an \
              anchors file with an `origin`",
@@ -301,13 +301,36 @@ fn write_files(
         let text = serde_json::to_string(&g).map_err(|e| e.to_string())?;
         outputs.write(p, text.as_bytes(), true)?;
     }
-    if let Some(p) = &a.kml {
+    if let Some(p) = kml {
         let k = tracks::kml(t).ok_or(
             "--kml needs the track on the earth: a capture with GPS positions, or an anchors \
              file with an `origin`",
         )?;
         outputs.write(p, k.as_bytes(), true)?;
     }
+    Ok(())
+}
+
+/// `track`'s options at every flag's default: what `locate` tracks an emitter that moves with.
+pub(crate) fn default_options() -> Result<Options, String> {
+    #[derive(clap::Parser)]
+    struct Defaults {
+        #[command(flatten)]
+        args: Args,
+    }
+    use clap::Parser;
+    let d = Defaults::try_parse_from(["track"]).map_err(|e| e.to_string())?;
+    d.args.values(None)
+}
+
+/// The files asked for.
+fn write_files(
+    a: &Args,
+    t: &Tracks,
+    file: Option<&AnchorsFile>,
+    outputs: &Outputs,
+) -> Result<(), String> {
+    write_maps(t, [a.geojson.as_deref(), a.kml.as_deref()], outputs)?;
     if let Some(p) = &a.csv {
         outputs.write(p, tracks::csv(t).as_bytes(), true)?;
     }
