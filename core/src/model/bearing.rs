@@ -58,11 +58,19 @@ impl Bearing {
 
 /// Wrap an angle to (-pi, pi]. Non-finite input stays non-finite (callers check first).
 ///
-/// The IEEE remainder is exact for any finite input, so even 1e30 wraps into range.
+/// The IEEE remainder is exact for any finite input, so even 1e30 wraps into range. One turn
+/// out (a residual of a checked bearing almost always is) one turn taken or added gives the
+/// same exact answer far cheaper: the difference of two floats within a factor of two of each
+/// other is exact (Sterbenz), and the answer in range is unique (a whole turn's zero may differ
+/// in sign, which nothing downstream reads).
 #[inline]
 pub fn wrap(a: f32) -> f32 {
     if (-PI..=PI).contains(&a) && a != -PI {
         return a;
+    }
+    let w = if a > PI { a - TAU } else { a + TAU };
+    if w > -PI && w <= PI {
+        return w;
     }
     let w = libm::remainderf(a, TAU);
     if w <= -PI { w + TAU } else { w }
@@ -187,6 +195,35 @@ mod tests {
             assert!(libm::fabsf(libm::sinf(w) - libm::sinf(a)) < 1e-4);
         }
         assert_eq!(wrap(-PI), PI);
+    }
+
+    #[test]
+    fn one_turn_out_wraps_as_the_remainder_does() {
+        let remainder = |a: f32| {
+            let w = libm::remainderf(a, TAU);
+            if w <= -PI { w + TAU } else { w }
+        };
+        let mut a = -5.0 * PI;
+        while a < 5.0 * PI {
+            for x in [a, a.next_up(), a.next_down()] {
+                assert_eq!(wrap(x), remainder(x), "{x}");
+            }
+            a += PI / 7.0;
+        }
+        for a in [
+            3.0 * PI,
+            -3.0 * PI,
+            4.0 * PI,
+            -4.0 * PI,
+            TAU,
+            -TAU,
+            PI.next_up(),
+        ] {
+            for x in [a, a.next_up(), a.next_down()] {
+                // The same value; a whole turn gives +0 where the remainder gives -0.
+                assert_eq!(wrap(x), remainder(x), "{x}");
+            }
+        }
     }
 
     #[test]

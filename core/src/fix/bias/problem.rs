@@ -26,10 +26,47 @@ pub(super) fn usable<T: Sighting>(
     items: &[T],
     stations: usize,
 ) -> impl Iterator<Item = (&Bearing, usize, [f32; HARMONICS])> {
+    usable_as(items, stations, Known::default())
+}
+
+/// What set-up learnt of a problem's sightings, so the solver's passes (a hundred or more per
+/// fix, two dozen fixes per offset profile) skip the work whose answer cannot change.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct Known {
+    /// Every sighting's bearing passed [`Bearing::check`]: no need to check it again.
+    checked: bool,
+    /// Some station's direction-dependent error is estimated or non-zero: the regressors are
+    /// needed (otherwise they multiply zeros, and their sine and cosine are zeros too).
+    harmonics: bool,
+}
+
+impl Default for Known {
+    /// Nothing known: check every bearing, compute every regressor.
+    fn default() -> Self {
+        Self {
+            checked: false,
+            harmonics: true,
+        }
+    }
+}
+
+/// [`usable`], skipping what `known` says is settled.
+fn usable_as<T: Sighting>(
+    items: &[T],
+    stations: usize,
+    known: Known,
+) -> impl Iterator<Item = (&Bearing, usize, [f32; HARMONICS])> {
     items
         .iter()
-        .filter(move |t| t.station() < stations && t.bearing().check().is_ok())
-        .map(|t| (t.bearing(), t.station(), harmonics(t.relative())))
+        .filter(move |t| t.station() < stations && (known.checked || t.bearing().check().is_ok()))
+        .map(move |t| {
+            let u = if known.harmonics {
+                harmonics(t.relative())
+            } else {
+                [0.0; HARMONICS]
+            };
+            (t.bearing(), t.station(), u)
+        })
 }
 
 /// Which of a row's offsets a cost is taken at.
@@ -48,9 +85,18 @@ pub(super) struct Problem<'a, T, L> {
     pub(super) origin: [f32; 2],
     pub(super) scale: f32,
     position_sd: f32,
+    known: Known,
 }
 
 impl<T: Sighting, L: Likelihood> Problem<'_, T, L> {
+    /// The usable sightings ([`usable`]) of a table of `stations` rows, as set-up found them.
+    pub(super) fn sightings(
+        &self,
+        stations: usize,
+    ) -> impl Iterator<Item = (&Bearing, usize, [f32; HARMONICS])> {
+        usable_as(self.items, stations, self.known)
+    }
+
     /// The bearing's sd at centred position `p` (the position error's share included).
     fn sigma(&self, b: &Bearing, p: [f32; 2]) -> f32 {
         let plain = self.scale * b.sigma;
@@ -74,7 +120,7 @@ impl<T: Sighting, L: Likelihood> Problem<'_, T, L> {
         };
         let trial = at == At::Trial;
         let mut c = 0.0f32;
-        for (b, s, u) in usable(self.items, stations.len()) {
+        for (b, s, u) in self.sightings(stations.len()) {
             let Some(row) = stations.get(s) else { continue };
             let r = residual(
                 b,
@@ -112,7 +158,7 @@ impl<T: Sighting, L: Likelihood> Problem<'_, T, L> {
             s.clear_blocks();
         }
         let n = stations.len();
-        for (b, s, u) in usable(self.items, n) {
+        for (b, s, u) in self.sightings(n) {
             let Some(row) = stations.get_mut(s) else {
                 continue;
             };
@@ -169,9 +215,18 @@ pub(super) fn set_up<'a, T: Sighting, L: Likelihood>(
     for s in stations.iter_mut() {
         s.n = 0;
     }
-    for (_, s, _) in usable(items, stations.len()) {
+    let mut counted = 0usize;
+    for (_, s, _) in usable_as(
+        items,
+        stations.len(),
+        Known {
+            checked: false,
+            harmonics: false,
+        },
+    ) {
         if let Some(row) = stations.get_mut(s) {
             row.n += 1;
+            counted += 1;
         }
     }
     for s in stations.iter_mut() {
@@ -196,12 +251,19 @@ pub(super) fn set_up<'a, T: Sighting, L: Likelihood>(
         });
         check_finite(&s.hx)?;
     }
+    let harmonics = stations
+        .iter()
+        .any(|s| s.hfree || s.hx.iter().chain(&s.htrial).any(|&h| h != 0.0));
     let problem = Problem {
         items,
         loss,
         origin: geo.origin,
         scale: options.scale,
         position_sd: options.position_sd_m,
+        known: Known {
+            checked: counted == items.len(),
+            harmonics,
+        },
     };
     let p = [
         start.position[0] - geo.origin[0],

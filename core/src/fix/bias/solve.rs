@@ -1,7 +1,7 @@
 //! The Levenberg-Marquardt fix of position and offsets, and what it reports.
 
 use super::super::{Geometry, geometry};
-use super::problem::{At, Problem, residual, set_up, usable};
+use super::problem::{At, Problem, residual, set_up};
 use super::stations::{StationSlot, back_substitute, offset_variances, reduce};
 use super::{BiasPrior, Sighting};
 use crate::error::{Error, check_finite};
@@ -285,7 +285,7 @@ fn finish<T: Sighting, L: Likelihood>(
     let mut outliers = 0;
     let mut front = 0.0f32;
     let mut chi2 = 0.0f32;
-    for (b, s, u) in usable(problem.items, stations.len()) {
+    for (b, s, u) in problem.sightings(stations.len()) {
         let Some(row) = stations.get(s) else { continue };
         let r = residual(b, geo.origin, p, row.bias + dot(&row.hfit, &u));
         let u = r / (problem.scale * b.sigma);

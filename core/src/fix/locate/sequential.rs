@@ -5,7 +5,7 @@
 use super::super::bias::{BiasPrior, StationSlot};
 use super::motion::{self, MIN_SPAN_BEARINGS, Motion, MotionNoise, SEGMENTS, Split};
 use super::region::direction_only;
-use super::source::{Found, as_region, find_source, noise_scale};
+use super::source::{Found, as_region, check_ambiguity, find_source, noise_scale};
 use super::{
     ChannelFreq, ChannelOutcome, Item, LocateConfig, NoEmitter, OtherReason, OtherSource, Region,
     Report, Source, StationOffset,
@@ -48,7 +48,28 @@ pub(super) fn channel_sources<const C: usize, const O: usize, R: Rng + ?Sized>(
             }
             break;
         }
-        let found = find_source(set, scratch, stations, freq, config, rng);
+        let mut found = find_source(set, scratch, stations, freq, config, rng);
+        // A still emitter's fix, or the middle of a moving one's path? Then, for a fix, whether
+        // its offset has a rival.
+        let mut motion = None;
+        let checked = match &mut found {
+            Ok(Found::Source(source, kept)) => {
+                let members = scratch.get(..*kept).unwrap_or(&[]);
+                if first {
+                    motion = motion_of(source, members, stations);
+                    source.motion_p = motion.map(|m| m.p_value);
+                }
+                if motion.is_some_and(|m| m.moving()) {
+                    Ok(())
+                } else {
+                    check_ambiguity(source, members, stations, config)
+                }
+            }
+            _ => Ok(()),
+        };
+        if let Err(why) = checked {
+            found = Err(why);
+        }
         let (mut source, kept) = match found {
             Ok(Found::Source(s, kept)) => (s, kept),
             // An open range: the channel's answer is its region; a later source's is none
@@ -95,10 +116,6 @@ pub(super) fn channel_sources<const C: usize, const O: usize, R: Rng + ?Sized>(
             }
         };
         if first {
-            // A still emitter's fix, or the middle of a moving one's path?
-            let members = scratch.get(..kept).unwrap_or(&[]);
-            let motion = motion_of(&source, members, stations);
-            source.motion_p = motion.map(|m| m.p_value);
             if let Some(m) = motion.filter(Motion::moving) {
                 outcome = ChannelOutcome::NoConsistentEmitter(NoEmitter::Moving(m));
                 break;

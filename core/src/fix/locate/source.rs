@@ -64,20 +64,6 @@ pub(super) fn find_source<R: Rng + ?Sized>(
         ..OffsetCheck::default()
     };
     if z.abs() <= CONTRADICTED_Z {
-        if prior.is_free() {
-            let members = scratch.get(..kept).ok_or(NoEmitter::TooFew)?;
-            let circle = bias::offset_circle(
-                members,
-                stations,
-                main,
-                source.position,
-                solver_at(&source, members, config),
-            )
-            .map_err(NoEmitter::Geometry)?;
-            // Deviances of correlated bearings count tau times what they hold.
-            source.offset_check.ambiguous =
-                circle.rival(source.bias, RIVAL_APART, AMBIGUOUS_DEVIANCE * tau);
-        }
         return Ok(Found::Source(source, kept));
     }
     past_prior(
@@ -90,6 +76,41 @@ pub(super) fn find_source<R: Rng + ?Sized>(
         (&source, kept),
         prior,
     )
+}
+
+/// Whether the data allow the main station's offset a rival far from `source`'s, its profile
+/// round the whole circle on the source's bearings `members` ([`OffsetCheck::ambiguous`]).
+/// Asked of a fix inside a free prior, once it is known to be a fix (a source that turns out
+/// to be a moving emitter's, or a span's in the search for one, needs no such check: two dozen
+/// solves each). The table is left as it came.
+pub(super) fn check_ambiguity(
+    source: &mut Source,
+    members: &[Item],
+    stations: &mut [StationSlot],
+    config: &LocateConfig,
+) -> Result<(), NoEmitter> {
+    let main = usize::from(source.bias_station);
+    let prior = stations
+        .get(main)
+        .map_or(BiasPrior::calibrated(0.0), StationSlot::prior_in_force);
+    if !(source.offset_check.z.abs() <= CONTRADICTED_Z && prior.is_free()) {
+        return Ok(());
+    }
+    let circle = bias::offset_circle(
+        members,
+        stations,
+        main,
+        source.position,
+        solver_at(source, members, config),
+    )
+    .map_err(NoEmitter::Geometry)?;
+    // Deviances of correlated bearings count tau times what they hold.
+    source.offset_check.ambiguous = circle.rival(
+        source.bias,
+        RIVAL_APART,
+        AMBIGUOUS_DEVIANCE * correlation(source),
+    );
+    Ok(())
 }
 
 /// Past the prior: the data put the main station's offset `z` of its predicted sds from the

@@ -221,12 +221,22 @@ pub fn ransac<T: Sighting, R: Rng + ?Sized>(
             continue;
         }
         scored += 1;
+        // Only residuals near the allowed offsets can count or enter the spread (those
+        // within a window of width 2t centred in the allowed range, or within t of its
+        // mean): the rest are left out before the sort, which is most of the scoring's cost
+        // (the sorted list, and so every sum over it, is what it was, a margin of t spare).
+        let near = (
+            window.centre - window.half_width - 3.0 * t,
+            window.centre + window.half_width + 3.0 * t,
+        );
         let mut k = 0;
         for it in items.iter().step_by(stride).filter(|t| usable(t)) {
             if let Some(slot) = residuals.get_mut(k) {
                 let bg = it.bearing();
                 *slot = wrap(bg.theta - predicted(&p, &bg.vehicle));
-                k += 1;
+                if *slot >= near.0 && *slot <= near.1 {
+                    k += 1;
+                }
             }
         }
         super::super::order::heapsort(&mut residuals[..k]);
