@@ -11,12 +11,13 @@
 //! Bars, and why: the updates of one run are strongly correlated (an offset learned wrong
 //! shifts a whole stretch), so a run counts as far fewer than its 570 updates; the per-run
 //! coverage ranges from 0.5 to 1.0, an sd of about 0.15, so over 24 runs the time-averaged
-//! figure has a standard error of about 0.03. Measured: 0.964 straight, 0.942 turning, 0.906
+//! figure has a standard error of about 0.03. Measured: 0.985 straight, 0.976 turning, 0.926
 //! stop-and-go (the issue's band is 0.90-0.98). The band asserted, 0.85-0.99, is that band
 //! widened by two standard errors below (0.90 - 0.06, rounded up) and up to where ellipses
 //! would be uselessly wide: it fails when the ellipses become much too small (a confident
-//! wrong track) or far too large. The rmse bar is a regression bar on the measured 2.0-2.2x
-//! the bound (not the 1.3x the issue asks: the book says so): 3.0x.
+//! wrong track) or far too large. The rmse bar is a regression bar on the measured 1.49-1.74x
+//! the bound (not the 1.3x the issue asks: the trackers forget the offsets on purpose, the
+//! book says why): 2.2x, a quarter above the worst, so a tracker a quarter worse fails.
 
 use foxhunt_core::Method;
 use foxhunt_sim::runs::moving::MovingScenario;
@@ -55,8 +56,8 @@ fn the_default_tracker_follows_a_drone_with_honest_ellipses() {
         if !(0.85..=0.99).contains(&coverage) {
             failed.push(format!("{name}: coverage {coverage:.3} outside 0.85-0.99"));
         }
-        if ratio > 3.0 {
-            failed.push(format!("{name}: rmse {ratio:.2}x the bound, above 3.0x"));
+        if ratio > 2.2 {
+            failed.push(format!("{name}: rmse {ratio:.2}x the bound, above 2.2x"));
         }
     }
     assert!(failed.is_empty(), "{}", failed.join("; "));
