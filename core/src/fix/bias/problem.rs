@@ -36,7 +36,8 @@ pub(super) struct Known {
     /// Every sighting's bearing passed [`Bearing::check`]: no need to check it again.
     checked: bool,
     /// Some station's direction-dependent error is estimated or non-zero: the regressors are
-    /// needed (otherwise they multiply zeros, and their sine and cosine are zeros too).
+    /// needed (otherwise they only multiply zeros, so zeros stand in for them and their sine
+    /// and cosine are never taken).
     harmonics: bool,
 }
 
