@@ -42,15 +42,7 @@ fn every_noise_estimating_method_is_honest_with_a_handful_of_bearings() {
                 r.found.unwrap_or(0.0)
             ));
             let upper = if n <= 5 { 1.0 } else { 0.98 };
-            // The unit's windowed fix claims too little noise with few bearings (its inliers'
-            // RMS is not corrected for Tukey's cut): 85 % at 5 and 84 % at 7 bearings when
-            // this was written (docs/src/field.md). Held at 80 % there, the bar from 20 on.
-            let lower = if m == Method::Unit && n < 20 {
-                0.80
-            } else {
-                0.90
-            };
-            if !(lower..=upper).contains(&c) {
+            if !(0.90..=upper).contains(&c) {
                 failed.push(format!("{} at n = {n}: {c:.3}", m.name()));
             }
         }

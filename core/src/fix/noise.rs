@@ -6,6 +6,20 @@
 use super::bias::Sighting;
 use super::order;
 
+/// Chance that a sample of Gaussian residuals holds one beyond [`chance_cut`] (Bonferroni over
+/// the sample): a residual past it is wild, one within it is noise however small the others.
+pub const WILD_ALPHA: f32 = 0.05;
+
+/// The largest of `n` Gaussian residuals, in units of a noise estimated with `dof` degrees of
+/// freedom, stays within this but in [`WILD_ALPHA`] of samples (Student-t, Bonferroni over
+/// `n`). A small sample's estimate is often small by chance: a fixed cut at a few of its
+/// sigmas drops good bearings, and the estimate then falls further. `None` when `dof` is not
+/// positive.
+pub fn chance_cut(n: usize, dof: f32) -> Option<f32> {
+    let tail = 1.0 - WILD_ALPHA / (2.0 * n.max(1) as f32);
+    crate::stats::t_quantile(tail, dof).ok()
+}
+
 /// Bearings the median is taken over at most: an evenly strided sample, so a long drive costs
 /// no more than this and nothing is allocated.
 pub const SIGMA_SAMPLE: usize = 256;

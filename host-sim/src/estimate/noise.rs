@@ -13,18 +13,14 @@ use foxhunt_core::estimator::batch_fix;
 use foxhunt_core::fix::consistency::ellipse_scale;
 use foxhunt_core::fix::crlb::information;
 use foxhunt_core::fix::ellipse::{Ellipse, cep50_of};
+use foxhunt_core::fix::noise::chance_cut;
 use foxhunt_core::linalg::eigen2;
 use foxhunt_core::model::bearing::{predicted, wrap};
-use foxhunt_core::stats;
 use foxhunt_core::{Bearing, Error, Method};
 use rand_xorshift::XorShiftRng;
 
 /// Unknowns of a fix's position.
 const POSITION_UNKNOWNS: usize = 2;
-
-/// Chance that a sample of Gaussian residuals holds one beyond the robust cut (Bonferroni over
-/// the sample).
-const WILD_ALPHA: f32 = 0.05;
 
 /// The share of a Gaussian's variance inside +-c standard deviations: the inliers' RMS is
 /// corrected by it (0.9733 at 3, 0.998 at 3.7).
@@ -77,8 +73,7 @@ pub fn estimate_noise(bearings: &[Bearing], p: &[f32; 2], robust: bool) -> Optio
             let dof = (kept - POSITION_UNKNOWNS) as f32;
             let ss: f64 = inliers.iter().map(|x| f64::from(x * x)).sum();
             let scale = ((ss / f64::from(dof) / keep_share).sqrt() as f32).max(floor);
-            let tail = 1.0 - WILD_ALPHA / (2.0 * n as f32);
-            let c = stats::t_quantile(tail, dof).unwrap_or(3.0);
+            let c = chance_cut(n, dof).unwrap_or(3.0);
             keep_share = kept_variance(f64::from(c));
             cut = c * scale;
         }

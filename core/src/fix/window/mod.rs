@@ -51,6 +51,7 @@
 
 mod answer;
 mod pass;
+use pass::Pass;
 mod settings;
 mod start;
 #[cfg(test)]
@@ -64,6 +65,7 @@ use crate::Bearing;
 use crate::fastmath::sincos;
 use crate::fix::consistency::ellipse_scale;
 use crate::fix::init::CLOUD_MAX_RANGE_M;
+use crate::fix::noise::chance_cut;
 use crate::likelihood::Tukey;
 use crate::linalg::{eigen2, inverse2, solve2};
 use crate::model::bearing::wrap;
@@ -96,6 +98,14 @@ pub const MAX_AXIS_M: f32 = 20_000.0;
 pub const MIN_SIGMA: f32 = 0.05 * PI / 180.0;
 /// Confidence of the reported ellipse.
 pub const CONFIDENCE: f32 = 0.95;
+
+/// Scale changes at most per judgement ([`WindowFix::admit`]).
+const ADMIT_ROUNDS: u32 = 3;
+/// Degrees of freedom from which the admission is not tried: the chance cut (Bonferroni over
+/// 128 bearings) is then below Tukey's 4.685.
+const ADMIT_DOF: u32 = 20;
+/// A changed scale puts the bearing judged this far inside (or outside) Tukey's cut.
+const ADMIT_MARGIN: f32 = 1.05;
 
 /// One degree, radians.
 const DEG: f32 = PI / 180.0;
@@ -312,6 +322,47 @@ impl WindowFix {
         }
     }
 
+    /// With the noise estimated, Tukey's cut (4.685 of the scale) is only as good as the scale,
+    /// and a handful of bearings often make that too small (three fit almost exactly): the
+    /// next good bearing is dropped and the scale falls further. So the scale is judged by
+    /// chance ([`chance_cut`] over the window, at the inliers' own noise): a bearing beyond the
+    /// cut that chance allows is noise, and the scale is raised until the nearest such is an
+    /// inlier; an inlier beyond what chance allows the others is wild, and the scale is lowered
+    /// until the farthest such is out. Each change takes the pass `at` (at `lock`'s position
+    /// and scale) again, at most [`ADMIT_ROUNDS`] times within the pass budget. Only small
+    /// samples are judged so: from [`ADMIT_DOF`] degrees of freedom on the chance cut lies
+    /// within Tukey's at a settled scale, and the window is fitted as before.
+    fn admit(&self, origin: [f32; 2], lock: &mut Lock, mut at: Pass, passes: &mut u32) -> Pass {
+        for _ in 0..ADMIT_ROUNDS {
+            let dof = at.inliers.saturating_sub(2);
+            if dof >= ADMIT_DOF || *passes + 1 >= MAX_PASSES {
+                break;
+            }
+            // How far chance lets the largest of the window's residuals lie, in units of the
+            // pass's scale, at a noise of `chi2` over `dof` (none: any residual is chance).
+            let allowed = |chi2: f32, dof: u32| {
+                if dof == 0 {
+                    Some(f32::INFINITY)
+                } else {
+                    chance_cut(self.len, dof as f32).map(|c| c * libm::sqrtf(chi2 / dof as f32))
+                }
+            };
+            let out = at.nearest_out;
+            let far = at.farthest_in;
+            let factor = if out.is_finite() && allowed(at.chi2, dof).is_some_and(|a| out <= a) {
+                out / TUKEY.c * ADMIT_MARGIN
+            } else if dof >= 2 && allowed(at.chi2 - far * far, dof - 1).is_some_and(|a| far > a) {
+                far / TUKEY.c / ADMIT_MARGIN
+            } else {
+                break;
+            };
+            lock.sigma *= factor;
+            at = self.pass(origin, lock.position, lock.sigma);
+            *passes += 1;
+        }
+        at
+    }
+
     fn lose(&mut self) {
         if self.lock.take().is_some() {
             self.counters.lost += 1;
@@ -349,6 +400,9 @@ impl WindowFix {
         };
         let mut at = self.pass(origin, lock.position, lock.sigma);
         passes += 1;
+        if let Noise::Estimated(_) = noise {
+            at = self.admit(origin, &mut lock, at, &mut passes);
+        }
         // Levenberg-Marquardt on the Tukey cost, within the pass budget: a step under a
         // millimetre is convergence, and three refused steps in a row end the update (at the
         // minimum, f32 round-off refuses every step).
@@ -385,6 +439,9 @@ impl WindowFix {
                     break;
                 }
             }
+        }
+        if let Noise::Estimated(_) = noise {
+            at = self.admit(origin, &mut lock, at, &mut passes);
         }
         // The noise scale from the inliers (sum u^2 is at the current scale).
         let dof = at.inliers.saturating_sub(2);

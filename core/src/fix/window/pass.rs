@@ -6,7 +6,7 @@ use crate::fastmath::atan2;
 use crate::likelihood::Likelihood;
 
 /// Sums of one pass over the window at a position.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy)]
 pub(super) struct Pass {
     /// IRLS normal matrix and right-hand side.
     pub(super) h: [[f32; 2]; 2],
@@ -19,6 +19,10 @@ pub(super) struct Pass {
     pub(super) inliers: u32,
     pub(super) chi2: f32,
     pub(super) front: f32,
+    /// The smallest |u| beyond the cut (infinite when every bearing is an inlier).
+    pub(super) nearest_out: f32,
+    /// The largest |u| within it (0 without inliers).
+    pub(super) farthest_in: f32,
 }
 
 /// `m + k n` for 2 x 2 matrices.
@@ -32,7 +36,17 @@ fn add(m: [[f32; 2]; 2], n: [[f32; 2]; 2], k: f32) -> [[f32; 2]; 2] {
 impl WindowFix {
     /// One pass over the window at `p` (centred coordinates) with noise scale `sigma`.
     pub(super) fn pass(&self, origin: [f32; 2], p: [f32; 2], sigma: f32) -> Pass {
-        let mut s = Pass::default();
+        let mut s = Pass {
+            h: [[0.0; 2]; 2],
+            g: [0.0; 2],
+            cost: 0.0,
+            info: [[0.0; 2]; 2],
+            inliers: 0,
+            chi2: 0.0,
+            front: 0.0,
+            nearest_out: f32::INFINITY,
+            farthest_in: 0.0,
+        };
         for e in self.entries() {
             let dx = p[0] - (e.vehicle[0] - origin[0]);
             let dy = p[1] - (e.vehicle[1] - origin[1]);
@@ -54,10 +68,17 @@ impl WindowFix {
             }
             s.g[0] += w * jx * r;
             s.g[1] += w * jy * r;
+            let a = libm::fabsf(u);
+            // Branches, not `min`/`max`: see above.
             if inlier {
                 s.inliers += 1;
                 s.chi2 += u * u;
                 s.front += sin_cos(r).1;
+                if a > s.farthest_in {
+                    s.farthest_in = a;
+                }
+            } else if a < s.nearest_out {
+                s.nearest_out = a;
             }
         }
         s

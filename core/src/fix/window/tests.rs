@@ -151,3 +151,42 @@ fn bad_bearings_are_refused_and_counted() {
     assert_eq!(t.counters().refused, 1);
     assert!(t.is_empty());
 }
+
+/// Bearings at drive steps `ks`, each off the truth by its error (degrees), pushed in order:
+/// the last update.
+fn pushed(ks: &[usize], errors_deg: &[f32]) -> Update {
+    let mut search = XorShiftRng::seed_from_u64(1);
+    let mut t = WindowFix::default();
+    let mut last = None;
+    for (i, (&k, &e)) in ks.iter().zip(errors_deg).enumerate() {
+        let v = drive(k);
+        let b = Bearing {
+            vehicle: v,
+            theta: predicted(&EMITTER, &v) + e * DEG,
+            sigma: 1.0,
+        };
+        last = t.push(&b, i as i64 * 1000, &mut search).ok();
+    }
+    last.unwrap()
+}
+
+#[test]
+fn a_handful_of_bearings_keeps_every_good_one() {
+    // Bearings of about 2 degrees: the first three fit with one degree of freedom, often
+    // far better than their noise, and the next ones are noise chance allows, not wild.
+    let ks = [0, 20, 40, 60, 80];
+    let f = pushed(&ks, &[0.3, -0.4, 0.2, 3.0, -2.5]);
+    assert_eq!(f.used, 5, "{f:?}");
+    assert!(f.sigma > 1.0 * DEG, "{}", f.sigma / DEG);
+}
+
+#[test]
+fn a_wild_bearing_among_a_handful_is_still_wild() {
+    // Ten bearings within a degree and one 40 degrees off: chance does not allow it.
+    let ks: [usize; 11] = core::array::from_fn(|i| 12 * i);
+    let mut errors = [0.5, -0.8, 0.3, -0.2, 0.9, -0.6, 0.1, 0.7, -0.4, 0.2, 0.0];
+    errors[5] = 40.0;
+    let f = pushed(&ks, &errors);
+    assert_eq!(f.used, 10, "{f:?}");
+    assert!(f.sigma < 1.5 * DEG, "{}", f.sigma / DEG);
+}
