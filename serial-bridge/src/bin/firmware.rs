@@ -46,6 +46,10 @@ const IDLE_MS: u32 = 20;
 mod hw;
 
 #[cfg(target_os = "none")]
+#[path = "shared/stack.rs"]
+mod stack;
+
+#[cfg(target_os = "none")]
 #[rtic::app(device = stm32f4::stm32f405, peripherals = true)]
 mod app {
     use super::hw::{self, Received};

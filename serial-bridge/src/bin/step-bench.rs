@@ -19,6 +19,10 @@
 mod track;
 
 #[cfg(target_os = "none")]
+#[path = "shared/stack.rs"]
+mod stack;
+
+#[cfg(target_os = "none")]
 mod image {
     use cortex_m as _;
     // The PAC's interrupt vectors: cortex-m-rt links with its `device` feature on.
@@ -167,23 +171,6 @@ mod image {
         Ok(sequences)
     }
 
-    const PAINT: u32 = 0xCCCC_CCCC;
-
-    // SAFETY: the linker script defines both symbols; only their addresses are taken.
-    #[allow(unsafe_code)]
-    unsafe extern "C" {
-        static _stack_start: u32;
-        static _stack_end: u32;
-    }
-
-    /// The stack's (bottom, top) addresses.
-    fn stack_bounds() -> (usize, usize) {
-        (
-            core::ptr::addr_of!(_stack_end) as usize,
-            core::ptr::addr_of!(_stack_start) as usize,
-        )
-    }
-
     /// The stack pointer where the stack was last repainted.
     static PAINTED_AT: core::sync::atomic::AtomicUsize = core::sync::atomic::AtomicUsize::new(0);
 
@@ -191,30 +178,10 @@ mod image {
     /// `src/bin/firmware/hw.rs`) and note where: the lowest word written since then says what
     /// the calls below that frame needed.
     #[inline(never)]
-    #[allow(unsafe_code)]
     fn repaint_stack() {
-        let (bottom, _) = stack_bounds();
         let sp = cortex_m::register::msp::read() as usize;
         PAINTED_AT.store(sp, core::sync::atomic::Ordering::Relaxed);
-        let mut p = bottom;
-        // A margin below the stack pointer for this function's own frame.
-        while p + 256 < sp {
-            // SAFETY: [bottom, sp - 256) is stack below every live frame, mapped RAM.
-            unsafe { core::ptr::write_volatile(p as *mut u32, PAINT) };
-            p += 4;
-        }
-    }
-
-    /// The lowest stack address written since the last paint.
-    #[allow(unsafe_code)]
-    fn stack_low_water() -> usize {
-        let (bottom, top) = stack_bounds();
-        let mut p = bottom;
-        // SAFETY: every word in [bottom, top) is mapped RAM in the stack region.
-        while p < top && unsafe { core::ptr::read_volatile(p as *const u32) } == PAINT {
-            p += 4;
-        }
-        p
+        crate::stack::paint_below(sp);
     }
 
     /// `track-<N>-<part>`: the tracker's run; prints its error, its state's bytes (what a
@@ -233,7 +200,7 @@ mod image {
             ran.bytes,
             PAINTED_AT
                 .load(core::sync::atomic::Ordering::Relaxed)
-                .saturating_sub(stack_low_water()),
+                .saturating_sub(crate::stack::lowest_written(0)),
             crate::track::D,
             ran.rmse,
             crate::track::WARMUP_S,

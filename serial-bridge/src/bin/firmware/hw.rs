@@ -294,39 +294,13 @@ pub fn take_record() -> Option<(u8, u32)> {
     }
 }
 
-const PAINT: u32 = 0xCCCC_CCCC;
-
-// SAFETY: the linker script defines both symbols; only their addresses are taken.
-#[allow(unsafe_code)]
-unsafe extern "C" {
-    static _stack_start: u32;
-    static _stack_end: u32;
-}
-
-fn stack_bounds() -> (usize, usize) {
-    // The linker script defines both symbols; only their addresses are taken.
-    (
-        core::ptr::addr_of!(_stack_end) as usize,
-        core::ptr::addr_of!(_stack_start) as usize,
-    )
-}
-
 /// Paint the stack below the current frame again (after the start-up, whose one-off moves of
 /// the big state would otherwise stand as the high-water mark): the mark then says what the
 /// running loop needs. Interrupts are off while it paints.
 #[inline(never)]
-#[allow(unsafe_code)]
 pub fn repaint_stack() {
-    let (bottom, _) = stack_bounds();
     cortex_m::interrupt::free(|_| {
-        let sp = cortex_m::register::msp::read() as usize;
-        // Leave a margin below the stack pointer for this function's own frame.
-        let mut p = bottom;
-        while p + 256 < sp {
-            // SAFETY: [bottom, sp - 256) is stack below every live frame, mapped RAM.
-            unsafe { core::ptr::write_volatile(p as *mut u32, PAINT) };
-            p += 4;
-        }
+        crate::stack::paint_below(cortex_m::register::msp::read() as usize);
     });
 }
 
@@ -336,13 +310,7 @@ pub fn repaint_stack() {
 pub const STACK_SCAN: usize = 16 * 1024;
 
 /// Peak stack use, bytes: from the top down to the lowest word no longer painted.
-#[allow(unsafe_code)]
 pub fn stack_high_water() -> u32 {
-    let (bottom, top) = stack_bounds();
-    let mut p = bottom.max(top.saturating_sub(STACK_SCAN));
-    // SAFETY: every word in [bottom, top) is mapped RAM in the stack region.
-    while p < top && unsafe { core::ptr::read_volatile(p as *const u32) } == PAINT {
-        p += 4;
-    }
-    (top - p) as u32
+    let (_, top) = crate::stack::bounds();
+    (top - crate::stack::lowest_written(top.saturating_sub(STACK_SCAN))) as u32
 }
