@@ -239,7 +239,7 @@ pub fn ransac<T: Sighting, R: Rng + ?Sized>(
                 }
             }
         }
-        super::super::order::heapsort(&mut residuals[..k]);
+        super::super::order::quicksort(&mut residuals[..k]);
         let (count, offset) = best_offset(&residuals[..k], t, window);
         // Ties go to the tighter window (smaller spread about its offset).
         let spread = residuals[..k]
