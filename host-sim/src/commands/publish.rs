@@ -255,7 +255,7 @@ pub fn run(a: &Args) -> Outcome {
             let mut line = reader(&source, None, None)?;
             loop {
                 let ended = line
-                    .take(&mut dec, quiet)
+                    .take(&mut dec, quiet, true)
                     .map_err(|s| s.message().unwrap_or("stopped").to_string())?;
                 if ended {
                     dec.end();

@@ -80,7 +80,7 @@ fn line(a: &Args) -> Result<Option<Input>, Stop> {
                 dec.begin_input(n)?;
             }
         }
-        line.take(dec, quiet).map_err(|s| match s {
+        line.take(dec, quiet, true).map_err(|s| match s {
             Stop::Error(e) | Stop::Usage(e) => e,
             Stop::Closed => "the line closed".into(),
         })

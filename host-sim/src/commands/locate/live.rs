@@ -17,20 +17,25 @@
 //! unit running foxhunt's firmware: every line (`--json`: `unit`, also when there is no fix
 //! yet) carries what the unit said ([`crate::inputs::unit`]).
 
-use super::window::ChannelWindow;
+use super::window::{ChannelWindow, Pending, channel_key};
 use crate::estimate::options::LocateOptions;
+use crate::estimate::pool;
 use crate::guidance::guide::Guide;
 use crate::inputs::capture::{Decoded, Decoder};
 use crate::inputs::gpsd::{GpsdAddress, Report, Watch};
 use crate::inputs::kraken_http::KrakenUrl;
 use crate::inputs::mqtt::{Handed, MqttUrl, Shard, Subscription, channel_name};
 use crate::locate::locate_guided;
+use crate::locate::report::{Located, NoFix};
 use crate::outputs::cot::{self, CotSender, CotUrl};
 use crate::outputs::history::recorder::Recorder;
 use crate::outputs::terminal::{Out, Stop, note};
 use foxhunt_bridge::BridgeConfig;
 use foxhunt_bridge::Frame;
 use foxhunt_bridge::kraken::KrakenXml;
+use foxhunt_core::fix::locate::Observation;
+use rayon::prelude::*;
+use std::collections::BTreeMap;
 use std::io::{ErrorKind, Read};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
@@ -246,9 +251,23 @@ pub fn reader(
 
 impl LiveLine {
     /// Block for the first chunk (or the idle timeout), then feed `dec` all that is waiting;
-    /// whether the line ended (closed, or quiet for `quiet_exit`).
-    pub fn take(&mut self, dec: &mut Decoder, quiet_exit: Option<Duration>) -> Result<bool, Stop> {
-        let mut next = self.rx.recv_timeout(IDLE);
+    /// whether the line ended (closed, or quiet for `quiet_exit`). Without `block`, only what
+    /// is already waiting (nothing waiting is not the line being idle).
+    pub fn take(
+        &mut self,
+        dec: &mut Decoder,
+        quiet_exit: Option<Duration>,
+        block: bool,
+    ) -> Result<bool, Stop> {
+        let mut next = if block {
+            self.rx.recv_timeout(IDLE)
+        } else {
+            match self.rx.try_recv() {
+                Ok(c) => Ok(c),
+                Err(mpsc::TryRecvError::Empty) => return Ok(false),
+                Err(mpsc::TryRecvError::Disconnected) => Err(mpsc::RecvTimeoutError::Disconnected),
+            }
+        };
         loop {
             match next {
                 Ok(Chunk::Bytes(b)) => {
@@ -287,12 +306,41 @@ impl LiveLine {
     }
 }
 
+/// Each channel's bearings (`channels`, of the observations `d` holds) located on its own,
+/// side by side on the thread pool, each with the rest of `d` and a copy of `guide` (a
+/// channel's fix does not depend on what else its worker fuses: the same on one worker as
+/// on a shard); `d` is left as it came.
+fn each_channel(
+    d: &mut Decoded,
+    channels: Vec<Vec<Observation>>,
+    o: &LocateOptions,
+    guide: &Guide,
+) -> Vec<Result<Located, Box<NoFix>>> {
+    let all = std::mem::take(&mut d.observations);
+    let rest = &*d;
+    let located = pool().install(|| {
+        channels
+            .into_par_iter()
+            .map(|observations| {
+                let one = Decoded {
+                    observations,
+                    ..rest.clone()
+                };
+                locate_guided(&one, o, &mut guide.clone())
+            })
+            .collect()
+    });
+    d.observations = all;
+    located
+}
+
 /// How a live line ended.
 #[derive(Debug)]
 pub struct LiveEnd {
     /// Everything decoded (for the maps and the statistics).
     pub decoded: Decoded,
-    /// Why the last update had no fix (`None`: it had one).
+    /// Why the last update had no fix (`None`: it had one; a broker's network: some channel's
+    /// last update had one).
     pub no_fix: Option<String>,
 }
 
@@ -331,14 +379,22 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
     };
     let mut reported = (0u64, 0u32);
     let mut ended = false;
-    // The last update's outcome; `None` until one is printed.
-    let mut last: Option<Option<String>> = None;
+    // Each channel's last update's outcome (why it had no fix; `None`: it had one), by the
+    // channel of its first bearing; empty until one is printed.
+    let mut last: BTreeMap<i64, Option<String>> = BTreeMap::new();
     let mut updates = 0u64;
-    while !ended {
-        ended = line.take(&mut dec, o.quiet_exit)?;
-        if ended {
-            // Bearings still waiting for a later fix are placed with the fixes there are.
-            dec.end();
+    // A broker's channels waiting for a solve, and the bearings already counted in them.
+    let mut pending = Pending::default();
+    let mut seen = 0usize;
+    let width = o.locate.channel_width_mhz;
+    while !ended || !pending.is_empty() {
+        if !ended {
+            // With channels waiting, only what has arrived meanwhile: the next solve is due.
+            ended = line.take(&mut dec, o.quiet_exit, pending.is_empty())?;
+            if ended {
+                // Bearings still waiting for a later fix are placed with the fixes there are.
+                dec.end();
+            }
         }
         if let (Some(h), Some(stamper)) = (&o.history, stamper.as_mut()) {
             h.keep_decoded(stamper, &mut dec);
@@ -350,16 +406,41 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
             dropped + dec.decoded.observations.len() as u64,
             dec.decoded.unit.fixes,
         );
+        // A broker's network is solved a channel at a time, the longest-waiting first
+        // ([`Pending`]), as many at once as there are cores; any other line's bearings all at
+        // once.
+        let mut channels = Vec::new();
         if let Some(w) = window.as_mut() {
+            let new = dec.decoded.observations.get(seen..).unwrap_or(&[]);
+            pending.arrived(new, Instant::now());
             w.trim(&mut dec.decoded.observations);
+            seen = dec.decoded.observations.len();
+            for _ in 0..pool().current_num_threads() {
+                channels.extend(pending.next(&dec.decoded.observations, width));
+            }
         }
+        let due = match window {
+            Some(_) => !channels.is_empty(),
+            None => n != reported,
+        };
         // New bearings (or a unit's fix) make an update; a line that ends without any makes
         // one too, so that it says why there is no fix.
-        if n != reported || (ended && last.is_none()) {
-            reported = n;
+        if !(due || (ended && last.is_empty())) {
+            continue;
+        }
+        reported = n;
+        dec.snapshot();
+        let keys: Vec<i64> = channels
+            .iter()
+            .map(|c| c.first().map_or(-1, channel_key))
+            .collect();
+        let located = if channels.is_empty() {
+            vec![locate_guided(&dec.decoded, &o.locate, guide)]
+        } else {
+            each_channel(&mut dec.decoded, channels, &o.locate, guide)
+        };
+        for (k, located) in located.into_iter().enumerate() {
             updates += 1;
-            dec.snapshot();
-            let located = locate_guided(&dec.decoded, &o.locate, guide);
             // TAK missing an update is no reason to stop following the emitter: the next
             // update sends the whole picture again.
             if let (Some(tak), Ok(l)) = (tak.as_mut(), &located)
@@ -383,7 +464,10 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
             if let Some(h) = &o.history {
                 h.keep_update(&located);
             }
-            last = Some(located.err().map(|e| e.error));
+            last.insert(
+                keys.get(k).copied().unwrap_or(-1),
+                located.err().map(|e| e.error),
+            );
             out.line(&text)?;
             out.flush()?;
         }
@@ -408,6 +492,10 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
     }
     Ok(LiveEnd {
         decoded: dec.finish(),
-        no_fix: last.flatten(),
+        // A fix on any channel is a fix; else why the last update had none.
+        no_fix: match last.values().any(Option::is_none) {
+            true => None,
+            false => last.into_values().flatten().last(),
+        },
     })
 }

@@ -143,10 +143,12 @@ pub struct Args {
     pub reference: Vec<String>,
     /// Live: every station's bearings from an MQTT broker, `mqtt://HOST[:PORT]/PREFIX`
     /// (`foxhunt publish` sends them to PREFIX/bearings/CHANNEL/STATION); no CAPTURE. Each
-    /// update's fix goes back as one retained message per channel, PREFIX/fixes/CHANNEL (an
-    /// emitter of --json's schema). A bearing arriving twice (same channel, station and time)
-    /// counts once. End it with --quiet-exit. A broker that cannot be reached at the start:
-    /// one line, exit status 1; one lost later is reconnected to.
+    /// update is one channel's, the longest-waiting first (as many side by side as there are
+    /// cores); its fix goes back as one retained message per channel, PREFIX/fixes/CHANNEL
+    /// (an emitter of --json's schema). A bearing arriving twice (same channel, station and
+    /// time) counts once. End it with --quiet-exit; exit status 0 when some channel's last
+    /// update had a fix. A broker that cannot be reached at the start: one line, exit status
+    /// 1; one lost later is reconnected to.
     #[arg(long, value_name = "URL")]
     pub mqtt: Option<String>,
     /// With --mqtt: the client id of the broker session, kept while this worker is away so

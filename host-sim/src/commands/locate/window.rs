@@ -6,6 +6,7 @@
 
 use foxhunt_core::fix::locate::Observation;
 use std::collections::HashMap;
+use std::time::Instant;
 
 /// The bearings kept per channel by default: minutes of a small network, seconds of a large
 /// one (200 stations at 2 Hz fill it in 10 s).
@@ -21,7 +22,7 @@ pub struct ChannelWindow {
 
 /// A bearing's channel as the topics name it ([`crate::inputs::mqtt::channel_name`]): its
 /// frequency to the kHz.
-fn channel_key(o: &Observation) -> i64 {
+pub fn channel_key(o: &Observation) -> i64 {
     match o.freq_mhz {
         Some(f) if f > 0.0 && f.is_finite() => (f64::from(f) * 1000.0).round() as i64,
         _ => -1,
@@ -71,6 +72,48 @@ impl ChannelWindow {
     }
 }
 
+/// The channels with bearings no fix has used yet, each with when the oldest of them arrived.
+/// A worker solves the longest-waiting channel next, one channel at a time, and takes what
+/// arrived after each solve: a bearing then waits for at most one solve of each other channel,
+/// not for a whole update of every channel and the next (docs/src/speed.md, "Through an MQTT
+/// broker").
+#[derive(Debug, Default)]
+pub struct Pending {
+    since: HashMap<i64, Instant>,
+}
+
+impl Pending {
+    /// `new` bearings arrived at `now`.
+    pub fn arrived(&mut self, new: &[Observation], now: Instant) {
+        for o in new {
+            self.since.entry(channel_key(o)).or_insert(now);
+        }
+    }
+
+    /// Whether every channel's bearings have been solved.
+    pub fn is_empty(&self) -> bool {
+        self.since.is_empty()
+    }
+
+    /// The longest-waiting channel's bearings and its neighbours' within `width_mhz` (a
+    /// channel may hold several keys: the fix groups them as it would the whole capture's),
+    /// those channels no longer pending; `None` when nothing waits.
+    pub fn next(&mut self, obs: &[Observation], width_mhz: f32) -> Option<Vec<Observation>> {
+        let (&key, _) = self.since.iter().min_by_key(|&(k, t)| (*t, *k))?;
+        let near = |k: i64| {
+            k == key
+                || (k >= 0 && key >= 0 && (k - key).abs() as f64 <= f64::from(width_mhz) * 1000.0)
+        };
+        self.since.retain(|&k, _| !near(k));
+        Some(
+            obs.iter()
+                .filter(|o| near(channel_key(o)))
+                .copied()
+                .collect(),
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -113,5 +156,34 @@ mod tests {
         assert!(v.windows(2).all(|p| p[0].time_s <= p[1].time_s));
         assert_eq!(w.trim(&mut v), 0);
         assert_eq!(w.dropped, 9);
+    }
+
+    #[test]
+    fn the_longest_waiting_channel_is_solved_first_with_its_neighbours() {
+        let t0 = Instant::now();
+        let later = t0 + std::time::Duration::from_millis(5);
+        let v = [
+            obs(433.92, 0.0),
+            obs(145.5, 1.0),
+            obs(433.921, 2.0),
+            obs(145.5, 3.0),
+        ];
+        let mut p = Pending::default();
+        p.arrived(&v[1..2], t0);
+        p.arrived(&v[..1], later);
+        p.arrived(&v[2..], later);
+        // 145.500 waited longest; then 433.920 with 433.921, one channel 1 kHz wide apart.
+        let first = p.next(&v, 0.05).expect("145.5");
+        assert_eq!(
+            first.iter().map(|o| o.time_s).collect::<Vec<_>>(),
+            [1.0, 3.0]
+        );
+        let second = p.next(&v, 0.05).expect("433.92");
+        assert_eq!(
+            second.iter().map(|o| o.time_s).collect::<Vec<_>>(),
+            [0.0, 2.0]
+        );
+        assert!(p.is_empty());
+        assert!(p.next(&v, 0.05).is_none());
     }
 }

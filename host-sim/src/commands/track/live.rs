@@ -62,7 +62,7 @@ pub fn run(
     let mut failed: Option<String> = None;
     let mut ended = false;
     while !ended {
-        ended = line.take(&mut dec, quiet_exit)?;
+        ended = line.take(&mut dec, quiet_exit, true)?;
         if ended {
             dec.end();
         }
