@@ -380,3 +380,34 @@ fn a_bearing_whose_time_jumped_ahead_holds_no_later_one_back() {
         );
     }
 }
+
+#[test]
+fn a_broker_bearing_held_up_by_an_outage_passes_when_its_clock_was_judged() {
+    // One station's KrakenSDR records a second apart; the one of 2.5 s arrives after the one
+    // of 5 s, as a broker delivers a bearing held up by an outage. Judged on the station's
+    // clock here it went back on its own (refused); a broker's were judged where they were
+    // decoded, and all pass as they come.
+    let record = |ms: u64| {
+        format!(
+            "<DATA><STATION_ID>mast-1</STATION_ID><TIME>{}</TIME><FREQUENCY>433.92</FREQUENCY>\
+             <LOCATION><LATITUDE>47.0</LATITUDE><LONGITUDE>8.0</LONGITUDE><HEADING>0</HEADING>\
+             </LOCATION><DOA>90</DOA><PWR>60</PWR><CONF>80</CONF></DATA>\n",
+            1_780_308_000_000 + ms
+        )
+    };
+    let mut times: Vec<u64> = (0..=5).map(|s| s * 1000).collect();
+    times.push(2500);
+    times.extend((6..10).map(|s| s * 1000));
+    let records: Vec<String> = times.iter().map(|&t| record(t)).collect();
+    let chunks: Vec<&[u8]> = records.iter().map(|r| r.as_bytes()).collect();
+    for (judged, placed, jumped) in [(false, 10, 1), (true, 11, 0)] {
+        let config = BridgeConfig {
+            judged_clocks: judged,
+            ..BridgeConfig::default()
+        };
+        let mut rx = Receiver::<0>::new(config, []);
+        let m = measurements(&feed_raw(&mut rx, &chunks));
+        assert_eq!(m.len(), placed, "judged {judged}: {:?}", rx.counters());
+        assert_eq!(rx.bridge.counters().time_jump, jumped, "judged {judged}");
+    }
+}

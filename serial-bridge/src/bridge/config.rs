@@ -60,6 +60,11 @@ pub struct BridgeConfig {
     pub yaw_gate_deg_s: Option<f32>,
     /// The yaw rate is the heading's change over at least this long, ms.
     pub yaw_window_ms: u32,
+    /// The records' times were already judged on their source's clock by the station's own
+    /// bridge (a broker's bearings, which `foxhunt publish` decoded): each passes at once, in
+    /// whatever order the broker delivers them (a bearing redelivered after an outage comes
+    /// after later ones), instead of waiting for its source's next record ([`super::clock`]).
+    pub judged_clocks: bool,
 }
 
 impl Default for BridgeConfig {
@@ -82,6 +87,7 @@ impl Default for BridgeConfig {
             fix_span_ms: 5000,
             yaw_gate_deg_s: Some(2.0),
             yaw_window_ms: 1000,
+            judged_clocks: false,
         }
     }
 }

@@ -349,7 +349,15 @@ pub struct LiveEnd {
 /// (why there is no fix). What was decoded, and whether the last update had a fix.
 pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd, Stop> {
     o.locate.check()?;
-    let mut dec = Decoder::new(BridgeConfig::default(), o.keep_track);
+    // A broker's bearings were judged on their stations' clocks where they were decoded
+    // (`foxhunt publish`): they pass as they come, each channel's put in time order before
+    // its solve ([`Pending::next`]).
+    let broker = matches!(o.source, LiveSource::Mqtt { .. });
+    let config = BridgeConfig {
+        judged_clocks: broker,
+        ..BridgeConfig::default()
+    };
+    let mut dec = Decoder::new(config, o.keep_track);
     // Several KrakenSDRs: each URL an input, so a unit without a STATION_ID is a station of
     // its own.
     if let LiveSource::Kraken(urls) = &o.source

@@ -97,7 +97,9 @@ impl Pending {
 
     /// The longest-waiting channel's bearings and its neighbours' within `width_mhz` (a
     /// channel may hold several keys: the fix groups them as it would the whole capture's),
-    /// those channels no longer pending; `None` when nothing waits.
+    /// in time order (by station within a time, else as they came), those channels no longer
+    /// pending; `None` when nothing waits. A broker delivers a bearing held up by an outage
+    /// after later ones; in time order the fix is the same whatever the delivery's order.
     pub fn next(&mut self, obs: &[Observation], width_mhz: f32) -> Option<Vec<Observation>> {
         let (&key, _) = self.since.iter().min_by_key(|&(k, t)| (*t, *k))?;
         let near = |k: i64| {
@@ -105,12 +107,17 @@ impl Pending {
                 || (k >= 0 && key >= 0 && (k - key).abs() as f64 <= f64::from(width_mhz) * 1000.0)
         };
         self.since.retain(|&k, _| !near(k));
-        Some(
-            obs.iter()
-                .filter(|o| near(channel_key(o)))
-                .copied()
-                .collect(),
-        )
+        let mut one: Vec<Observation> = obs
+            .iter()
+            .filter(|o| near(channel_key(o)))
+            .copied()
+            .collect();
+        one.sort_by(|a, b| {
+            a.time_s
+                .total_cmp(&b.time_s)
+                .then(a.station.cmp(&b.station))
+        });
+        Some(one)
     }
 }
 
@@ -164,15 +171,16 @@ mod tests {
         let later = t0 + std::time::Duration::from_millis(5);
         let v = [
             obs(433.92, 0.0),
-            obs(145.5, 1.0),
-            obs(433.921, 2.0),
             obs(145.5, 3.0),
+            obs(433.921, 2.0),
+            obs(145.5, 1.0),
         ];
         let mut p = Pending::default();
         p.arrived(&v[1..2], t0);
         p.arrived(&v[..1], later);
         p.arrived(&v[2..], later);
-        // 145.500 waited longest; then 433.920 with 433.921, one channel 1 kHz wide apart.
+        // 145.500 waited longest (its bearings put in time order); then 433.920 with 433.921,
+        // 1 kHz apart in a 50 kHz channel.
         let first = p.next(&v, 0.05).expect("145.5");
         assert_eq!(
             first.iter().map(|o| o.time_s).collect::<Vec<_>>(),
