@@ -17,7 +17,7 @@
 //! unit running foxhunt's firmware: every line (`--json`: `unit`, also when there is no fix
 //! yet) carries what the unit said ([`crate::inputs::unit`]).
 
-use super::window::{ChannelWindow, Pending, channel_key};
+use super::window::{ChannelWindow, Pending};
 use crate::estimate::options::LocateOptions;
 use crate::estimate::pool;
 use crate::guidance::guide::Guide;
@@ -306,27 +306,27 @@ impl LiveLine {
     }
 }
 
-/// Each channel's bearings (`channels`, of the observations `d` holds) located on its own,
+/// Each channel's bearings (`channels`, by key, of the observations `d` holds) located on its own,
 /// side by side on the thread pool, each with the rest of `d` and a copy of `guide` (a
 /// channel's fix does not depend on what else its worker fuses: the same on one worker as
 /// on a shard); `d` is left as it came.
 fn each_channel(
     d: &mut Decoded,
-    channels: Vec<Vec<Observation>>,
+    channels: Vec<(i64, Vec<Observation>)>,
     o: &LocateOptions,
     guide: &Guide,
-) -> Vec<Result<Located, Box<NoFix>>> {
+) -> Vec<(i64, Result<Located, Box<NoFix>>)> {
     let all = std::mem::take(&mut d.observations);
     let rest = &*d;
     let located = pool().install(|| {
         channels
             .into_par_iter()
-            .map(|observations| {
+            .map(|(key, observations)| {
                 let one = Decoded {
                     observations,
                     ..rest.clone()
                 };
-                locate_guided(&one, o, &mut guide.clone())
+                (key, locate_guided(&one, o, &mut guide.clone()))
             })
             .collect()
     });
@@ -387,8 +387,8 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
     };
     let mut reported = (0u64, 0u32);
     let mut ended = false;
-    // Each channel's last update's outcome (why it had no fix; `None`: it had one), by the
-    // channel of its first bearing; empty until one is printed.
+    // Each channel's last update's outcome (why it had no fix; `None`: it had one), by its
+    // key; empty until one is printed.
     let mut last: BTreeMap<i64, Option<String>> = BTreeMap::new();
     let mut updates = 0u64;
     // A broker's channels waiting for a solve, and the bearings already counted in them.
@@ -438,16 +438,13 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
         }
         reported = n;
         dec.snapshot();
-        let keys: Vec<i64> = channels
-            .iter()
-            .map(|c| c.first().map_or(-1, channel_key))
-            .collect();
-        let located = if channels.is_empty() {
-            vec![locate_guided(&dec.decoded, &o.locate, guide)]
+        // Each update's channel key (-1: every channel at once).
+        let located: Vec<(i64, _)> = if channels.is_empty() {
+            vec![(-1, locate_guided(&dec.decoded, &o.locate, guide))]
         } else {
             each_channel(&mut dec.decoded, channels, &o.locate, guide)
         };
-        for (k, located) in located.into_iter().enumerate() {
+        for (key, located) in located {
             updates += 1;
             // TAK missing an update is no reason to stop following the emitter: the next
             // update sends the whole picture again.
@@ -472,10 +469,7 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
             if let Some(h) = &o.history {
                 h.keep_update(&located);
             }
-            last.insert(
-                keys.get(k).copied().unwrap_or(-1),
-                located.err().map(|e| e.error),
-            );
+            last.insert(key, located.err().map(|e| e.error));
             out.line(&text)?;
             out.flush()?;
         }

@@ -22,7 +22,7 @@ pub struct ChannelWindow {
 
 /// A bearing's channel as the topics name it ([`crate::inputs::mqtt::channel_name`]): its
 /// frequency to the kHz.
-pub fn channel_key(o: &Observation) -> i64 {
+fn channel_key(o: &Observation) -> i64 {
     match o.freq_mhz {
         Some(f) if f > 0.0 && f.is_finite() => (f64::from(f) * 1000.0).round() as i64,
         _ => -1,
@@ -95,12 +95,13 @@ impl Pending {
         self.since.is_empty()
     }
 
-    /// The longest-waiting channel's bearings and its neighbours' within `width_mhz` (a
+    /// The longest-waiting channel's key and its bearings with its neighbours' within
+    /// `width_mhz` (a
     /// channel may hold several keys: the fix groups them as it would the whole capture's),
     /// in time order (by station within a time, else as they came), those channels no longer
     /// pending; `None` when nothing waits. A broker delivers a bearing held up by an outage
     /// after later ones; in time order the fix is the same whatever the delivery's order.
-    pub fn next(&mut self, obs: &[Observation], width_mhz: f32) -> Option<Vec<Observation>> {
+    pub fn next(&mut self, obs: &[Observation], width_mhz: f32) -> Option<(i64, Vec<Observation>)> {
         let (&key, _) = self.since.iter().min_by_key(|&(k, t)| (*t, *k))?;
         let near = |k: i64| {
             k == key
@@ -117,7 +118,7 @@ impl Pending {
                 .total_cmp(&b.time_s)
                 .then(a.station.cmp(&b.station))
         });
-        Some(one)
+        Some((key, one))
     }
 }
 
@@ -181,12 +182,14 @@ mod tests {
         p.arrived(&v[2..], later);
         // 145.500 waited longest (its bearings put in time order); then 433.920 with 433.921,
         // 1 kHz apart in a 50 kHz channel.
-        let first = p.next(&v, 0.05).expect("145.5");
+        let (key, first) = p.next(&v, 0.05).expect("145.5");
+        assert_eq!(key, 145_500);
         assert_eq!(
             first.iter().map(|o| o.time_s).collect::<Vec<_>>(),
             [1.0, 3.0]
         );
-        let second = p.next(&v, 0.05).expect("433.92");
+        let (key, second) = p.next(&v, 0.05).expect("433.92");
+        assert_eq!(key, 433_920);
         assert_eq!(
             second.iter().map(|o| o.time_s).collect::<Vec<_>>(),
             [0.0, 2.0]
