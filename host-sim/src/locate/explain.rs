@@ -167,6 +167,10 @@ pub fn explain(e: Error, bearings: &[Bearing]) -> String {
              singular); drive across the line of bearing"
             .into(),
         Error::BehindVehicle => "the bearings meet behind the vehicle: no emitter there".into(),
+        Error::NotConverged => "the method did not settle on a point the bearings agree on (its \
+             estimate lies outside their own 95 % likelihood region, or no crossing most of \
+             them meet at was found); ml-robust fits them directly"
+            .into(),
         e => format!("no fix: {e}"),
     }
 }

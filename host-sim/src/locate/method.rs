@@ -110,7 +110,7 @@ pub(crate) fn located_by(
     let mut s = s.map_err(|e| explain(e, &bearings))?;
     if !estimated && o.method != Method::Unit {
         // With the noise given the claim is chi-square's, still no tighter than the bound.
-        claim(&mut s, &bearings).map_err(|e| explain(e, &bearings))?;
+        claim(o.method, &mut s, &bearings).map_err(|e| explain(e, &bearings))?;
     }
     // Chi-square with the stated noise, 2 F(2, dof) with an estimated one (the fix says which).
     let ellipse = match unit_ellipse {
