@@ -121,6 +121,9 @@ pub struct Priors {
     /// The widest noise ceiling of the stations' stated device classes, radians (`None`: no
     /// class stated, the configuration's holds).
     pub ceiling: Option<f32>,
+    /// Whether every station's noise is stated (a stations file's, or its device class's):
+    /// [`LocateConfig::noise_stated`].
+    pub noise_stated: bool,
     /// Station index to its direction-dependent error's prior and its antenna's front where
     /// it stands still (theta, radians); `None`: not modelled.
     pub direction: Vec<Option<(DirectionPrior, f32)>>,
@@ -171,10 +174,11 @@ impl Priors {
         }
     }
 
-    /// `config` with the stated classes' ceiling, if any.
+    /// `config` with the stated classes' ceiling, if any, and whether the noise is stated.
     pub fn config(&self, config: &LocateConfig) -> LocateConfig {
         LocateConfig {
             max_sigma: self.ceiling.unwrap_or(config.max_sigma),
+            noise_stated: self.noise_stated || config.noise_stated,
             ..*config
         }
     }

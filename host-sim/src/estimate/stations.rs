@@ -177,6 +177,7 @@ pub fn station_setup<'a>(
             setup.priors.ceiling = Some(widest);
         }
     }
+    setup.priors.noise_stated = !setup.noise.is_empty() && setup.noise.iter().all(Option::is_some);
     setup
 }
 

@@ -32,6 +32,11 @@ pub struct LocateConfig {
     /// A cluster is a source only if luck would line up as many bearings with a chance below
     /// this.
     pub significance: f32,
+    /// Whether the bearings' sigmas are their stations' stated noise (a stations file's, or
+    /// its device class's): the chance test then judges a cluster's agreement at no less than
+    /// that noise, so that a handful of noisy bearings whose scatter happened to be small is
+    /// not passed for it (the passed ones' ellipses were too small with their scatter).
+    pub noise_stated: bool,
     /// With [`NoiseModel::Known`], a residual chi-square p-value below this marks the unit
     /// noisier than it claims.
     pub consistency: f32,
@@ -53,6 +58,7 @@ impl Default for LocateConfig {
             confidence: 0.95,
             max_sigma: crate::fix::device::UNSTATED.ceiling,
             significance: 0.01,
+            noise_stated: false,
             consistency: 1e-3,
             max_sources_per_channel: 4,
             min_bearings: 3,

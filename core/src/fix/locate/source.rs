@@ -347,7 +347,13 @@ fn attempt<R: Rng + ?Sized>(
     let members = scratch.get(..kept).ok_or(NoEmitter::TooFew)?;
     let median = median_sigma(members);
     let estimated_sigma = refined.scale * median;
-    let chance = refined_chance(&refined, &consensus, window, estimated_sigma)?;
+    // Agreement judged at no less than a stated noise: luck in the scatter is no evidence.
+    let judged_sigma = if config.noise_stated {
+        estimated_sigma.max(median)
+    } else {
+        estimated_sigma
+    };
+    let chance = refined_chance(&refined, &consensus, window, judged_sigma)?;
     if chance > config.significance {
         return Err(NoEmitter::NoConsensus);
     }
@@ -477,7 +483,8 @@ fn refine(
 }
 
 /// Significance again, with the refined set and its own agreement width: how likely luck
-/// lines up as many bearings within the trimming cut (at the estimated noise) of a point.
+/// lines up as many bearings within the trimming cut (at the noise `estimated_sigma`) of a
+/// point.
 fn refined_chance(
     refined: &RobustFix,
     consensus: &Consensus,

@@ -256,7 +256,8 @@ pub struct FieldDrive {
 impl FieldDrive {
     /// What its stations file says of each station (as `locate --stations` reads it): the
     /// drive's own prior where it states one, else `default`; each station's unmodelled error
-    /// (its own, else its class's) and the stated classes' ceiling.
+    /// (its own, else its class's), the stated classes' ceiling, and whether every station's
+    /// class states its noise.
     pub fn priors(&self, default: BiasPrior) -> Priors {
         let classes = self.stations.iter().filter_map(|s| s.class);
         Priors {
@@ -268,6 +269,11 @@ impl FieldDrive {
                 .map(|s| Some(s.unmodelled.unwrap_or(class_noise(s.class).unmodelled)))
                 .collect(),
             ceiling: classes.map(|c| c.noise().ceiling).reduce(f32::max),
+            noise_stated: !self.stations.is_empty()
+                && self
+                    .stations
+                    .iter()
+                    .all(|s| class_noise(s.class).noise.is_some()),
             ..Priors::default()
         }
     }
