@@ -96,14 +96,20 @@ pub(super) fn check_ambiguity(
     if !(source.offset_check.z.abs() <= CONTRADICTED_Z && prior.is_free()) {
         return Ok(());
     }
-    let circle = bias::offset_circle(
-        members,
-        stations,
-        main,
-        source.position,
-        solver_at(source, members, config),
-    )
-    .map_err(NoEmitter::Geometry)?;
+    // Each step's deviance is needed to well within the rival's gap, not its position to the
+    // fix's millimetre: a step stops at a fiftieth of the fix's smallest sd, where the
+    // deviance it leaves is under 0.0004 (the fix's own solve keeps the configured tolerance).
+    let (_, minor) = crate::linalg::eigen2(&source.covariance)
+        .map_or((0.0, 0.0), |(a, b, _)| (a.max(b), a.min(b)));
+    let solver = BiasedOptions {
+        tolerance_m: config
+            .solver
+            .tolerance_m
+            .max(CIRCLE_TOLERANCE_SD * libm::sqrtf(minor.max(0.0))),
+        ..solver_at(source, members, config)
+    };
+    let circle = bias::offset_circle(members, stations, main, source.position, solver)
+        .map_err(NoEmitter::Geometry)?;
     // Deviances of correlated bearings count tau times what they hold.
     source.offset_check.ambiguous = circle.rival(
         source.bias,
@@ -112,6 +118,9 @@ pub(super) fn check_ambiguity(
     );
     Ok(())
 }
+
+/// How closely each step of the ambiguity check's circle is solved, in the fix's smallest sd.
+const CIRCLE_TOLERANCE_SD: f32 = 0.02;
 
 /// Past the prior: the data put the main station's offset `z` of its predicted sds from the
 /// prior's mean (`first`: that fit and its bearings' count). Its profile round the whole
