@@ -761,10 +761,11 @@ fn a_noisy_class_is_a_fix_with_enough_bearings_and_pure_noise_is_not() {
     // A unit of the indoor-aoa class (ceiling 25 degrees) with 15 and 20 degree noise along
     // the U, 10 to 1000 bearings, 200 runs a cell: a fix once enough bearings back it (the
     // chance check is what asks for enough: a cluster of a few 20 degree bearings is what
-    // luck gives), its ellipse F-scaled; with fewer, no fix (at most 5 %). Beside it the same class's pure noise, bearings
-    // uniform on the circle or the unit's own boresight (straight ahead, a unit locked on
-    // nothing) with its noise: no emitter in >= 95 % of runs at every n. 200 runs give a
-    // coverage to +-1.5 %: the bar 90-98 % is three sds either side of 95 %.
+    // luck gives), its ellipse F-scaled; with fewer, no fix (at most 5 %). Beside it the same
+    // class's pure noise, bearings uniform on the circle or the unit's own boresight
+    // (straight ahead, a unit locked on nothing) with its noise: no emitter in >= 95 % of
+    // runs at every n. 200 runs give a coverage to +-1.5 %: the bar 90-98 % is three sds
+    // either side of 95 %.
     const CELL: usize = 200;
     let mut table = Vec::new();
     for noise in [15.0f32, 20.0] {

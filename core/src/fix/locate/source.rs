@@ -99,8 +99,7 @@ pub(super) fn check_ambiguity(
     // Each step's deviance is needed to well within the rival's gap, not its position to the
     // fix's millimetre: a step stops at a fiftieth of the fix's smallest sd, where the
     // deviance it leaves is under 0.0004 (the fix's own solve keeps the configured tolerance).
-    let (_, minor) = crate::linalg::eigen2(&source.covariance)
-        .map_or((0.0, 0.0), |(a, b, _)| (a.max(b), a.min(b)));
+    let minor = crate::linalg::eigen2(&source.covariance).map_or(0.0, |(a, b, _)| a.min(b));
     let solver = BiasedOptions {
         tolerance_m: config
             .solver
