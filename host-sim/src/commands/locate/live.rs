@@ -306,9 +306,9 @@ impl LiveLine {
     }
 }
 
-/// Each channel's bearings (`channels`, by key, of the observations `d` holds) located on its own,
-/// side by side on the thread pool, each with the rest of `d` and a copy of `guide` (a
-/// channel's fix does not depend on what else its worker fuses: the same on one worker as
+/// Each channel's bearings (`channels`, by key, of the observations `d` holds) located on
+/// its own, side by side on the thread pool, each with the rest of `d` and a copy of `guide`
+/// (a channel's fix does not depend on what else its worker fuses: the same on one worker as
 /// on a shard); `d` is left as it came.
 fn each_channel(
     d: &mut Decoded,

@@ -96,11 +96,11 @@ impl Pending {
     }
 
     /// The longest-waiting channel's key and its bearings with its neighbours' within
-    /// `width_mhz` (a
-    /// channel may hold several keys: the fix groups them as it would the whole capture's),
-    /// in time order (by station within a time, else as they came), those channels no longer
-    /// pending; `None` when nothing waits. A broker delivers a bearing held up by an outage
-    /// after later ones; in time order the fix is the same whatever the delivery's order.
+    /// `width_mhz` (a channel may hold several keys: the fix groups them as it would the whole
+    /// capture's), in time order (by station within a time, else as they came), those
+    /// channels no longer pending; `None` when nothing waits. A broker delivers a bearing held
+    /// up by an outage after later ones; in time order the fix is the same whatever the
+    /// delivery's order.
     pub fn next(&mut self, obs: &[Observation], width_mhz: f32) -> Option<(i64, Vec<Observation>)> {
         let (&key, _) = self.since.iter().min_by_key(|&(k, t)| (*t, *k))?;
         let near = |k: i64| {
