@@ -348,6 +348,86 @@ fn a_live_line_is_tracked_as_it_arrives_and_ends_where_the_recording_does() {
 }
 
 #[test]
+fn a_live_line_of_anchors_rssi_is_tracked_as_the_recording_is() {
+    let (znp, anchors) = (capture("rssi-sim.znp"), capture("rssi-sim.anchors.toml"));
+    let recorded = json(&foxhunt(&["track", &znp, "--anchors", &anchors, "--json"]));
+    let points = recorded["tracks"][0]["points"].as_array().expect("points");
+    let bytes = std::fs::read(&znp).expect("capture");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .args(["track", "-", "--anchors", &anchors, "--json"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run foxhunt");
+    let rx = common::line_reader(&mut child);
+    let mut stdin = child.stdin.take().expect("stdin");
+    let half = bytes.len() / 2;
+    stdin.write_all(&bytes[..half]).expect("first half");
+    stdin.flush().expect("flush");
+    // Epochs are tracked while the line is open.
+    let first = rx
+        .recv_timeout(Duration::from_secs(60))
+        .expect("an update before the line closed");
+    let mut lines = vec![first];
+    stdin.write_all(&bytes[half..]).expect("second half");
+    drop(stdin);
+    lines.extend(rx.iter());
+    assert!(child.wait().expect("wait").success());
+    let live: Vec<serde_json::Value> = lines
+        .iter()
+        .map(|l| serde_json::from_str(l).expect("one JSON object per line"))
+        .collect();
+    println!(
+        "live {} epochs, recorded {}; first live {}, first recorded {}",
+        live.len(),
+        points.len(),
+        live[0],
+        points[0]
+    );
+    // The pause between the halves closes the open epoch early (the line went quiet): one
+    // epoch more at most. Up to it the points are the recording's to the last digit.
+    assert!(
+        (points.len()..=points.len() + 1).contains(&live.len()),
+        "{} live epochs against {} recorded",
+        live.len(),
+        points.len()
+    );
+    let same = live.iter().zip(points).take_while(|(a, b)| {
+        [
+            "east_m",
+            "north_m",
+            "vel_e_mps",
+            "vel_n_mps",
+            "ellipse",
+            "p_moving",
+        ]
+        .iter()
+        .all(|k| a[k] == b[k])
+    });
+    let same = same.count();
+    println!("the first {same} points are the recording's");
+    // Frames are of one size, so the half of the bytes is about the half of the epochs: an
+    // early close there (two epochs of slack for where in an epoch the cut falls) is the only
+    // place the points may part.
+    assert!(
+        same == points.len() || same >= points.len() / 2 - 2,
+        "only the first {same} points agree"
+    );
+    for p in &live {
+        assert!(p.get("lat").is_none() && p["freq_mhz"].is_null(), "{p}");
+        let (x, y) = (
+            p["east_m"].as_f64().expect("east"),
+            p["north_m"].as_f64().expect("north"),
+        );
+        assert!(
+            (-0.5..=10.5).contains(&x) && (-0.5..=10.5).contains(&y),
+            "{p}"
+        );
+    }
+}
+
+#[test]
 fn a_live_line_without_bearings_and_live_files_are_refused() {
     let run = |args: &[&str], input: &[u8]| {
         let mut child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
@@ -374,10 +454,30 @@ fn a_live_line_without_bearings_and_live_files_are_refused() {
         "{err}"
     );
     assert!(out.stdout.is_empty());
-    // Files are written from recordings; no CAPTURE at all is a usage error.
+    // A line of MT frames from no listed anchor: nothing to track, exit 1.
+    let anchors = capture("rssi-sim.anchors.toml");
+    let out = run(
+        &["track", "-", "--anchors", &anchors],
+        b"\xfe\x00\x00\x00\x00",
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("no RSSI reading") && err.trim().lines().count() == 1,
+        "{err}"
+    );
+    // Files are written from recordings, RSSI comes on a byte line; no CAPTURE at all is a
+    // usage error.
     for args in [
         vec!["track", "-", "--geojson", "x.geojson"],
-        vec!["track", "-", "--anchors", "a.toml"],
+        vec!["track", "-", "--anchors", &anchors, "--svg", "x.svg"],
+        vec![
+            "track",
+            "--kraken",
+            "http://127.0.0.1:9",
+            "--anchors",
+            &anchors,
+        ],
         vec!["track"],
         vec!["track", "-", "--kraken", "http://127.0.0.1:9"],
     ] {

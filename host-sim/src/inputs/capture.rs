@@ -389,3 +389,24 @@ impl Decoded {
         self.bearings().map(|b| Bearing { sigma, ..*b }).collect()
     }
 }
+
+/// What a live line's chunks are fed to: the bearings' decoder, or a decoder that reads an
+/// anchors file's RSSI from the same bytes beside it.
+pub trait LineFeed {
+    /// The bearings' decoder, for what only it reads (records, sentences, inputs).
+    fn bearings(&mut self) -> &mut Decoder;
+    /// The line's bytes as they arrive.
+    fn feed(&mut self, bytes: &[u8]) {
+        self.bearings().feed(bytes);
+    }
+    /// The line went quiet: frames waiting on look-ahead are settled.
+    fn idle(&mut self) {
+        self.bearings().idle();
+    }
+}
+
+impl LineFeed for Decoder {
+    fn bearings(&mut self) -> &mut Decoder {
+        self
+    }
+}

@@ -3,7 +3,7 @@
 //! RSSI of an anchors file's anchors from the ZigBee coordinator's MT frames, each reading
 //! timed by the GPS fix before it when the capture has fixes.
 
-use crate::inputs::capture::{Decoded, Decoder};
+use crate::inputs::capture::{Decoded, Decoder, LineFeed};
 use crate::track::indoor::{AnchorsFile, MAX_ANCHORS};
 use foxhunt_bridge::Frame;
 use foxhunt_bridge::bridge::{BridgeConfig, Event, Receiver};
@@ -115,6 +115,17 @@ impl TrackDecoder {
         }
     }
 
+    /// The RSSI readings decoded since the last call, taken out (a line that never ends keeps
+    /// none it handed on).
+    pub fn take_readings(&mut self) -> Vec<Reading> {
+        std::mem::take(&mut self.readings)
+    }
+
+    /// Frames from addresses the anchors file does not list, and those addresses.
+    pub fn unknown(&self) -> (u32, &BTreeSet<u16>) {
+        (self.unknown.1, &self.unknown.0)
+    }
+
     /// What has been decoded so far (the bearings' frame and counters brought up to date).
     pub fn snapshot(&mut self) -> Measured {
         self.bearings.snapshot();
@@ -148,6 +159,18 @@ impl TrackDecoder {
             unknown: (self.unknown.1, self.unknown.0),
             rssi_frames: self.frames,
         }
+    }
+}
+
+impl LineFeed for TrackDecoder {
+    fn bearings(&mut self) -> &mut Decoder {
+        &mut self.bearings
+    }
+    fn feed(&mut self, bytes: &[u8]) {
+        TrackDecoder::feed(self, bytes);
+    }
+    fn idle(&mut self) {
+        TrackDecoder::idle(self);
     }
 }
 

@@ -70,7 +70,7 @@ impl Tracks {
 
 /// The settings of one channel: an offset for each of its DF sources, RSSI terms as the
 /// anchors file says, the room and a start region for RSSI alone.
-fn settings(
+pub(crate) fn settings(
     c: &Channel,
     anchors: Option<&AnchorsFile>,
     o: &Options,

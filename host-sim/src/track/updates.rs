@@ -4,9 +4,9 @@
 //! their time (after the GPS fix before them) or, in a capture without GPS, one reading per
 //! anchor per epoch as the indoor tracker has always taken them.
 
-use crate::track::capture::Measured;
+use crate::track::capture::{Measured, Reading};
 use crate::track::indoor::AnchorsFile;
-use crate::track::moving::{K, Update};
+use crate::track::moving::Update;
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;
 use foxhunt_core::fix::channel::{NO_CHANNEL, group};
@@ -113,12 +113,6 @@ pub fn channels(
     {
         let at = anchor_positions(file, m.decoded.frame.as_ref())?;
         let timed = m.readings.iter().all(|r| r.after_fix_ms.is_some());
-        let levels = |r: &crate::track::capture::Reading| Level {
-            anchor: at[r.anchor],
-            dbm: r.dbm,
-            sigma_db: file.sigma_db,
-            law: file.law(r.anchor),
-        };
         match (timed, out.len()) {
             (true, 1) => {
                 let first = m.decoded.first_ms.unwrap_or(0);
@@ -127,7 +121,7 @@ pub fn channels(
                     .iter()
                     .map(|r| {
                         let ms = r.after_fix_ms.unwrap_or(first);
-                        ((ms - first) as f32 / 1000.0, levels(r))
+                        ((ms - first) as f32 / 1000.0, level(file, &at, r))
                     })
                     .collect();
                 let c = &mut out[0];
@@ -135,18 +129,10 @@ pub fn channels(
                 c.rssi = true;
             }
             (true, _) | (false, 0) => {
-                let epochs = anchor_epochs(&m.readings, file.anchor.len());
-                let mut updates = Vec::with_capacity(epochs.len());
-                for (k, e) in epochs.iter().enumerate() {
-                    let mut epoch = Epoch::<K>::new(if k == 0 { 0.0 } else { file.dt_s });
-                    for r in e {
-                        let _ = epoch.push_level(levels(r));
-                    }
-                    updates.push(Update {
-                        t_s: k as f32 * file.dt_s,
-                        epoch,
-                    });
-                }
+                let mut epochs = AnchorEpochs::new(file, at);
+                let mut updates: Vec<Update> =
+                    m.readings.iter().filter_map(|r| epochs.push(*r)).collect();
+                updates.extend(epochs.close());
                 out.push(Channel {
                     freq_mhz: None,
                     updates,
@@ -168,7 +154,7 @@ pub fn channels(
 }
 
 /// Bearings (in time order) as updates: each update the bearings within [`WINDOW_S`] of its
-/// first, at most [`K`].
+/// first, at most [`K`](crate::track::moving::K).
 pub fn bearing_updates(obs: &[Observation]) -> Vec<Update> {
     let mut window = Window::default();
     let mut out: Vec<Update> = obs.iter().filter_map(|o| window.push(*o)).collect();
@@ -250,35 +236,76 @@ fn merge(updates: &[Update], levels: &[(f32, Level)]) -> Vec<Update> {
     out
 }
 
-/// Readings without times grouped one per anchor: a second reading from an anchor already
-/// heard starts the next epoch (unit-free, whatever the receiver's timestamp ticks are).
-pub fn anchor_epochs(
-    readings: &[crate::track::capture::Reading],
-    anchors: usize,
-) -> Vec<Vec<crate::track::capture::Reading>> {
-    let mut out = Vec::new();
-    let mut current: Vec<crate::track::capture::Reading> = Vec::new();
-    let mut heard = vec![false; anchors];
-    for r in readings {
-        if heard.get(r.anchor).copied().unwrap_or(false) {
-            out.push(std::mem::take(&mut current));
-            heard.iter_mut().for_each(|h| *h = false);
+/// Reading `r` of an anchor at `at` (by anchor index) as the tracker's measurement.
+fn level(file: &AnchorsFile, at: &[[f32; 2]], r: &Reading) -> Level {
+    Level {
+        anchor: at.get(r.anchor).copied().unwrap_or_default(),
+        dbm: r.dbm,
+        sigma_db: file.sigma_db,
+        law: file.law(r.anchor),
+    }
+}
+
+/// Readings without times grouped into updates as they arrive, one reading per anchor: a
+/// second reading from an anchor already heard closes the epoch and opens the next
+/// (unit-free, whatever the receiver's timestamp ticks are); epochs are the anchors file's
+/// `dt_s` apart, the first at 0.
+#[derive(Debug, Clone)]
+pub struct AnchorEpochs {
+    file: AnchorsFile,
+    /// Each anchor's position in the track's frame, by index.
+    at: Vec<[f32; 2]>,
+    open: Option<Update>,
+    heard: Vec<bool>,
+    /// Epochs opened so far.
+    count: usize,
+}
+
+impl AnchorEpochs {
+    /// Epochs of `file`'s anchors, standing at `at` ([`anchor_positions`]).
+    pub fn new(file: &AnchorsFile, at: Vec<[f32; 2]>) -> Self {
+        Self {
+            heard: vec![false; file.anchor.len()],
+            file: file.clone(),
+            at,
+            open: None,
+            count: 0,
         }
-        if let Some(h) = heard.get_mut(r.anchor) {
+    }
+
+    /// Add reading `r`; the update it closed, if any.
+    pub fn push(&mut self, r: Reading) -> Option<Update> {
+        let repeats = self.heard.get(r.anchor).copied().unwrap_or(false);
+        let closed = if repeats || self.open.as_ref().is_some_and(|u| u.epoch.is_full()) {
+            self.close()
+        } else {
+            None
+        };
+        let (k, dt) = (self.count, self.file.dt_s);
+        let open = self.open.get_or_insert_with(|| Update {
+            t_s: k as f32 * dt,
+            epoch: Epoch::new(if k == 0 { 0.0 } else { dt }),
+        });
+        let _ = open.epoch.push_level(level(&self.file, &self.at, &r));
+        if let Some(h) = self.heard.get_mut(r.anchor) {
             *h = true;
         }
-        current.push(*r);
+        closed
     }
-    if !current.is_empty() {
-        out.push(current);
+
+    /// Close the open epoch (the line went quiet, or ended).
+    pub fn close(&mut self) -> Option<Update> {
+        let u = self.open.take()?;
+        self.heard.iter_mut().for_each(|h| *h = false);
+        self.count += 1;
+        Some(u)
     }
-    out
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::track::capture::Reading;
+    use crate::track::moving::K;
     use foxhunt_core::model::bearing::Bearing;
 
     fn at(t: f32) -> Observation {
@@ -314,8 +341,20 @@ mod tests {
             dbm: -60.0,
             after_fix_ms: None,
         };
-        let e = anchor_epochs(&[r(0), r(1), r(2), r(1), r(0), r(0)], 3);
-        let sizes: Vec<usize> = e.iter().map(Vec::len).collect();
+        let file = AnchorsFile::from_toml(
+            "anchor = [{ addr = 1, x = 0, y = 0 }, { addr = 2, x = 5, y = 0 }, \
+             { addr = 3, x = 0, y = 5 }]",
+        )
+        .unwrap();
+        let mut epochs = AnchorEpochs::new(&file, vec![[0.0, 0.0], [5.0, 0.0], [0.0, 5.0]]);
+        let mut e: Vec<Update> = [r(0), r(1), r(2), r(1), r(0), r(0)]
+            .into_iter()
+            .filter_map(|r| epochs.push(r))
+            .collect();
+        e.extend(epochs.close());
+        let sizes: Vec<usize> = e.iter().map(|u| u.epoch.levels().len()).collect();
         assert_eq!(sizes, [3, 2, 1]);
+        let times: Vec<(f32, f32)> = e.iter().map(|u| (u.t_s, u.epoch.dt)).collect();
+        assert_eq!(times, [(0.0, 0.0), (0.5, 0.5), (1.0, 0.5)], "dt_s apart");
     }
 }

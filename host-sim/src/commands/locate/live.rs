@@ -21,7 +21,7 @@ use super::window::{ChannelWindow, Pending};
 use crate::estimate::options::LocateOptions;
 use crate::estimate::pool;
 use crate::guidance::guide::Guide;
-use crate::inputs::capture::{Decoded, Decoder};
+use crate::inputs::capture::{Decoded, Decoder, LineFeed};
 use crate::inputs::gpsd::{GpsdAddress, Report, Watch};
 use crate::inputs::kraken_http::KrakenUrl;
 use crate::inputs::mqtt::{Handed, MqttUrl, Shard, Subscription, channel_name};
@@ -255,7 +255,7 @@ impl LiveLine {
     /// is already waiting (nothing waiting is not the line being idle).
     pub fn take(
         &mut self,
-        dec: &mut Decoder,
+        dec: &mut impl LineFeed,
         quiet_exit: Option<Duration>,
         block: bool,
     ) -> Result<bool, Stop> {
@@ -276,18 +276,18 @@ impl LiveLine {
                 }
                 Ok(Chunk::From(i, b)) => {
                     self.last_byte = Instant::now();
-                    dec.switch_input(i);
+                    dec.bearings().switch_input(i);
                     dec.feed(&b);
                 }
                 Ok(Chunk::Records(v)) => {
                     self.last_byte = Instant::now();
                     for r in v {
-                        dec.push_frame(&Frame::KrakenXml(r));
+                        dec.bearings().push_frame(&Frame::KrakenXml(r));
                     }
                 }
                 Ok(Chunk::Sentences(v)) => {
                     for s in &v {
-                        dec.push_sentence(s);
+                        dec.bearings().push_sentence(s);
                     }
                 }
                 Ok(Chunk::End) | Err(mpsc::RecvTimeoutError::Disconnected) => return Ok(true),

@@ -10,14 +10,19 @@
 use super::Args;
 use crate::commands::locate::live::{LiveSource, reader};
 use crate::estimate::stations::station_setup;
-use crate::inputs::capture::Decoder;
+use crate::inputs::capture::{Decoder, LineFeed};
 use crate::outputs::cot::{self, CotSender};
 use crate::outputs::terminal::{Out, Outcome, Stop, note};
 use crate::outputs::tracks;
-use crate::track::live::{Dropped, LIVE_CHANNELS, LIVE_SOURCES, LiveChannels, Ready};
-use crate::track::moving::Settings;
-use crate::track::tracks::{Options, Tracks};
+use crate::track::capture::TrackDecoder;
+use crate::track::indoor::AnchorsFile;
+use crate::track::live::{Dropped, LIVE_CHANNELS, LIVE_SOURCES, LiveChannels, LiveTracker, Ready};
+use crate::track::moving::{Settings, TrackPoint, Update};
+use crate::track::tracks::{Options, Tracks, settings};
+use crate::track::updates::{AnchorEpochs, Channel, anchor_positions};
 use foxhunt_bridge::BridgeConfig;
+use foxhunt_bridge::geo::LocalFrame;
+use foxhunt_bridge::nmea::LatLon;
 use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::track::{Layout, Motion};
 use std::time::Duration;
@@ -31,8 +36,6 @@ pub fn run(
     a: &Args,
     out: &mut Out,
 ) -> Outcome {
-    let json = a.json;
-    let mut tak = a.cot.clone().map(CotSender::new);
     let mut dec = Decoder::new(BridgeConfig::default(), false);
     if let LiveSource::Kraken(urls) = &source
         && urls.len() > 1
@@ -57,9 +60,8 @@ pub fn run(
     let mut live = LiveChannels::new(o.width_mhz, settings, unheard(o, fallback));
     let mut line = reader(&source, None, None)?;
     let mut heard = 0usize;
-    let mut printed = 0usize;
+    let mut points = Points::new(a);
     let mut dropped = [false; 2];
-    let mut failed: Option<String> = None;
     let mut ended = false;
     while !ended {
         ended = line.take(&mut dec, quiet_exit, true)?;
@@ -113,55 +115,181 @@ pub fn run(
         };
         let prior_of = |s: u16| setup.priors.of(usize::from(s));
         for r in ready {
-            match live.step(r, &prior_of) {
-                Ok(p) => {
-                    if printed == 0 && !json {
-                        out.line(tracks::CSV_HEADER)?;
-                    }
-                    printed += 1;
-                    let text = if json {
-                        tracks::live_point(&shell, r.freq_mhz, &p).to_string()
-                    } else {
-                        tracks::csv_line(&shell, r.freq_mhz, &p)
-                            .trim_end()
-                            .to_string()
-                    };
-                    out.line(&text)?;
-                    out.flush()?;
-                    // TAK missing an update is no reason to stop tracking: the next one sends
-                    // the latest point again.
-                    if let (Some(tak), Some(frame)) = (tak.as_mut(), shell.frame.as_ref())
-                        && let Err(e) = tak.send(&cot::track_events(
-                            r.freq_mhz,
-                            &p,
-                            frame,
-                            std::time::SystemTime::now(),
-                        ))
-                    {
-                        note(&format!("foxhunt: {e}; this update not sent"));
-                    }
-                }
-                Err(e) => {
-                    let what = r
-                        .freq_mhz
-                        .map_or(String::new(), |f| format!(" on {f:.3} MHz"));
-                    let e = format!("cannot track{what}: {e}");
-                    note(&format!("foxhunt: {e}"));
-                    failed = Some(e);
-                }
+            let point = live.step(r, &prior_of);
+            points.print(&shell, r.freq_mhz, point, out)?;
+        }
+    }
+    points.end(heard, "no bearing on the line: nothing to track")
+}
+
+/// Track the RSSI of `file`'s anchors on a byte line (standard input or a serial device, as a
+/// ZigBee coordinator's MT frames arrive): the readings grouped into epochs as a recorded
+/// capture without GPS times groups them ([`AnchorEpochs`]: an epoch closes when an anchor is
+/// heard again, or when the line goes quiet), each epoch a step of one tracker, in the anchors
+/// file's metres (latitudes and longitudes with its `origin`).
+pub fn rssi(
+    source: LiveSource,
+    quiet_exit: Option<Duration>,
+    o: &Options,
+    a: &Args,
+    file: &AnchorsFile,
+    out: &mut Out,
+) -> Outcome {
+    if !matches!(source, LiveSource::Stdin | LiveSource::Serial { .. }) {
+        return Err(Stop::usage(
+            "RSSI comes in a coordinator's MT frames: track it live from standard input or a \
+             serial device, not --kraken or --mqtt",
+        ));
+    }
+    let shell = Tracks {
+        tracks: Vec::new(),
+        frame: file
+            .origin
+            .and_then(|[lat, lon]| LocalFrame::new(LatLon { lat, lon }, 0.0).ok()),
+        first_ms: None,
+    };
+    let channel = Channel {
+        freq_mhz: None,
+        updates: Vec::new(),
+        sources: Vec::new(),
+        rssi: true,
+    };
+    let fallback = BiasPrior {
+        mean: 0.0,
+        sd: o.offset_sd,
+    };
+    let setup = station_setup(std::iter::empty(), None, fallback, false);
+    let mut tracker = None;
+    let settings = settings(&channel, Some(file), o, &setup);
+    let mut epochs = AnchorEpochs::new(file, anchor_positions(file, None)?);
+    let mut dec = TrackDecoder::new(Some(file));
+    let mut line = reader(&source, None, None)?;
+    let mut points = Points::new(a);
+    let (mut heard, mut unknown, mut bearings) = (0usize, 0u32, false);
+    let mut ended = false;
+    while !ended {
+        ended = line.take(&mut dec, quiet_exit, true)?;
+        let new = dec.take_readings();
+        heard += new.len();
+        // Bearings on the same line are not this track's: said once, and not kept.
+        let d = dec.bearings();
+        d.snapshot();
+        if !d.decoded.observations.is_empty() && !std::mem::replace(&mut bearings, true) {
+            note(
+                "foxhunt: a live line tracks bearings or an anchors file's RSSI, not both: \
+                 its bearings are left out (track both from a recorded capture)",
+            );
+        }
+        d.decoded.observations.clear();
+        let (skipped, addrs) = dec.unknown();
+        if skipped > 0 && unknown == 0 {
+            let addrs: Vec<String> = addrs.iter().map(|a| format!("0x{a:04x}")).collect();
+            note(&format!(
+                "foxhunt: frames from addresses not in the anchors file are skipped: {}",
+                addrs.join(", ")
+            ));
+        }
+        unknown = skipped;
+        let mut ready: Vec<Update> = new.iter().filter_map(|r| epochs.push(*r)).collect();
+        if new.is_empty() || ended {
+            ready.extend(epochs.close());
+        }
+        for u in ready {
+            let t = match tracker.as_mut() {
+                Some(t) => t,
+                None => tracker.insert(LiveTracker::start(settings.clone())?),
+            };
+            let point = t.step(u);
+            if point.is_err() {
+                // The next epoch starts a new tracker.
+                tracker = None;
             }
+            points.print(&shell, None, point, out)?;
         }
     }
-    if printed > 0 {
-        return Ok(());
+    points.end(
+        heard,
+        "no RSSI reading of a listed anchor on the line: nothing to track",
+    )
+}
+
+/// Where a live track's points go: standard output (the CSV's row, or with `--json` one
+/// object a line) and TAK; and why none did.
+struct Points {
+    json: bool,
+    tak: Option<CotSender>,
+    printed: usize,
+    failed: Option<String>,
+}
+
+impl Points {
+    fn new(a: &Args) -> Self {
+        Self {
+            json: a.json,
+            tak: a.cot.clone().map(CotSender::new),
+            printed: 0,
+            failed: None,
+        }
     }
-    Err(Stop::Error(failed.unwrap_or_else(|| {
-        if heard == 0 {
-            "no bearing on the line: nothing to track".into()
+
+    /// Print `point` of the channel on `freq_mhz`, or say why the update has none.
+    fn print(
+        &mut self,
+        shell: &Tracks,
+        freq_mhz: Option<f32>,
+        point: Result<TrackPoint, String>,
+        out: &mut Out,
+    ) -> Outcome {
+        let p = match point {
+            Ok(p) => p,
+            Err(e) => {
+                let what = freq_mhz.map_or(String::new(), |f| format!(" on {f:.3} MHz"));
+                let e = format!("cannot track{what}: {e}");
+                note(&format!("foxhunt: {e}"));
+                self.failed = Some(e);
+                return Ok(());
+            }
+        };
+        if self.printed == 0 && !self.json {
+            out.line(tracks::CSV_HEADER)?;
+        }
+        self.printed += 1;
+        let text = if self.json {
+            tracks::live_point(shell, freq_mhz, &p).to_string()
         } else {
-            "no update could be tracked".into()
+            tracks::csv_line(shell, freq_mhz, &p).trim_end().to_string()
+        };
+        out.line(&text)?;
+        out.flush()?;
+        // TAK missing an update is no reason to stop tracking: the next one sends the latest
+        // point again.
+        if let (Some(tak), Some(frame)) = (self.tak.as_mut(), shell.frame.as_ref())
+            && let Err(e) = tak.send(&cot::track_events(
+                freq_mhz,
+                &p,
+                frame,
+                std::time::SystemTime::now(),
+            ))
+        {
+            note(&format!("foxhunt: {e}; this update not sent"));
         }
-    })))
+        Ok(())
+    }
+
+    /// The line is done: fine if a point was printed, else why none was (`nothing`: when the
+    /// line brought no measurement, `heard` of them).
+    fn end(self, heard: usize, nothing: &str) -> Outcome {
+        if self.printed > 0 {
+            return Ok(());
+        }
+        Err(Stop::Error(self.failed.unwrap_or_else(|| {
+            if heard == 0 {
+                nothing.into()
+            } else {
+                "no update could be tracked".into()
+            }
+        })))
+    }
 }
 
 /// The offset prior of a station not yet heard when its channel's tracker starts: the widest

@@ -56,7 +56,8 @@ pub struct Args {
     #[arg(long, allow_hyphen_values = true,
           value_parser = values::f64_where(|s| s >= 0.0, "a number of seconds >= 0, or inf"))]
     pub quiet_exit: Option<f64>,
-    /// The anchors file: where the anchors whose RSSI the captures hold stand.
+    /// The anchors file: where the anchors whose RSSI the captures hold stand (live: the
+    /// line's RSSI is tracked, its bearings left out).
     #[arg(long)]
     pub anchors: Option<PathBuf>,
     /// Print JSON (`{"tracks": [...]}`) instead of CSV.
@@ -213,23 +214,20 @@ fn live_source(a: &Args) -> Result<Option<LiveSource>, Stop> {
 pub fn run(a: &Args, out: &mut Out) -> Outcome {
     let options = a.options()?;
     if let Some(source) = live_source(a)? {
-        if a.anchors.is_some() || a.svg.is_some() {
+        if a.geojson.is_some() || a.kml.is_some() || a.csv.is_some() || a.svg.is_some() {
             return Err(Stop::usage(
-                "a live track takes bearings: track RSSI from an anchors file in a recorded \
-                 capture",
-            ));
-        }
-        if a.geojson.is_some() || a.kml.is_some() || a.csv.is_some() {
-            return Err(Stop::usage(
-                "a live track prints each update: write --geojson, --kml and --csv from the \
-                 recorded capture",
+                "a live track prints each update: write --geojson, --kml, --csv and --svg from \
+                 the recorded capture",
             ));
         }
         let quiet = a
             .quiet_exit
             .filter(|s| s.is_finite())
             .map(std::time::Duration::from_secs_f64);
-        return live::run(source, quiet, &options, a, out);
+        return match a.anchors.as_deref().map(AnchorsFile::load).transpose()? {
+            Some(file) => live::rssi(source, quiet, &options, a, &file, out),
+            None => live::run(source, quiet, &options, a, out),
+        };
     }
     let mut inputs: Vec<&std::path::Path> = a.captures.iter().map(PathBuf::as_path).collect();
     inputs.extend(a.anchors.as_deref());
@@ -312,7 +310,7 @@ pub(crate) fn write_maps(
 }
 
 /// `track`'s options at every flag's default: what `locate` tracks an emitter that moves with.
-pub(crate) fn default_options() -> Result<Options, String> {
+pub fn default_options() -> Result<Options, String> {
     #[derive(clap::Parser)]
     struct Defaults {
         #[command(flatten)]
