@@ -26,6 +26,19 @@ pub const TRACK_PARTICLES: [usize; 4] = [200, 1000, 2000, 10_000];
 /// The state sizes compiled for tracking: one source's offset (a vehicle), RSSI alone, four
 /// sources, four sources and RSSI ([`Layout::dims`]).
 pub const STATE_SIZES: [usize; 4] = [7, 10, 13, 18];
+/// The most DF sources a track's state holds (the largest of [`STATE_SIZES`]), with RSSI
+/// terms beside them or without.
+pub const fn max_sources(rssi: bool) -> usize {
+    let largest = STATE_SIZES[STATE_SIZES.len() - 1];
+    let rssi_terms = Layout {
+        sources: 0,
+        rssi: true,
+    }
+    .dims()
+        - PARAMETERS;
+    (largest - PARAMETERS - if rssi { rssi_terms } else { 0 }) / 2
+}
+
 /// Updates the fixed-lag smoother holds: each smoothed point has seen this many - 1 later
 /// updates.
 pub const LAG: usize = 16;

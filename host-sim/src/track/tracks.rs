@@ -47,6 +47,9 @@ pub struct ChannelTrack {
     pub freq_mhz: Option<f32>,
     /// Every update's point.
     pub points: Vec<TrackPoint>,
+    /// DF stations whose bearings were left out (the state holds
+    /// [`max_sources`](crate::track::moving::max_sources)) and their bearings.
+    pub left_out: (usize, usize),
 }
 
 /// Every channel's track and the frame that places them on the earth.
@@ -178,6 +181,7 @@ pub fn tracks(m: &Measured, anchors: Option<&AnchorsFile>, o: &Options) -> Resul
         out.push(ChannelTrack {
             freq_mhz: c.freq_mhz,
             points: run.points,
+            left_out: c.left_out,
         });
     }
     let frame = match (m.decoded.frame, anchors.and_then(|f| f.origin)) {

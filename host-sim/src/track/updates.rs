@@ -6,7 +6,7 @@
 
 use crate::track::capture::{Measured, Reading};
 use crate::track::indoor::AnchorsFile;
-use crate::track::moving::Update;
+use crate::track::moving::{Update, max_sources};
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;
 use foxhunt_core::fix::channel::{NO_CHANNEL, group};
@@ -31,6 +31,9 @@ pub struct Channel {
     pub sources: Vec<u16>,
     /// Whether RSSI readings are in the updates.
     pub rssi: bool,
+    /// Stations left out (beyond [`max_sources`], the fewest bearings first) and their
+    /// bearings.
+    pub left_out: (usize, usize),
 }
 
 /// Where the anchors are in the track's frame, and that frame: the capture's GPS frame when it
@@ -76,6 +79,8 @@ pub fn channels(
 ) -> Result<Vec<Channel>, String> {
     let obs = &m.decoded.observations;
     let n = obs.len();
+    // Readings may join a channel's bearings, and their terms then take room in the state.
+    let rssi_may_join = anchors.is_some() && !m.readings.is_empty();
     let mut order = vec![0u32; n];
     let mut of = vec![NO_CHANNEL; n];
     let groups = group::<CHANNELS>(n, |i| Some(obs[i].freq_mhz), width_mhz, &mut order, &mut of)
@@ -94,18 +99,13 @@ pub fn channels(
             }
         }
         mine.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
-        // The channel's stations numbered from 0, as the tracker's offsets are.
-        let mut sources: Vec<u16> = mine.iter().map(|o| o.station).collect();
-        sources.sort_unstable();
-        sources.dedup();
-        for o in mine.iter_mut() {
-            o.station = sources.iter().position(|s| *s == o.station).unwrap_or(0) as u16;
-        }
+        let (sources, left_out) = most_heard(&mut mine, max_sources(rssi_may_join));
         out.push(Channel {
             freq_mhz: groups.freq(c).flatten(),
             updates: bearing_updates(&mine),
             sources,
             rssi: false,
+            left_out,
         });
     }
     if let Some(file) = anchors
@@ -138,6 +138,7 @@ pub fn channels(
                     updates,
                     sources: Vec::new(),
                     rssi: true,
+                    left_out: (0, 0),
                 });
             }
             (false, _) => {
@@ -151,6 +152,28 @@ pub fn channels(
     }
     out.retain(|c| !c.updates.is_empty());
     Ok(out)
+}
+
+/// The stations of a channel's bearings `mine`, numbered from 0 as the tracker's offsets are
+/// (each bearing's `station` renumbered so): at most `max` of them, those with the most
+/// bearings (a state holds that many offsets); the others' bearings are taken out of `mine`.
+/// The capture's station index of each kept, and how many stations and bearings were left out.
+fn most_heard(mine: &mut Vec<Observation>, max: usize) -> (Vec<u16>, (usize, usize)) {
+    let mut counts: std::collections::BTreeMap<u16, usize> = Default::default();
+    for o in mine.iter() {
+        *counts.entry(o.station).or_default() += 1;
+    }
+    let mut ranked: Vec<(u16, usize)> = counts.into_iter().collect();
+    ranked.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+    let left_out = ranked.get(max..).unwrap_or(&[]);
+    let left_out = (left_out.len(), left_out.iter().map(|(_, n)| n).sum());
+    let mut sources: Vec<u16> = ranked.iter().take(max).map(|(s, _)| *s).collect();
+    sources.sort_unstable();
+    mine.retain(|o| sources.contains(&o.station));
+    for o in mine.iter_mut() {
+        o.station = sources.iter().position(|s| *s == o.station).unwrap_or(0) as u16;
+    }
+    (sources, left_out)
 }
 
 /// Bearings (in time order) as updates: each update the bearings within [`WINDOW_S`] of its
@@ -332,6 +355,31 @@ mod tests {
         let u = bearing_updates(&many);
         assert_eq!(u.len(), 2);
         assert_eq!(u[1].epoch.dt, 0.0);
+    }
+
+    #[test]
+    fn a_channel_keeps_the_most_heard_stations_its_state_holds() {
+        // Station 10 + k heard k + 1 times, k = 0..8: the six most heard are 12..=17.
+        let mut mine: Vec<Observation> = (0..8u16)
+            .flat_map(|k| {
+                (0..=k).map(move |_| {
+                    let mut o = at(0.0);
+                    o.station = 10 + k;
+                    o
+                })
+            })
+            .collect();
+        assert_eq!(max_sources(false), 6);
+        assert_eq!(max_sources(true), 4);
+        let (sources, left_out) = most_heard(&mut mine, 6);
+        assert_eq!(sources, [12, 13, 14, 15, 16, 17]);
+        assert_eq!(
+            left_out,
+            (2, 1 + 2),
+            "stations 10 and 11, one and two bearings"
+        );
+        assert_eq!(mine.len(), (3..=8).sum::<usize>());
+        assert!(mine.iter().all(|o| o.station < 6), "renumbered from 0");
     }
 
     #[test]

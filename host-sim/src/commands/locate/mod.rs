@@ -713,6 +713,7 @@ fn write_track_maps(
         ..Default::default()
     };
     let t = crate::track::tracks::tracks(&measured, None, &o)?;
+    crate::commands::track::note_left_out(&t);
     crate::commands::track::write_maps(&t, [geojson.as_deref(), kml.as_deref()], outputs)?;
     let written: Vec<String> = [geojson, kml]
         .into_iter()

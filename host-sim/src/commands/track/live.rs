@@ -153,6 +153,7 @@ pub fn rssi(
         updates: Vec::new(),
         sources: Vec::new(),
         rssi: true,
+        left_out: (0, 0),
     };
     let fallback = BiasPrior {
         mean: 0.0,

@@ -15,7 +15,9 @@ use crate::outputs::terminal::{Out, Outcome, Stop, note};
 use crate::outputs::tracks;
 use crate::track::capture::{Measured, TrackDecoder};
 use crate::track::indoor::AnchorsFile;
-use crate::track::moving::{DEFAULT_METHOD, PARTICLES, TRACK_METHODS, TRACK_PARTICLES};
+use crate::track::moving::{
+    DEFAULT_METHOD, PARTICLES, TRACK_METHODS, TRACK_PARTICLES, max_sources,
+};
 use crate::track::tracks::{Options, Tracks};
 use foxhunt_core::Method;
 use foxhunt_core::track::Motion;
@@ -259,6 +261,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
         }
     }
     let t = crate::track::tracks::tracks(&m, file.as_ref(), &options)?;
+    note_left_out(&t);
     write_files(a, &t, file.as_ref(), &outputs)?;
     if let Some(url) = &a.cot {
         let frame = t.frame.as_ref().ok_or(
@@ -281,6 +284,23 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
         out.line(&text)
     } else {
         out.text(&tracks::csv(&t))
+    }
+}
+
+/// Say which channels' tracks left stations out, and how many bearings that cost.
+pub(crate) fn note_left_out(t: &Tracks) {
+    for c in t.tracks.iter().filter(|c| c.left_out.0 > 0) {
+        let what = c
+            .freq_mhz
+            .map_or(String::new(), |f| format!(" on {f:.3} MHz"));
+        let (stations, bearings) = c.left_out;
+        note(&format!(
+            "foxhunt: a track holds at most {} DF stations a channel ({} beside RSSI): the \
+             track{what} follows those with the most bearings; {stations} other stations' \
+             {bearings} bearings are left out",
+            max_sources(false),
+            max_sources(true)
+        ));
     }
 }
 
