@@ -852,3 +852,40 @@ fn the_live_map_follows_three_stations_through_the_broker() {
         "{apart} m apart"
     );
 }
+
+#[test]
+fn the_load_harness_shards_to_pinned_workers_and_counts_every_bearing_once() {
+    let _one_broker = serial();
+    let broker = Broker::start("load");
+    let out = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .args(["perf", "--mqtt", &broker.url("load")])
+        // 16 channels: the hash gives each of two shards some (10/6).
+        .args(["--stations", "4", "--channels", "16", "--rate-hz", "5"])
+        .args(["--seconds", "3", "--workers", "2", "--pin-workers"])
+        .output()
+        .expect("run foxhunt perf");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    println!("{text}");
+    let row: Vec<&str> = text
+        .lines()
+        .last()
+        .expect("a table row")
+        .split('|')
+        .map(str::trim)
+        .collect();
+    // | stations | channels | rate | bearings/s | workers | sent | taken | fixes | updates |
+    // worker CPU s | ...: 4 x 16 x 5 x 3 = 960 bearings, each taken by one worker.
+    assert_eq!(row[5], "2 (pinned)");
+    assert_eq!((row[6], row[7]), ("960", "960"), "sent and taken");
+    let cpu: Vec<f64> = row[10]
+        .split('+')
+        .map(|c| c.trim().parse().expect("processor seconds"))
+        .collect();
+    assert_eq!(cpu.len(), 2, "one figure per worker: {}", row[10]);
+    assert!(cpu.iter().all(|c| *c > 0.0), "{cpu:?}");
+}

@@ -58,6 +58,10 @@ pub struct Args {
     #[arg(long, default_value_t = 1, requires = "mqtt",
           value_parser = clap::value_parser!(u32).range(1..=i64::from(crate::inputs::mqtt::MAX_SHARDS)))]
     pub workers: u32,
+    /// With --mqtt: pin worker k to processor k (modulo their count; Linux's `taskset`), so
+    /// each worker solves on one core of its own: how the sharding scales, measured.
+    #[arg(long, requires = "mqtt")]
+    pub pin_workers: bool,
     /// With --mqtt: each worker's bearings kept per channel (`locate --mqtt-keep`).
     #[arg(long, value_name = "N", requires = "mqtt",
           value_parser = super::values::count_at_least(2, "bearings per channel"))]
@@ -78,6 +82,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
             seconds: a.seconds,
             workers: a.workers,
             keep: a.mqtt_keep,
+            pin: a.pin_workers,
         };
         let exe = std::env::current_exe().map_err(|e| e.to_string())?;
         let f = crate::runs::mqtt_load::run(&load, &exe)?;

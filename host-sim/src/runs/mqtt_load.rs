@@ -38,6 +38,8 @@ pub struct Load {
     pub workers: u32,
     /// Each worker's bearings kept per channel (`locate --mqtt-keep`; `None`: its default).
     pub keep: Option<usize>,
+    /// Pin worker k to processor k (`taskset`): one core each, its solves on one thread.
+    pub pin: bool,
 }
 
 /// Seconds between samples of the timeline.
@@ -71,6 +73,8 @@ pub struct Figures {
     pub worker_peak_bytes: u64,
     /// Each worker's bearings taken and updates (solves) made.
     pub per_worker: Vec<(u64, u64)>,
+    /// Processor seconds each worker used (user and system), as last sampled.
+    pub worker_cpu_s: Vec<f64>,
     /// The run sample by sample.
     pub timeline: Vec<Sample>,
 }
@@ -143,7 +147,14 @@ struct Worker {
 
 /// Start worker `k` of `load.workers` and wait for its subscription.
 fn start_worker(load: &Load, url: &MqttUrl, exe: &Path, k: u32) -> Result<Worker, String> {
-    let mut c = Command::new(exe);
+    let mut c = if load.pin {
+        let cpus = std::thread::available_parallelism().map_or(1, usize::from);
+        let mut t = Command::new("taskset");
+        t.args(["-c", &(k as usize % cpus).to_string()]).arg(exe);
+        t
+    } else {
+        Command::new(exe)
+    };
     c.args(["locate", "--stats", "--quiet-exit", "3", "--mqtt"])
         .arg(format!("mqtt://{}/{}", url.address(), url.prefix))
         .args([
@@ -160,7 +171,10 @@ fn start_worker(load: &Load, url: &MqttUrl, exe: &Path, k: u32) -> Result<Worker
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
-        .map_err(|e| format!("cannot start the worker: {e}"))?;
+        .map_err(|e| match load.pin {
+            true => format!("cannot start the worker under taskset (util-linux): {e}"),
+            false => format!("cannot start the worker: {e}"),
+        })?;
     let stderr = child.stderr.take().ok_or("no stderr")?;
     let (etx, notes) = mpsc::channel::<String>();
     std::thread::spawn(move || {
@@ -190,6 +204,21 @@ fn rss_mb(pid: u32) -> f64 {
         .map_or(0.0, |kb| kb / 1024.0)
 }
 
+/// Processor seconds process `pid` has used, user and system (0 where unknown): fields 14
+/// and 15 of /proc/PID/stat, in Linux's fixed 100 ticks a second.
+fn cpu_s(pid: u32) -> f64 {
+    std::fs::read_to_string(format!("/proc/{pid}/stat"))
+        .ok()
+        .and_then(|s| {
+            // The command name may hold spaces: the fields count from its closing bracket.
+            let rest = s.rsplit_once(')')?.1;
+            let f: Vec<&str> = rest.split_whitespace().collect();
+            let ticks = |i: usize| f.get(i)?.parse::<f64>().ok();
+            Some((ticks(11)? + ticks(12)?) / 100.0)
+        })
+        .unwrap_or(0.0)
+}
+
 /// Run the load against the broker with `exe` (this program) as the workers.
 pub fn run(load: &Load, exe: &Path) -> Result<Figures, String> {
     let mut url = load.url.clone();
@@ -200,16 +229,17 @@ pub fn run(load: &Load, exe: &Path) -> Result<Figures, String> {
     }
     // The workers' memory, sampled while the load runs.
     let pids: Vec<u32> = workers.iter().map(|w| w.child.id()).collect();
-    let (mtx, mrx) = mpsc::channel::<(Instant, f64)>();
+    let (mtx, mrx) = mpsc::channel::<(Instant, f64, Vec<f64>)>();
     let sampling = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(true));
     let on = sampling.clone();
     std::thread::spawn(move || {
         while on.load(std::sync::atomic::Ordering::Relaxed) {
             let mb = pids.iter().map(|&p| rss_mb(p)).sum();
-            if mtx.send((Instant::now(), mb)).is_err() {
+            let cpu = pids.iter().map(|&p| cpu_s(p)).collect();
+            if mtx.send((Instant::now(), mb, cpu)).is_err() {
                 return;
             }
-            std::thread::sleep(Duration::from_secs(1));
+            std::thread::sleep(Duration::from_millis(250));
         }
     });
     let fixes = watch_fixes(&url)?;
@@ -290,7 +320,16 @@ pub fn run(load: &Load, exe: &Path) -> Result<Figures, String> {
     // The fixes still in flight to the watcher.
     std::thread::sleep(Duration::from_millis(300));
     let seen: Vec<(String, f64, Instant)> = fixes.try_iter().collect();
-    let memory: Vec<(Instant, f64)> = mrx.try_iter().collect();
+    let memory: Vec<(Instant, f64, Vec<f64>)> = mrx.try_iter().collect();
+    // A worker's last sample with a figure (an exited worker reads 0).
+    let worker_cpu_s = (0..workers.len())
+        .map(|k| {
+            memory
+                .iter()
+                .filter_map(|m| m.2.get(k).copied())
+                .fold(0.0, f64::max)
+        })
+        .collect();
     if !failed.is_empty() {
         return Err(format!("a worker failed: {}", failed.join(" | ")));
     }
@@ -337,7 +376,7 @@ pub fn run(load: &Load, exe: &Path) -> Result<Figures, String> {
     for (k, ticks) in by_tick.chunks(per_sample).enumerate() {
         let mut v: Vec<f64> = ticks.iter().flatten().copied().collect();
         let end = start + Duration::from_secs_f64((k + 1) as f64 * SAMPLE_S);
-        let rss = memory.iter().rfind(|(t, _)| *t <= end).map_or(0.0, |m| m.1);
+        let rss = memory.iter().rfind(|m| m.0 <= end).map_or(0.0, |m| m.1);
         timeline.push(Sample {
             t_s: ((k * per_sample + ticks.len()) as f64 / load.rate_hz),
             latency_ms: [q(&mut v, 0.5), q(&mut v, 0.99)],
@@ -365,6 +404,7 @@ pub fn run(load: &Load, exe: &Path) -> Result<Figures, String> {
             .max()
             .unwrap_or(0),
         per_worker,
+        worker_cpu_s,
         timeline,
     })
 }
@@ -384,21 +424,25 @@ fn memory_ends(f: &Figures) -> (f64, f64) {
 pub fn table(l: &Load, f: &Figures) -> String {
     let (rss_1, rss_end) = memory_ends(f);
     let updates: Vec<String> = f.per_worker.iter().map(|w| w.1.to_string()).collect();
+    let cpu: Vec<String> = f.worker_cpu_s.iter().map(|c| format!("{c:.1}")).collect();
     format!(
         "| stations | channels | rate Hz | bearings/s | workers | sent | taken | fixes | updates | \
-         p50 ms | p99 ms | max ms | no fix | RSS MB at 1 min | at end | worker peak MB |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n\
-         | {} | {} | {} | {:.0} | {} | {} | {} | {} | {} | {:.0} | {:.0} | {:.0} | {} | {:.1} | \
-         {:.1} | {:.1} |",
+         worker CPU s | p50 ms | p99 ms | max ms | no fix | RSS MB at 1 min | at end | worker \
+         peak MB |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n\
+         | {} | {} | {} | {:.0} | {}{} | {} | {} | {} | {} | {} | {:.0} | {:.0} | {:.0} | {} | \
+         {:.1} | {:.1} | {:.1} |",
         l.stations,
         l.channels,
         l.rate_hz,
         l.stations as f64 * l.channels as f64 * l.rate_hz,
         l.workers,
+        if l.pin { " (pinned)" } else { "" },
         f.sent,
         f.taken,
         f.fixes,
         updates.join(" + "),
+        cpu.join(" + "),
         f.latency_ms[0],
         f.latency_ms[1],
         f.latency_ms[2],
