@@ -273,6 +273,36 @@ fn drone(dir: &std::path::Path) -> (PathBuf, PathBuf) {
     (xml, dir.join("drone.stations.toml"))
 }
 
+/// `foxhunt ARGS` fed `bytes` on standard input in two halves: it must print an update
+/// before the second half is written (the line is tracked as it arrives), and end well; its
+/// lines, one JSON object each.
+fn live_in_halves(args: &[&str], bytes: &[u8]) -> Vec<serde_json::Value> {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run foxhunt");
+    let rx = common::line_reader(&mut child);
+    let mut stdin = child.stdin.take().expect("stdin");
+    let half = bytes.len() / 2;
+    stdin.write_all(&bytes[..half]).expect("first half");
+    stdin.flush().expect("flush");
+    let first = rx
+        .recv_timeout(Duration::from_secs(60))
+        .expect("an update before the line closed");
+    let mut lines = vec![first];
+    stdin.write_all(&bytes[half..]).expect("second half");
+    drop(stdin);
+    lines.extend(rx.iter());
+    assert!(child.wait().expect("wait").success());
+    lines
+        .iter()
+        .map(|l| serde_json::from_str(l).expect("one JSON object per line"))
+        .collect()
+}
+
 #[test]
 fn a_live_line_is_tracked_as_it_arrives_and_ends_where_the_recording_does() {
     let dir = scratch("live");
@@ -284,33 +314,7 @@ fn a_live_line_is_tracked_as_it_arrives_and_ends_where_the_recording_does() {
     let recorded = json(&foxhunt(&["track", xml, "--stations", stations, "--json"]));
     let points = recorded["tracks"][0]["points"].as_array().expect("points");
     let bytes = std::fs::read(xml).expect("capture");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
-        .args(["track", "-", "--stations", stations, "--json"])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run foxhunt");
-    let rx = common::line_reader(&mut child);
-    let mut stdin = child.stdin.take().expect("stdin");
-    let half = bytes.len() / 2;
-    stdin.write_all(&bytes[..half]).expect("first half");
-    stdin.flush().expect("flush");
-    // Updates come while the line is still open: the first half's are printed before the
-    // second half is written.
-    let first = rx
-        .recv_timeout(Duration::from_secs(60))
-        .expect("an update before the line closed");
-    let mut lines = vec![first];
-    stdin.write_all(&bytes[half..]).expect("second half");
-    drop(stdin);
-    lines.extend(rx.iter());
-    let status = child.wait().expect("wait");
-    assert!(status.success());
-    let live: Vec<serde_json::Value> = lines
-        .iter()
-        .map(|l| serde_json::from_str(l).expect("one JSON object per line"))
-        .collect();
+    let live = live_in_halves(&["track", "-", "--stations", stations, "--json"], &bytes);
     println!(
         "live {} updates, recorded {}; last live {}, last recorded {}",
         live.len(),
@@ -353,31 +357,7 @@ fn a_live_line_of_anchors_rssi_is_tracked_as_the_recording_is() {
     let recorded = json(&foxhunt(&["track", &znp, "--anchors", &anchors, "--json"]));
     let points = recorded["tracks"][0]["points"].as_array().expect("points");
     let bytes = std::fs::read(&znp).expect("capture");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
-        .args(["track", "-", "--anchors", &anchors, "--json"])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run foxhunt");
-    let rx = common::line_reader(&mut child);
-    let mut stdin = child.stdin.take().expect("stdin");
-    let half = bytes.len() / 2;
-    stdin.write_all(&bytes[..half]).expect("first half");
-    stdin.flush().expect("flush");
-    // Epochs are tracked while the line is open.
-    let first = rx
-        .recv_timeout(Duration::from_secs(60))
-        .expect("an update before the line closed");
-    let mut lines = vec![first];
-    stdin.write_all(&bytes[half..]).expect("second half");
-    drop(stdin);
-    lines.extend(rx.iter());
-    assert!(child.wait().expect("wait").success());
-    let live: Vec<serde_json::Value> = lines
-        .iter()
-        .map(|l| serde_json::from_str(l).expect("one JSON object per line"))
-        .collect();
+    let live = live_in_halves(&["track", "-", "--anchors", &anchors, "--json"], &bytes);
     println!(
         "live {} epochs, recorded {}; first live {}, first recorded {}",
         live.len(),
@@ -393,19 +373,11 @@ fn a_live_line_of_anchors_rssi_is_tracked_as_the_recording_is() {
         live.len(),
         points.len()
     );
-    let same = live.iter().zip(points).take_while(|(a, b)| {
-        [
-            "east_m",
-            "north_m",
-            "vel_e_mps",
-            "vel_n_mps",
-            "ellipse",
-            "p_moving",
-        ]
+    let same = live
         .iter()
-        .all(|k| a[k] == b[k])
-    });
-    let same = same.count();
+        .zip(points)
+        .take_while(|(a, b)| POINT_KEYS.iter().all(|k| a[k] == b[k]))
+        .count();
     println!("the first {same} points are the recording's");
     // Frames are of one size, so the half of the bytes is about the half of the epochs: an
     // early close there (two epochs of slack for where in an epoch the cut falls) is the only
