@@ -3,6 +3,8 @@
 //! track` reads the anchors' AF_INCOMING_MSG frames with it ([`crate::track::capture`]) and
 //! groups their readings into the tracker's updates ([`crate::track::updates`]).
 
+use foxhunt_bridge::geo::LocalFrame;
+use foxhunt_bridge::nmea::LatLon;
 use foxhunt_core::PathLoss;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeSet;
@@ -187,6 +189,13 @@ impl AnchorsFile {
              # well as 257), position in metres; room, epoch, noise and path loss of the model.\n{}",
             toml::to_string(self).map_err(|e| e.to_string())?
         ))
+    }
+
+    /// The frame of the file's metres on the earth: east and north of its `origin` (none
+    /// without one, or with one out of range).
+    pub fn frame(&self) -> Option<LocalFrame> {
+        let [lat, lon] = self.origin?;
+        LocalFrame::new(LatLon { lat, lon }, 0.0).ok()
     }
 
     /// An anchors file from disk; errors name the file.

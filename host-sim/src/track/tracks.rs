@@ -184,11 +184,7 @@ pub fn tracks(m: &Measured, anchors: Option<&AnchorsFile>, o: &Options) -> Resul
             left_out: c.left_out,
         });
     }
-    let frame = match (m.decoded.frame, anchors.and_then(|f| f.origin)) {
-        (Some(f), _) => Some(f),
-        (None, Some([lat, lon])) => LocalFrame::new(LatLon { lat, lon }, 0.0).ok(),
-        (None, None) => None,
-    };
+    let frame = m.decoded.frame.or(anchors.and_then(AnchorsFile::frame));
     Ok(Tracks {
         tracks: out,
         frame,

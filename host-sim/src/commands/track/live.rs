@@ -4,8 +4,9 @@
 //! ([`crate::commands::locate::live`]); each channel's updates are stepped by its own
 //! tracker ([`crate::track::live`]). An update closes when a bearing comes after its window,
 //! or when the line brings nothing new for a moment (so a quiet line's last bearings are
-//! tracked at once, not when the next arrive). Memory stays bounded: each bearing leaves the
-//! decoder once its channel has it, and the points are printed, not kept.
+//! tracked at once, not when the next arrive). With an anchors file the line's RSSI is tracked
+//! instead ([`rssi`]), an epoch at a time. Memory stays bounded: each bearing and reading
+//! leaves the decoder once its tracker has it, and the points are printed, not kept.
 
 use super::Args;
 use crate::commands::locate::live::{LiveSource, reader};
@@ -21,8 +22,6 @@ use crate::track::moving::{Settings, TrackPoint, Update};
 use crate::track::tracks::{Options, Tracks, settings};
 use crate::track::updates::{AnchorEpochs, Channel, anchor_positions};
 use foxhunt_bridge::BridgeConfig;
-use foxhunt_bridge::geo::LocalFrame;
-use foxhunt_bridge::nmea::LatLon;
 use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::track::{Layout, Motion};
 use std::time::Duration;
@@ -143,9 +142,7 @@ pub fn rssi(
     }
     let shell = Tracks {
         tracks: Vec::new(),
-        frame: file
-            .origin
-            .and_then(|[lat, lon]| LocalFrame::new(LatLon { lat, lon }, 0.0).ok()),
+        frame: file.frame(),
         first_ms: None,
     };
     let channel = Channel {
