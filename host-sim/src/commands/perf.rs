@@ -58,8 +58,9 @@ pub struct Args {
     #[arg(long, default_value_t = 1, requires = "mqtt",
           value_parser = clap::value_parser!(u32).range(1..=i64::from(crate::inputs::mqtt::MAX_SHARDS)))]
     pub workers: u32,
-    /// With --mqtt: pin worker k to processor k (modulo their count; Linux's `taskset`), so
-    /// each worker solves on one core of its own: how the sharding scales, measured.
+    /// With --mqtt: pin worker k to the k-th processor this process may use (modulo their
+    /// count; Linux's `taskset`), so each worker solves on one core of its own: how the
+    /// sharding scales, measured.
     #[arg(long, requires = "mqtt")]
     pub pin_workers: bool,
     /// With --mqtt: each worker's bearings kept per channel (`locate --mqtt-keep`).

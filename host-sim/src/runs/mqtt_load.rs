@@ -38,7 +38,8 @@ pub struct Load {
     pub workers: u32,
     /// Each worker's bearings kept per channel (`locate --mqtt-keep`; `None`: its default).
     pub keep: Option<usize>,
-    /// Pin worker k to processor k (`taskset`): one core each, its solves on one thread.
+    /// Pin worker k to the k-th processor this process may use (`taskset`): one core each,
+    /// its solves on one thread.
     pub pin: bool,
 }
 
@@ -148,9 +149,13 @@ struct Worker {
 /// Start worker `k` of `load.workers` and wait for its subscription.
 fn start_worker(load: &Load, url: &MqttUrl, exe: &Path, k: u32) -> Result<Worker, String> {
     let mut c = if load.pin {
-        let cpus = std::thread::available_parallelism().map_or(1, usize::from);
+        let cpus = allowed_processors();
+        let cpu = cpus
+            .get(k as usize % cpus.len().max(1))
+            .copied()
+            .unwrap_or(0);
         let mut t = Command::new("taskset");
-        t.args(["-c", &(k as usize % cpus).to_string()]).arg(exe);
+        t.args(["-c", &cpu.to_string()]).arg(exe);
         t
     } else {
         Command::new(exe)
@@ -190,6 +195,36 @@ fn start_worker(load: &Load, url: &MqttUrl, exe: &Path, k: u32) -> Result<Worker
         return Err(format!("worker: {first}"));
     }
     Ok(Worker { child, notes })
+}
+
+/// The processors this process may run on (`Cpus_allowed_list` of /proc/self/status, as
+/// `0-3,8`; empty where unknown).
+fn allowed_processors() -> Vec<usize> {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find_map(|l| l.strip_prefix("Cpus_allowed_list:"))
+                .map(processor_list)
+        })
+        .unwrap_or_default()
+}
+
+/// A processor list as Linux writes it (`0-3,8,10-11`); what does not parse is skipped.
+fn processor_list(text: &str) -> Vec<usize> {
+    let mut out = Vec::new();
+    for part in text.trim().split(',') {
+        let mut ends = part
+            .trim()
+            .splitn(2, '-')
+            .map(|n| n.trim().parse::<usize>());
+        match (ends.next(), ends.next()) {
+            (Some(Ok(a)), None) => out.push(a),
+            (Some(Ok(a)), Some(Ok(b))) if a <= b && b - a < 4096 => out.extend(a..=b),
+            _ => {}
+        }
+    }
+    out
 }
 
 /// Resident memory of process `pid`, MB (0 where unknown).
@@ -521,4 +556,22 @@ pub fn svg(l: &Load, f: &Figures) -> String {
     out += &line(&|s| s.rss_mb, mem_max, "#888888");
     out += "</svg>\n";
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn processor_lists_read_as_linux_writes_them() {
+        assert_eq!(processor_list("0-1\n"), [0, 1]);
+        assert_eq!(processor_list("2-3,8,10-11"), [2, 3, 8, 10, 11]);
+        assert_eq!(processor_list("5"), [5]);
+        assert_eq!(
+            processor_list("x,3-1,4"),
+            [4],
+            "what does not parse is skipped"
+        );
+        assert!(processor_list("").is_empty());
+    }
 }
