@@ -889,3 +889,26 @@ fn the_load_harness_shards_to_pinned_workers_and_counts_every_bearing_once() {
     assert_eq!(cpu.len(), 2, "one figure per worker: {}", row[10]);
     assert!(cpu.iter().all(|c| *c > 0.0), "{cpu:?}");
 }
+
+#[test]
+fn a_worker_the_broker_gives_nothing_says_so() {
+    let _one_broker = serial();
+    let broker = Broker::start("empty");
+    let w = Worker::start_with(
+        &broker.url("quiet"),
+        "empty-worker",
+        1,
+        &["--mqtt-shard", "1/2"],
+    );
+    let mut child = w.child;
+    let status = child.wait().expect("wait");
+    let err: Vec<String> = w.early.into_iter().chain(w.stderr.iter()).collect();
+    let out: Vec<String> = w.stdout.iter().collect();
+    println!("{err:?} {out:?}");
+    // No fix: exit 1, and the reason is the broker's silence on its shard's topics.
+    assert_eq!(status.code(), Some(1), "{err:?}");
+    let said = err.iter().chain(&out).any(|l| {
+        l.contains("no bearing came through the broker on quiet/bearings/1/#: nothing to fuse")
+    });
+    assert!(said, "{err:?} {out:?}");
+}

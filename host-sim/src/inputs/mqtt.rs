@@ -353,6 +353,8 @@ const BATCH_WAITS: usize = 200_000;
 pub struct Subscription {
     client: Client,
     url: MqttUrl,
+    /// The topics it subscribed to.
+    filter: String,
     /// Its counters.
     pub counts: Arc<Counts>,
     /// Each channel's latest fix not yet handed to the client (its queue was full): only
@@ -525,9 +527,15 @@ impl Subscription {
         Ok(Self {
             client,
             url: url.clone(),
+            filter: url.worker_filter(shard),
             counts,
             waiting: Mutex::new(BTreeMap::new()),
         })
+    }
+
+    /// The topics it subscribed to (`PREFIX/bearings/#`, or its shard's).
+    pub fn filter(&self) -> &str {
+        &self.filter
     }
 
     /// Publish a channel's fix (JSON), retained at QoS 1: a worker or map that subscribes

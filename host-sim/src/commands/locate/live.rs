@@ -440,7 +440,26 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
         dec.snapshot();
         // Each update's channel key (-1: every channel at once).
         let located: Vec<(i64, _)> = if channels.is_empty() {
-            vec![(-1, locate_guided(&dec.decoded, &o.locate, guide))]
+            let mut l = locate_guided(&dec.decoded, &o.locate, guide);
+            // A worker the broker gave no bearing: that is why, not what a capture lacks.
+            let taken =
+                |a: &std::sync::atomic::AtomicU64| a.load(std::sync::atomic::Ordering::Relaxed);
+            if let (Some(sub), Err(e)) = (&line.mqtt, &mut l)
+                && taken(&sub.counts.bearings) == 0
+            {
+                e.error = match taken(&sub.counts.refused) {
+                    0 => format!(
+                        "no bearing came through the broker on {}: nothing to fuse",
+                        sub.filter()
+                    ),
+                    r => format!(
+                        "no usable bearing came through the broker on {}: {r} messages \
+                         refused (the notes say why)",
+                        sub.filter()
+                    ),
+                };
+            }
+            vec![(-1, l)]
         } else {
             each_channel(&mut dec.decoded, channels, &o.locate, guide)
         };
