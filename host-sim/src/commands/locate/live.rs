@@ -442,12 +442,10 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
         let located: Vec<(i64, _)> = if channels.is_empty() {
             let mut l = locate_guided(&dec.decoded, &o.locate, guide);
             // A worker the broker gave no bearing: that is why, not what a capture lacks.
-            let taken =
-                |a: &std::sync::atomic::AtomicU64| a.load(std::sync::atomic::Ordering::Relaxed);
             if let (Some(sub), Err(e)) = (&line.mqtt, &mut l)
-                && taken(&sub.counts.bearings) == 0
+                && count(&sub.counts.bearings) == 0
             {
-                e.error = match taken(&sub.counts.refused) {
+                e.error = match count(&sub.counts.refused) {
                     0 => format!(
                         "no bearing came through the broker on {}: nothing to fuse",
                         sub.filter()
@@ -498,15 +496,14 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
             note("the MQTT broker did not acknowledge every fix before the end");
         }
         let c = &sub.counts;
-        let n = |a: &std::sync::atomic::AtomicU64| a.load(std::sync::atomic::Ordering::Relaxed);
         note(&format!(
             "mqtt: bearings {}, duplicates {}, refused {}, other shard {}, fixes {}, updates {}, \
              dropped past the window {}",
-            n(&c.bearings),
-            n(&c.duplicates),
-            n(&c.refused),
-            n(&c.misrouted),
-            n(&c.fixes_acked),
+            count(&c.bearings),
+            count(&c.duplicates),
+            count(&c.refused),
+            count(&c.misrouted),
+            count(&c.fixes_acked),
             updates,
             window.as_ref().map_or(0, |w| w.dropped)
         ));
@@ -519,4 +516,9 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
             false => last.into_values().flatten().last(),
         },
     })
+}
+
+/// A broker counter's value now.
+fn count(a: &std::sync::atomic::AtomicU64) -> u64 {
+    a.load(std::sync::atomic::Ordering::Relaxed)
 }
