@@ -670,3 +670,23 @@ fn a_turning_drive_measures_the_harmonics_and_a_straight_pass_says_it_cannot() {
         Err(Error::OutOfRange)
     );
 }
+
+/// A short stretch of road far from the transmitter: its relative bearings sweep a few
+/// degrees, too few to hold the third and fourth harmonics apart from the table (the wide
+/// fit is singular); the calibration falls back to the table alone, as before they were
+/// fitted, and says the table is not measured (its span far below the rule's), so the caller
+/// takes the offset-only calibration; not an error.
+#[test]
+fn a_short_arc_is_no_table_and_no_error() {
+    extern crate std;
+    let e = [0.0, 0.0];
+    let c = [3.0 * DEG, -1.5 * DEG, 2.0 * DEG, 2.5 * DEG];
+    let mut rng = XorShiftRng::seed_from_u64(11);
+    let road = |k: f32| [-1000.0 + 2000.0 * k / 240.0, 10_000.0];
+    let bs: [Bearing; 240] = unit_drive(e, road, 4.0 * DEG, c, 2.0 * DEG, &mut rng);
+    let mut phi = [0.0f32; 240];
+    relative_to_course(&bs, 0.0, &mut phi);
+    let m = calibrate_direction(&bs, &phi, e).expect("a calibration");
+    std::println!("short arc: span {:.2e}", m.span);
+    assert!(!m.measured() && m.span < 1e-3, "span {}", m.span);
+}
