@@ -890,6 +890,47 @@ fn the_load_harness_shards_to_pinned_workers_and_counts_every_bearing_once() {
     assert!(cpu.iter().all(|c| *c > 0.0), "{cpu:?}");
 }
 
+/// One channel, two workers: the hash gives the channel to one shard and the other worker is
+/// told nothing. It ends without a fix (exit 1), and the harness counts it idle, not failed.
+#[test]
+fn the_load_harness_counts_a_worker_with_an_empty_shard_idle() {
+    let _one_broker = serial();
+    let broker = Broker::start("idle");
+    let out = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .args(["perf", "--mqtt", &broker.url("idle")])
+        .args(["--stations", "3", "--channels", "1", "--rate-hz", "2"])
+        .args(["--seconds", "2", "--workers", "2"])
+        .output()
+        .expect("run foxhunt perf");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    println!("{text}");
+    let row: Vec<&str> = text
+        .lines()
+        .last()
+        .expect("a table row")
+        .split('|')
+        .map(str::trim)
+        .collect();
+    // 3 x 1 x 2 x 2 = 12 bearings, every one taken by the worker that owns the channel; the
+    // other's one update is the one that said nothing came (before, the harness stopped on
+    // it: "a worker failed").
+    assert_eq!((row[6], row[7]), ("12", "12"), "sent and taken");
+    let updates: Vec<u64> = row[9]
+        .split('+')
+        .map(|u| u.trim().parse().expect("updates"))
+        .collect();
+    assert_eq!(updates.len(), 2, "{}", row[9]);
+    assert!(
+        updates.iter().any(|u| *u <= 1) && updates.iter().any(|u| *u > 1),
+        "{updates:?}"
+    );
+}
+
 #[test]
 fn a_worker_the_broker_gives_nothing_says_so() {
     let _one_broker = serial();
