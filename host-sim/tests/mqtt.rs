@@ -853,15 +853,13 @@ fn the_live_map_follows_three_stations_through_the_broker() {
     );
 }
 
-#[test]
-fn the_load_harness_shards_to_pinned_workers_and_counts_every_bearing_once() {
-    let _one_broker = serial();
-    let broker = Broker::start("load");
+/// `foxhunt perf --mqtt URL LOAD RUN` run to success: its table row's cells (the cell
+/// before the first `|` empty, so the first column is cell 1).
+fn perf_row(url: &str, load: &[&str], run: &[&str]) -> Vec<String> {
     let out = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
-        .args(["perf", "--mqtt", &broker.url("load")])
-        // 16 channels: the hash gives each of two shards some (10/6).
-        .args(["--stations", "4", "--channels", "16", "--rate-hz", "5"])
-        .args(["--seconds", "3", "--workers", "2", "--pin-workers"])
+        .args(["perf", "--mqtt", url])
+        .args(load)
+        .args(run)
         .output()
         .expect("run foxhunt perf");
     let text = String::from_utf8_lossy(&out.stdout);
@@ -871,21 +869,40 @@ fn the_load_harness_shards_to_pinned_workers_and_counts_every_bearing_once() {
         String::from_utf8_lossy(&out.stderr)
     );
     println!("{text}");
-    let row: Vec<&str> = text
-        .lines()
+    text.lines()
         .last()
         .expect("a table row")
         .split('|')
-        .map(str::trim)
-        .collect();
+        .map(|c| c.trim().to_string())
+        .collect()
+}
+
+/// A cell of one figure per worker ("a + b"), its figures.
+fn per_worker<T: std::str::FromStr>(cell: &str) -> Vec<T> {
+    cell.split('+')
+        .map(|c| c.trim().parse().ok().expect("a figure per worker"))
+        .collect()
+}
+
+#[test]
+fn the_load_harness_shards_to_pinned_workers_and_counts_every_bearing_once() {
+    let _one_broker = serial();
+    let broker = Broker::start("load");
+    // 16 channels: the hash gives each of two shards some (10/6).
+    let row = perf_row(
+        &broker.url("load"),
+        &["--stations", "4", "--channels", "16", "--rate-hz", "5"],
+        &["--seconds", "3", "--workers", "2", "--pin-workers"],
+    );
     // | stations | channels | rate | bearings/s | workers | sent | taken | fixes | updates |
     // worker CPU s | ...: 4 x 16 x 5 x 3 = 960 bearings, each taken by one worker.
     assert_eq!(row[5], "2 (pinned)");
-    assert_eq!((row[6], row[7]), ("960", "960"), "sent and taken");
-    let cpu: Vec<f64> = row[10]
-        .split('+')
-        .map(|c| c.trim().parse().expect("processor seconds"))
-        .collect();
+    assert_eq!(
+        (row[6].as_str(), row[7].as_str()),
+        ("960", "960"),
+        "sent and taken"
+    );
+    let cpu: Vec<f64> = per_worker(&row[10]);
     assert_eq!(cpu.len(), 2, "one figure per worker: {}", row[10]);
     assert!(cpu.iter().all(|c| *c > 0.0), "{cpu:?}");
 }
@@ -896,34 +913,20 @@ fn the_load_harness_shards_to_pinned_workers_and_counts_every_bearing_once() {
 fn the_load_harness_counts_a_worker_with_an_empty_shard_idle() {
     let _one_broker = serial();
     let broker = Broker::start("idle");
-    let out = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
-        .args(["perf", "--mqtt", &broker.url("idle")])
-        .args(["--stations", "3", "--channels", "1", "--rate-hz", "2"])
-        .args(["--seconds", "2", "--workers", "2"])
-        .output()
-        .expect("run foxhunt perf");
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{text}{}",
-        String::from_utf8_lossy(&out.stderr)
+    let row = perf_row(
+        &broker.url("idle"),
+        &["--stations", "3", "--channels", "1", "--rate-hz", "2"],
+        &["--seconds", "2", "--workers", "2"],
     );
-    println!("{text}");
-    let row: Vec<&str> = text
-        .lines()
-        .last()
-        .expect("a table row")
-        .split('|')
-        .map(str::trim)
-        .collect();
     // 3 x 1 x 2 x 2 = 12 bearings, every one taken by the worker that owns the channel; the
     // other's one update is the one that said nothing came (before, the harness stopped on
     // it: "a worker failed").
-    assert_eq!((row[6], row[7]), ("12", "12"), "sent and taken");
-    let updates: Vec<u64> = row[9]
-        .split('+')
-        .map(|u| u.trim().parse().expect("updates"))
-        .collect();
+    assert_eq!(
+        (row[6].as_str(), row[7].as_str()),
+        ("12", "12"),
+        "sent and taken"
+    );
+    let updates: Vec<u64> = per_worker(&row[9]);
     assert_eq!(updates.len(), 2, "{}", row[9]);
     assert!(
         updates.iter().any(|u| *u <= 1) && updates.iter().any(|u| *u > 1),

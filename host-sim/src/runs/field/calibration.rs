@@ -192,6 +192,18 @@ mod tests {
         rows
     }
 
+    /// The calibration file's row over `runs`: the harmonics measured on every loop, an
+    /// emitter on all but two runs, 90-98 % of the ellipses holding the truth.
+    fn assert_honest(direction: &CalibrationRow, runs: usize) {
+        assert_eq!(direction.harmonics_measured, runs);
+        assert!(direction.found >= runs - 2, "{direction:?}");
+        assert!(
+            (0.90..=0.98).contains(&direction.coverage()),
+            "coverage {:.3}",
+            direction.coverage()
+        );
+    }
+
     #[test]
     fn a_calibrated_direction_dependent_error_brings_the_fix_to_the_plain_bound() {
         // 400 runs: a share near 94 % is known to +-1.2 % (one sd), so the common bar of the
@@ -202,13 +214,7 @@ mod tests {
         const RUNS: usize = 400;
         let [not, _offset_only, direction] = printed(RUNS, 1.0);
         // Every loop turns through every direction: the harmonics are measured on each.
-        assert_eq!(direction.harmonics_measured, RUNS);
-        assert!(direction.found >= RUNS - 2, "{direction:?}");
-        assert!(
-            (0.90..=0.98).contains(&direction.coverage()),
-            "coverage {:.3}",
-            direction.coverage()
-        );
+        assert_honest(&direction, RUNS);
         // Closer to the plain bound than without calibration, by a margin beyond the rmse's
         // own noise: at most 0.85 of the uncalibrated rmse.
         assert!(
@@ -231,12 +237,6 @@ mod tests {
         // three sd to spare below.
         const RUNS: usize = 400;
         let [_, _, direction] = printed(RUNS, 0.75);
-        assert_eq!(direction.harmonics_measured, RUNS);
-        assert!(direction.found >= RUNS - 2, "{direction:?}");
-        assert!(
-            (0.90..=0.98).contains(&direction.coverage()),
-            "coverage {:.3}",
-            direction.coverage()
-        );
+        assert_honest(&direction, RUNS);
     }
 }
