@@ -179,15 +179,15 @@ fn regressors(phi: f32) -> [f32; UNKNOWNS] {
 }
 
 /// The least-squares fit of residuals about `centre` on the regressors, over the bearings
-/// `keep` accepts: the normal matrix, the solution with its inverse ([`solve_wide`]) and the
-/// count (`None`: too few or degenerate).
+/// `keep` accepts: the solution ([`solve_wide`]) and the count (`None`: too few or
+/// degenerate).
 fn fit_direction(
     bearings: &[Bearing],
     relative: &[f32],
     emitter: &[f32; 2],
     centre: f32,
     keep: impl Fn(f32, f32) -> bool,
-) -> Option<(Normal, Wide, u32)> {
+) -> Option<(Wide, u32)> {
     let mut a = [[0.0f32; UNKNOWNS]; UNKNOWNS];
     let mut rhs = [0.0f32; UNKNOWNS];
     let mut n = 0u32;
@@ -211,19 +211,21 @@ fn fit_direction(
     if (n as usize) <= TABLE {
         return None;
     }
-    let wide = solve_wide(&a, &rhs, n)?;
-    Some((a, wide, n))
+    Some((solve_wide(&a, &rhs, n)?, n))
 }
 
 /// The calibration's normal matrix.
 type Normal = [[f32; UNKNOWNS]; UNKNOWNS];
 
 /// A solved calibration: the solution, the inverse of the normal matrix and the unknowns
-/// fitted (the higher harmonics' rows and columns zero where they were not).
+/// fitted (the higher harmonics' rows and columns zero where they were not), and the inverse
+/// of the offset's and table's own block (what the directions driven give the table alone:
+/// the span).
 struct Wide {
     x: [f32; UNKNOWNS],
     inv: Normal,
     unknowns: usize,
+    table_inv: [[f32; TABLE]; TABLE],
 }
 
 /// The normal equations `a x = rhs` of `n` bearings solved with the higher harmonics, or,
@@ -231,26 +233,30 @@ struct Wide {
 /// bearings), with the table alone: such a drive's span is far below [`MIN_SPAN`] and it
 /// gives the offset only.
 fn solve_wide(a: &Normal, rhs: &[f32; UNKNOWNS], n: u32) -> Option<Wide> {
+    let table: [[f32; TABLE]; TABLE] = core::array::from_fn(|i| core::array::from_fn(|j| a[i][j]));
+    let table_inv = crate::linalg::inverse_scaled(&table)?;
     if n as usize > UNKNOWNS
         && let Some(inv) = crate::linalg::inverse_scaled(a)
     {
-        let x = crate::linalg::mat_vec(&inv, rhs);
         return Some(Wide {
-            x,
+            x: crate::linalg::mat_vec(&inv, rhs),
             inv,
             unknowns: UNKNOWNS,
+            table_inv,
         });
     }
-    let table: [[f32; TABLE]; TABLE] = core::array::from_fn(|i| core::array::from_fn(|j| a[i][j]));
-    let t_inv = crate::linalg::inverse_scaled(&table)?;
-    let t_rhs: [f32; TABLE] = core::array::from_fn(|i| rhs[i]);
-    let t_x = crate::linalg::mat_vec(&t_inv, &t_rhs);
+    // The table alone, embedded in the wide unknowns.
+    let mut x = [0.0f32; UNKNOWNS];
+    let mut inv = [[0.0f32; UNKNOWNS]; UNKNOWNS];
+    for i in 0..TABLE {
+        inv[i][..TABLE].copy_from_slice(&table_inv[i]);
+        x[i] = (0..TABLE).map(|j| table_inv[i][j] * rhs[j]).sum();
+    }
     Some(Wide {
-        x: core::array::from_fn(|i| t_x.get(i).copied().unwrap_or(0.0)),
-        inv: core::array::from_fn(|i| {
-            core::array::from_fn(|j| t_inv.get(i).and_then(|r| r.get(j)).copied().unwrap_or(0.0))
-        }),
+        x,
+        inv,
         unknowns: TABLE,
+        table_inv,
     })
 }
 
@@ -274,7 +280,7 @@ pub fn calibrate_direction(
     // The median residual: a centre that keeps every residual away from the wrap.
     let centre = calibrate(bearings, emitter)?.bias;
     let all = |_: f32, _: f32| true;
-    let (_, Wide { x: first, .. }, _) = fit_direction(bearings, relative, &emitter, centre, all)
+    let (Wide { x: first, .. }, _) = fit_direction(bearings, relative, &emitter, centre, all)
         .ok_or(Error::TooFewMeasurements)?;
     let misfit = |r: f32, phi: f32| wrap(r - crate::linalg::dot(&first, &regressors(phi)));
     // The robust spread of the first fit's misfits, from a strided sample (no allocator).
@@ -293,9 +299,16 @@ pub fn calibrate_direction(
     }
     let spread = (1.4826 * super::super::order::median(&mut sample[..k])).max(1e-5);
     let inside = |r: f32, phi: f32| libm::fabsf(misfit(r, phi)) <= CALIBRATION_CUT * spread;
-    let (a, Wide { x, inv, unknowns }, n) =
-        fit_direction(bearings, relative, &emitter, centre, inside)
-            .ok_or(Error::TooFewMeasurements)?;
+    let (
+        Wide {
+            x,
+            inv,
+            unknowns,
+            table_inv,
+        },
+        n,
+    ) = fit_direction(bearings, relative, &emitter, centre, inside)
+        .ok_or(Error::TooFewMeasurements)?;
     // The fit's residuals, time order, for the noise and its correlation.
     let kept = || {
         bearings
@@ -316,8 +329,6 @@ pub fn calibrate_direction(
     // The span is the table's own: the harmonics' block of the inverse per bearing of the
     // offset and table alone (what the directions driven give the table; its largest
     // eigenvalue is 1 / span).
-    let table: [[f32; TABLE]; TABLE] = core::array::from_fn(|i| core::array::from_fn(|j| a[i][j]));
-    let table_inv = crate::linalg::inverse_scaled(&table).ok_or(Error::TooFewMeasurements)?;
     let block: [[f32; HARMONICS]; HARMONICS] =
         core::array::from_fn(|i| core::array::from_fn(|j| n as f32 * table_inv[i + 1][j + 1]));
     let span = 1.0 / crate::linalg::largest_eigenvalue(&block);
