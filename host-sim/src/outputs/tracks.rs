@@ -62,16 +62,21 @@ pub fn live_point(t: &Tracks, freq_mhz: Option<f32>, p: &TrackPoint) -> Value {
     v
 }
 
-/// `{"tracks": [{"freq_mhz", "points": [...]}]}`.
+/// `{"tracks": [{"freq_mhz", "points": [...]}]}`, and `"untracked"`: why, for a channel with
+/// no track.
 pub fn json(t: &Tracks) -> Value {
     let tracks: Vec<Value> = t
         .tracks
         .iter()
         .map(|c| {
-            json!({
+            let mut v = json!({
                 "freq_mhz": c.freq_mhz.short(),
                 "points": c.points.iter().map(|p| point(t, p)).collect::<Vec<_>>(),
-            })
+            });
+            if let (Some(why), Some(m)) = (&c.untracked, v.as_object_mut()) {
+                m.insert("untracked".into(), why.as_str().into());
+            }
+            v
         })
         .collect();
     json!({ "tracks": tracks })
@@ -131,7 +136,7 @@ pub fn geojson(t: &Tracks) -> Option<Value> {
     t.frame.as_ref()?;
     let lonlat = |p: [f32; 2]| t.geodetic(p).map(|g| [g.lon, g.lat]);
     let mut features = Vec::new();
-    for c in &t.tracks {
+    for c in t.tracks.iter().filter(|c| !c.points.is_empty()) {
         let line: Vec<[f64; 2]> = c.points.iter().filter_map(|p| lonlat(p.position)).collect();
         let parts = split_antimeridian(&line);
         let geometry = match parts.as_slice() {
@@ -174,7 +179,7 @@ pub fn kml(t: &Tracks) -> Option<String> {
     let mut out = String::from(
         "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<kml xmlns=\"http://www.opengis.net/kml/2.2\">\n<Document>\n<name>foxhunt track</name>\n",
     );
-    for c in &t.tracks {
+    for c in t.tracks.iter().filter(|c| !c.points.is_empty()) {
         let name = c
             .freq_mhz
             .map_or_else(|| "track".to_string(), |f| format!("track {f:.3} MHz"));

@@ -11,6 +11,7 @@
 //! known when the tracker starts), and bearings of stations beyond it are dropped.
 
 use crate::track::moving::{Settings, TrackPoint, Update, track_each};
+use crate::track::tracks::observable;
 use crate::track::updates::Window;
 use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::fix::channel::belongs;
@@ -192,15 +193,20 @@ impl LiveChannels {
             .collect()
     }
 
-    /// Step `r` with its channel's tracker (started on the channel's first update, and again
-    /// after one that stopped; `prior_of` gives the offset prior of a station by its index on
-    /// the line): its point, or why there is none.
+    /// Step `r` with its channel's tracker (started on the channel's first update heard by two
+    /// stations, and again after one that stopped; `prior_of` gives the offset prior of a
+    /// station by its index on the line): its point, `None` while one station alone has been
+    /// heard on the channel (its range is not observable: [`one_station`]), or why there is
+    /// none.
     pub fn step(
         &mut self,
         r: Ready,
         prior_of: &dyn Fn(u16) -> BiasPrior,
-    ) -> Result<TrackPoint, String> {
+    ) -> Result<Option<TrackPoint>, String> {
         let ch = self.channels.get_mut(r.channel).ok_or("no such channel")?;
+        if !observable(ch.sources.len(), false) {
+            return Ok(None);
+        }
         let tracker = match ch.tracker.as_mut() {
             Some(t) => t,
             None => {
@@ -216,7 +222,15 @@ impl LiveChannels {
             // The next update starts a new tracker from its bearings.
             ch.tracker = None;
         }
-        point
+        point.map(Some)
+    }
+
+    /// The name of the one station heard on channel `c` so far, by its index on the line.
+    pub fn lone_station(&self, c: usize) -> Option<u16> {
+        match self.channels.get(c)?.sources.as_slice() {
+            [one] => Some(*one),
+            _ => None,
+        }
     }
 }
 
@@ -267,11 +281,11 @@ mod tests {
         let mut points = Vec::new();
         for o in &obs {
             if let Some(r) = live.push(*o).unwrap() {
-                points.push(live.step(r, &|_| prior).unwrap());
+                points.push(live.step(r, &|_| prior).unwrap().expect("a point"));
             }
         }
         for r in live.close() {
-            points.push(live.step(r, &|_| prior).unwrap());
+            points.push(live.step(r, &|_| prior).unwrap().expect("a point"));
         }
         // The same bearings, numbered as the live line numbers its stations, in one call.
         let mut numbered = obs.clone();
@@ -286,6 +300,34 @@ mod tests {
         let last = points.last().unwrap().position;
         println!("last point {last:?}");
         assert!((last[0] - 1000.0).hypot(last[1] - 2000.0) < 300.0);
+    }
+
+    #[test]
+    fn a_channel_heard_by_one_station_has_no_point_until_a_second_is_heard() {
+        let mut settings = Settings::new(Layout::default(), Motion::OUTDOOR);
+        settings.particles = 200;
+        let prior = BiasPrior {
+            mean: 0.0,
+            sd: 2f32.to_radians(),
+        };
+        let mut live = LiveChannels::new(0.025, settings, prior);
+        let obs = bearings(20);
+        let (mut none, mut points) = (0, 0);
+        // Ten seconds of station 7 alone, then every station.
+        for o in obs.iter().filter(|o| o.time_s >= 10.0 || o.station == 7) {
+            if let Some(r) = live.push(*o).unwrap() {
+                match live.step(r, &|_| prior).unwrap() {
+                    None => {
+                        assert_eq!(live.lone_station(r.channel), Some(7));
+                        none += 1;
+                    }
+                    Some(_) => points += 1,
+                }
+            }
+        }
+        assert_eq!(none, 10, "no point while one station is heard");
+        assert_eq!(points, 9, "a point for every later update but the open one");
+        assert_eq!(live.lone_station(0), None);
     }
 
     #[test]

@@ -50,6 +50,29 @@ pub struct ChannelTrack {
     /// DF stations whose bearings were left out (the state holds
     /// [`max_sources`](crate::track::moving::max_sources)) and their bearings.
     pub left_out: (usize, usize),
+    /// Why the channel has no track (its points are then empty): [`one_station`].
+    pub untracked: Option<String>,
+}
+
+/// Why a channel heard by one DF station alone (bearings, no RSSI) is not tracked: from one
+/// station's bearings a moving emitter's range is not observable. Any copy of its path
+/// scaled along the lines of bearing (moving with the station, outward) fits the bearings as
+/// well, and the tracker's particles settle on one of the copies: measured on one vehicle
+/// watching a drone (`bench --scenario moving/move-vehicle-turning`), the default tracker's
+/// 95 % ellipses held the drone 36 % of the time, 3.6x the bound off; watching a hovering one,
+/// 44 %, and it called the still drone moving (docs/src/tracking.md).
+pub fn one_station(station: &str) -> String {
+    format!(
+        "heard by one DF station only ({station}): from one station's bearings a moving \
+         emitter's range is not observable (any copy of its path scaled along the bearings \
+         fits them), so no track is given; `foxhunt locate` fixes it if it stands still, a \
+         second station (or RSSI anchors) tracks it"
+    )
+}
+
+/// Whether a channel of these sources can be tracked: two DF stations, or RSSI.
+pub fn observable(sources: usize, rssi: bool) -> bool {
+    sources >= 2 || rssi
 }
 
 /// Every channel's track and the frame that places them on the earth.
@@ -172,6 +195,20 @@ pub fn tracks(m: &Measured, anchors: Option<&AnchorsFile>, o: &Options) -> Resul
     }
     let mut out = Vec::with_capacity(found.len());
     for c in &found {
+        if !observable(c.sources.len(), c.rssi) {
+            let station = c
+                .sources
+                .first()
+                .and_then(|k| m.decoded.stations.get(usize::from(*k)))
+                .map_or("no station", |s| s.id.as_str());
+            out.push(ChannelTrack {
+                freq_mhz: c.freq_mhz,
+                points: Vec::new(),
+                left_out: c.left_out,
+                untracked: Some(one_station(station)),
+            });
+            continue;
+        }
         let run = track(&c.updates, &settings(c, anchors, o, &setup)).map_err(|e| {
             let what = c
                 .freq_mhz
@@ -182,6 +219,7 @@ pub fn tracks(m: &Measured, anchors: Option<&AnchorsFile>, o: &Options) -> Resul
             freq_mhz: c.freq_mhz,
             points: run.points,
             left_out: c.left_out,
+            untracked: None,
         });
     }
     let frame = m.decoded.frame.or(anchors.and_then(AnchorsFile::frame));

@@ -714,6 +714,12 @@ fn write_track_maps(
     };
     let t = crate::track::tracks::tracks(&measured, None, &o)?;
     crate::commands::track::note_left_out(&t);
+    if let Err(why) = crate::commands::track::untracked(&t) {
+        note(&format!(
+            "the emitter moves, and it has {why}: no map written"
+        ));
+        return Ok(());
+    }
     crate::commands::track::write_maps(&t, [geojson.as_deref(), kml.as_deref()], outputs)?;
     let written: Vec<String> = [geojson, kml]
         .into_iter()

@@ -19,7 +19,7 @@ use crate::track::capture::TrackDecoder;
 use crate::track::indoor::AnchorsFile;
 use crate::track::live::{Dropped, LIVE_CHANNELS, LIVE_SOURCES, LiveChannels, LiveTracker, Ready};
 use crate::track::moving::{Settings, TrackPoint, Update};
-use crate::track::tracks::{Options, Tracks, settings};
+use crate::track::tracks::{Options, Tracks, one_station, settings};
 use crate::track::updates::{AnchorEpochs, Channel, anchor_positions};
 use foxhunt_bridge::BridgeConfig;
 use foxhunt_core::fix::bias::BiasPrior;
@@ -61,6 +61,8 @@ pub fn run(
     let mut heard = 0usize;
     let mut points = Points::new(a);
     let mut dropped = [false; 2];
+    // Channels said to be heard by one station alone (each said once).
+    let mut lone: Vec<usize> = Vec::new();
     let mut ended = false;
     while !ended {
         ended = line.take(&mut dec, quiet_exit, true)?;
@@ -114,7 +116,21 @@ pub fn run(
         };
         let prior_of = |s: u16| setup.priors.of(usize::from(s));
         for r in ready {
-            let point = live.step(r, &prior_of);
+            let point = match live.step(r, &prior_of) {
+                Ok(Some(p)) => Ok(p),
+                Ok(None) => {
+                    if !lone.contains(&r.channel) {
+                        lone.push(r.channel);
+                        let station = live
+                            .lone_station(r.channel)
+                            .and_then(|s| dec.decoded.stations.get(usize::from(s)))
+                            .map_or("no station", |s| s.id.as_str());
+                        points.untracked(r.freq_mhz, &one_station(station));
+                    }
+                    continue;
+                }
+                Err(e) => Err(e),
+            };
             points.print(&shell, r.freq_mhz, point, out)?;
         }
     }
@@ -228,6 +244,15 @@ impl Points {
             printed: 0,
             failed: None,
         }
+    }
+
+    /// Say once that the channel on `freq_mhz` is not tracked, and `why` (also the line's
+    /// error if no point is printed).
+    fn untracked(&mut self, freq_mhz: Option<f32>, why: &str) {
+        let what = freq_mhz.map_or(String::new(), |f| format!(" on {f:.3} MHz"));
+        let e = format!("no track{what} yet: {why}");
+        note(&format!("foxhunt: {e}"));
+        self.failed.get_or_insert(e);
     }
 
     /// Print `point` of the channel on `freq_mhz`, or say why the update has none.

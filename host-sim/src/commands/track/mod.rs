@@ -262,6 +262,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
     }
     let t = crate::track::tracks::tracks(&m, file.as_ref(), &options)?;
     note_left_out(&t);
+    untracked(&t)?;
     write_files(a, &t, file.as_ref(), &outputs)?;
     if let Some(url) = &a.cot {
         let frame = t.frame.as_ref().ok_or(
@@ -302,6 +303,26 @@ pub(crate) fn note_left_out(t: &Tracks) {
             max_sources(true)
         ));
     }
+}
+
+/// Say which channels have no track and why (one line each on standard error); when no
+/// channel has one, the first's reason as the error instead.
+pub(crate) fn untracked(t: &Tracks) -> Result<(), String> {
+    let mut why = t.tracks.iter().filter_map(|c| {
+        let on = c
+            .freq_mhz
+            .map_or(String::new(), |f| format!(" on {f:.3} MHz"));
+        c.untracked.as_ref().map(|w| format!("no track{on}: {w}"))
+    });
+    if t.tracks.iter().all(|c| c.points.is_empty()) {
+        return Err(why
+            .next()
+            .unwrap_or_else(|| "no update could be tracked".into()));
+    }
+    for w in why {
+        note(&format!("foxhunt: {w}"));
+    }
+    Ok(())
 }
 
 /// The tracks and their 95 % ellipses on the earth, as GeoJSON and KML, to the paths given

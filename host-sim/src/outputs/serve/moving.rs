@@ -120,7 +120,7 @@ impl MapTracker {
         }
         let prior = self.prior;
         for r in ready {
-            let Ok(p) = self.live.step(r, &|_| prior) else {
+            let Ok(Some(p)) = self.live.step(r, &|_| prior) else {
                 continue;
             };
             if self.lines.len() <= r.channel {
