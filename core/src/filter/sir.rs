@@ -139,7 +139,7 @@ impl<M: Model<D>, L: Likelihood, const N: usize, const D: usize, S: Swarm<D>> Fi
         if self.config.policy.due(ess, N) {
             let set = &mut self.state.set;
             set.resample(self.config.resampling, rng);
-            let kernel = self.model.regularised();
+            let kernel = self.model.regularised(&covariance);
             // The kernel owed: a full one per resampling, or per KERNEL_PERIOD_S of time.
             let share = elapsed.map_or(1.0, |_| self.since_kernel_s / KERNEL_PERIOD_S);
             self.since_kernel_s = 0.0;

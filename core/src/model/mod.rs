@@ -81,8 +81,9 @@ pub trait Model<const D: usize> {
     /// Which state components the roughening kernel may jitter after resampling
     /// ([`crate::Roughening::apply_to`]): those the motion does not diversify itself (a still
     /// emitter's position, a constant parameter). A component the model keeps discrete (a
-    /// motion mode) or drives with its own noise (a velocity) is left out. Default: every one.
-    fn regularised(&self) -> [bool; D] {
+    /// motion mode) or drives with its own noise (a velocity) is left out. `covariance` is the
+    /// weighted cloud's before the resampling. Default: every one.
+    fn regularised(&self, _covariance: &[[f32; D]; D]) -> [bool; D] {
         [true; D]
     }
 }

@@ -8,9 +8,11 @@
 //! Stations join a channel as they are heard, so the state is sized for [`LIVE_SOURCES`]
 //! from the start (a recorded capture's is sized for the stations it holds): a later station
 //! takes the next free offset, whose prior is the widest any station may have (its own is not
-//! known when the tracker starts), and bearings of stations beyond it are dropped.
+//! known when the tracker starts), and bearings of stations beyond it are dropped. An offset
+//! no bearing has reached is left out of the tracker's kernel (the core's `Mover`), so the
+//! heard stations are tracked to the bit as a state of those alone tracks them.
 
-use crate::track::moving::{Settings, TrackPoint, Update, track_each};
+use crate::track::moving::{Settings, TrackPoint, Update, max_sources, track_each};
 use crate::track::tracks::observable;
 use crate::track::updates::Window;
 use foxhunt_core::fix::bias::BiasPrior;
@@ -21,7 +23,7 @@ use std::sync::mpsc;
 use std::thread::JoinHandle;
 
 /// DF stations a live channel tracks: the most a compiled state of bearings alone holds.
-pub const LIVE_SOURCES: u8 = 4;
+pub const LIVE_SOURCES: u8 = max_sources(false) as u8;
 /// Channels a live line may hold, as a capture may.
 pub const LIVE_CHANNELS: usize = 16;
 
@@ -293,7 +295,10 @@ mod tests {
             o.station -= 7;
         }
         let updates = crate::track::updates::bearing_updates(&numbered);
-        settings.offsets = vec![prior; 4];
+        // A recording's state holds its three stations alone (the live one has room for six):
+        // the offsets no bearing reached stay out of the kernel, so the points are the same.
+        settings.layout.sources = 3;
+        settings.offsets = vec![prior; 3];
         let batch = track(&updates, &settings).unwrap();
         assert_eq!(points.len(), 30, "one point per second's update");
         assert_eq!(points, batch.points, "live and recorded points differ");
@@ -331,15 +336,16 @@ mod tests {
     }
 
     #[test]
-    fn a_fifth_station_and_a_seventeenth_channel_are_dropped() {
+    fn a_seventh_station_and_a_seventeenth_channel_are_dropped() {
         let settings = Settings::new(Layout::default(), Motion::OUTDOOR);
         let mut live = LiveChannels::new(0.025, settings, BiasPrior::default());
         let mut o = bearings(1)[0];
-        for s in 0..4 {
+        for s in 0..u16::from(LIVE_SOURCES) {
             o.station = s;
             assert!(live.push(o).is_ok());
         }
-        o.station = 4;
+        assert_eq!(LIVE_SOURCES, 6, "what a recording's state holds");
+        o.station = 6;
         assert_eq!(live.push(o), Err(Dropped::Stations));
         for c in 1..16 {
             o.station = 0;

@@ -408,10 +408,15 @@ impl<const D: usize, const K: usize> Model<D> for Mover<K> {
     /// a position jittered alone no longer agrees with its offsets, the next bearings weigh it
     /// out, and only the kernel's shrinkage toward the mean stays, narrowing the cloud at each
     /// resampling (measured: 10 Hz ellipses holding the drone 55 % of the time at N = 1000).
-    fn regularised(&self) -> [bool; D] {
+    /// An offset mean the cloud does not spread (variance exactly 0: a calibrated source, or
+    /// one no bearing has reached yet) is left out: there is nothing to smooth, and counted it
+    /// would change the kernel's width and draws, so a state with room for stations not heard
+    /// yet (a live channel's) tracks the heard ones to the bit as a state of those alone does.
+    fn regularised(&self, covariance: &[[f32; D]; D]) -> [bool; D] {
         let offsets = PARAMETERS..PARAMETERS + 2 * self.layout.sources as usize;
         core::array::from_fn(|j| {
-            j < 2 || (offsets.contains(&j) && (j - PARAMETERS).is_multiple_of(2))
+            let spread = covariance.get(j).and_then(|row| row.get(j)).copied() != Some(0.0);
+            j < 2 || (offsets.contains(&j) && (j - PARAMETERS).is_multiple_of(2) && spread)
         })
     }
 }

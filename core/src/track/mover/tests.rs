@@ -188,8 +188,16 @@ fn the_kernel_moves_the_position_with_the_offset_means_and_the_layout_must_fit()
         },
     );
     // Position and source 0's offset mean (component 5); not its variance, nor unused room.
-    let mask: [bool; 8] = m.regularised();
+    let mut cov = [[0.0f32; 8]; 8];
+    for (j, row) in cov.iter_mut().enumerate() {
+        row[j] = 1.0;
+    }
+    let mask: [bool; 8] = m.regularised(&cov);
     assert_eq!(mask, [true, true, false, false, false, true, false, false]);
+    // Nor an offset mean the cloud does not spread (a source not heard yet).
+    cov[5][5] = 0.0;
+    let mask: [bool; 8] = m.regularised(&cov);
+    assert_eq!(mask, [true, true, false, false, false, false, false, false]);
     let mut z = Epoch::<4>::new(1.0);
     z.push_bearing(bearing([0.0, 0.0], 0.0, 0)).unwrap();
     assert_eq!(

@@ -305,7 +305,7 @@ fn staged<const N: usize>(
     if part >= Part::Resample {
         let config = SirConfig::TUNED;
         set.resample(config.resampling, rng);
-        let kernel = <Mover<STATIONS> as Model<D>>::regularised(model);
+        let kernel = <Mover<STATIONS> as Model<D>>::regularised(model, &covariance);
         config.roughening.apply_to(
             set,
             &mean,
