@@ -3,7 +3,7 @@
 
 use std::io::Write;
 use std::path::PathBuf;
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Output};
 use std::time::Duration;
 
 mod common;
@@ -27,6 +27,18 @@ fn foxhunt(args: &[&str]) -> Output {
         .args(args)
         .output()
         .expect("run foxhunt")
+}
+
+/// `foxhunt ARGS` with `input` on standard input, run to its end.
+fn fed(args: &[&str], input: &[u8]) -> Output {
+    let mut child = common::piped(args);
+    child
+        .stdin
+        .take()
+        .expect("stdin")
+        .write_all(input)
+        .expect("write");
+    child.wait_with_output().expect("wait")
 }
 
 fn json(out: &Output) -> serde_json::Value {
@@ -105,16 +117,8 @@ fn a_drone_seen_by_four_masts_gives_a_placed_track_around_it() {
 fn a_channel_heard_by_one_station_is_not_tracked_and_says_why() {
     // The bundled drive: one vehicle's DF unit. Recorded, with or without --json: no track,
     // status 1, one line naming the station and what to do.
-    for json in [false, true] {
-        let mut args = vec!["track", "AOA"];
-        if json {
-            args.push("--json");
-        }
-        let path = capture("aoa-drive.nmea");
-        let args: Vec<&str> = args
-            .into_iter()
-            .map(|a| if a == "AOA" { path.as_str() } else { a })
-            .collect();
+    let path = capture("aoa-drive.nmea");
+    for args in [vec!["track", &path], vec!["track", &path, "--json"]] {
         let out = foxhunt(&args);
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
@@ -128,21 +132,8 @@ fn a_channel_heard_by_one_station_is_not_tracked_and_says_why() {
         assert!(out.stdout.is_empty());
     }
     // Live: no point while only that station is heard, and the reason once it ends.
-    let mut child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
-        .args(["track", "-", "--json"])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run foxhunt");
-    let bytes = std::fs::read(capture("aoa-drive.nmea")).expect("capture");
-    child
-        .stdin
-        .take()
-        .expect("stdin")
-        .write_all(&bytes)
-        .expect("write");
-    let out = child.wait_with_output().expect("wait");
+    let bytes = std::fs::read(&path).expect("capture");
+    let out = fed(&["track", "-", "--json"], &bytes);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(out.stdout.is_empty());
@@ -379,13 +370,7 @@ fn drone(dir: &std::path::Path) -> (PathBuf, PathBuf) {
 /// before the second half is written (the line is tracked as it arrives), and end well; its
 /// lines, one JSON object each.
 fn live_in_halves(args: &[&str], bytes: &[u8]) -> Vec<serde_json::Value> {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run foxhunt");
+    let mut child = common::piped(args);
     let rx = common::line_reader(&mut child);
     let mut stdin = child.stdin.take().expect("stdin");
     let half = bytes.len() / 2;
@@ -503,22 +488,7 @@ fn a_live_line_of_anchors_rssi_is_tracked_as_the_recording_is() {
 
 #[test]
 fn a_live_line_without_bearings_and_live_files_are_refused() {
-    let run = |args: &[&str], input: &[u8]| {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
-            .args(args)
-            .stdin(Stdio::piped())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("run foxhunt");
-        child
-            .stdin
-            .take()
-            .expect("stdin")
-            .write_all(input)
-            .expect("write");
-        child.wait_with_output().expect("wait")
-    };
+    let run = fed;
     // Nothing on the line: no track, exit status 1, one line saying why.
     let out = run(&["track", "-"], b"$GPGGA,garbage\r\n");
     let err = String::from_utf8_lossy(&out.stderr);

@@ -59,6 +59,17 @@ pub fn grid_osm(path: &Path) {
     std::fs::write(path, s).expect("write the extract");
 }
 
+/// `foxhunt ARGS` started with its standard input, output and error piped.
+pub fn piped(args: &[&str]) -> Child {
+    std::process::Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .args(args)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run foxhunt")
+}
+
 /// The lines of `child`'s standard output as they come, read on a thread of their own (a live
 /// command prints while its input is still open).
 pub fn line_reader(child: &mut Child) -> Receiver<String> {
