@@ -227,7 +227,7 @@ impl LiveChannels {
         point.map(Some)
     }
 
-    /// The name of the one station heard on channel `c` so far, by its index on the line.
+    /// The line's station index of the one station heard on channel `c` so far, if one alone is.
     pub fn lone_station(&self, c: usize) -> Option<u16> {
         match self.channels.get(c)?.sources.as_slice() {
             [one] => Some(*one),
