@@ -50,12 +50,14 @@ enum Command {
     ///
     /// Every channel of the captures is tracked with a particle filter (a still and a moving
     /// model, each DF unit's offset learned): per update, position, velocity, 95 % ellipse and
-    /// P(moving). RSSI comes from a ZigBee coordinator's AF_INCOMING_MSG frames and needs the
-    /// anchors file (TOML: each anchor's short address and position, the room, path loss and
-    /// noise). Prints CSV (or --json); --geojson, --csv and --svg write files. Live (-,
-    /// --baud, --kraken, --mqtt): one line per update as the bearings arrive (a JSON object
-    /// with --json). Exit status: 0 with a track, 1 when there is none (the message says
-    /// why), 2 on a usage error.
+    /// P(moving). A channel one DF station alone hears (bearings, no RSSI) is not: from one
+    /// station a moving emitter's range is not observable (`locate` fixes a still one). RSSI
+    /// comes from a ZigBee coordinator's AF_INCOMING_MSG frames and needs the anchors file
+    /// (TOML: each anchor's short address and position, the room, path loss and noise).
+    /// Prints CSV (or --json); --geojson, --csv and --svg write files. Live (-, --baud,
+    /// --kraken, --mqtt): one line per update as the bearings arrive (a JSON object with
+    /// --json). Exit status: 0 with a track, 1 when there is none (the message says why), 2
+    /// on a usage error.
     ///
     /// Examples:
     ///   foxhunt track drone.nmea --json
