@@ -1,6 +1,7 @@
 //! `foxhunt track` through the binary: bearings of a recorded drive, MT-frame RSSI with an
 //! anchors file, the JSON schema, CSV and GeoJSON, a live line, and one-line refusals.
 
+use foxhunt_bridge::nmea::write_sentence;
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::{Command, Output};
@@ -191,15 +192,12 @@ fn retuned(bytes: &[u8], mhz: &str) -> Vec<u8> {
             out.push_str("\r\n");
             continue;
         };
-        let fields: Vec<&str> = body.split(',').collect();
-        let fields: Vec<&str> = fields
-            .iter()
+        let fields: Vec<&str> = body
+            .split(',')
             .enumerate()
             .map(|(i, f)| if i == 4 { mhz } else { f })
             .collect();
-        let body = format!("PFOXB,{}", fields.join(","));
-        let sum = body.bytes().fold(0u8, |a, b| a ^ b);
-        out.push_str(&format!("${body}*{sum:02X}\r\n"));
+        write_sentence(&mut out, &format!("PFOXB,{}", fields.join(","))).expect("written");
     }
     out.into_bytes()
 }
