@@ -34,6 +34,7 @@ mod direction;
 mod prior;
 mod problem;
 mod profile_likelihood;
+mod rival;
 mod solve;
 mod stations;
 #[cfg(test)]
@@ -46,6 +47,7 @@ pub use calibration::{
 pub use direction::{DirectionPrior, HARMONICS, harmonics, relative_to_course};
 pub use prior::{BiasPrior, CONTRADICTED_Z, KNOWN_SD};
 pub use profile_likelihood::{CIRCLE_STEPS, OffsetCircle, ProfilePoint, offset_circle, profile};
+pub use rival::no_rival;
 pub use solve::{BiasedFix, BiasedOptions, Start, StartOffsets, ml, ml_sources, refit};
 pub use stations::{FRONT_STEP_M, StationSlot};
 

@@ -107,14 +107,23 @@ pub(super) fn check_ambiguity(
             .max(CIRCLE_TOLERANCE_SD * libm::sqrtf(minor.max(0.0))),
         ..solver_at(source, members, config)
     };
+    // Deviances of correlated bearings count tau times what they hold.
+    let gap = AMBIGUOUS_DEVIANCE * correlation(source);
+    // Other stations that pin the position leave no rival to walk to (a network's solve).
+    if bias::no_rival(
+        members,
+        stations,
+        main,
+        source.position,
+        solver,
+        RIVAL_APART,
+        gap,
+    ) {
+        return Ok(());
+    }
     let circle = bias::offset_circle(members, stations, main, source.position, solver)
         .map_err(NoEmitter::Geometry)?;
-    // Deviances of correlated bearings count tau times what they hold.
-    source.offset_check.ambiguous = circle.rival(
-        source.bias,
-        RIVAL_APART,
-        AMBIGUOUS_DEVIANCE * correlation(source),
-    );
+    source.offset_check.ambiguous = circle.rival(source.bias, RIVAL_APART, gap);
     Ok(())
 }
 
