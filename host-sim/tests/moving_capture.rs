@@ -222,6 +222,55 @@ fn locate_on_a_drone_s_records_says_it_moves() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `locate` from one vehicle watching the circling drone (`move-vehicle-turning`): no fix,
+/// and the words say the bearings follow something rather than scatter like noise: an emitter
+/// that moves, or an error that turns with the vehicle (one station cannot tell them apart,
+/// nor place a moving emitter). A still emitter's drive (`bias-2deg`) gets a fix, and no such
+/// words.
+#[test]
+fn locate_from_one_vehicle_on_a_moving_drone_says_its_bearings_follow_something() {
+    let dir = std::env::temp_dir().join(format!("foxhunt-move-one-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("scratch");
+    for (name, file, moves) in [
+        ("move-vehicle-turning", "drone.xml", true),
+        ("bias-2deg", "still.nmea", false),
+    ] {
+        let out = dir.join(file);
+        let path = out.to_str().expect("path");
+        let sim = foxhunt(&[
+            "simulate",
+            "--condition",
+            name,
+            "--run",
+            "2",
+            "--out",
+            path,
+            "--force",
+        ]);
+        assert!(
+            sim.status.success(),
+            "{}",
+            String::from_utf8_lossy(&sim.stderr)
+        );
+        let l = foxhunt(&["locate", path, "--json"]);
+        let v: Value = serde_json::from_slice(&l.stdout).expect("one JSON object");
+        let words = v["error"].as_str().unwrap_or("").to_string();
+        eprintln!("{name}: {words}");
+        if moves {
+            assert_eq!(l.status.code(), Some(1), "{v}");
+            assert!(
+                words.contains("follow something that changes, not noise"),
+                "{v}"
+            );
+            assert!(words.contains("an emitter that moves"), "{v}");
+        } else {
+            assert_eq!(l.status.code(), Some(0), "{v}");
+            assert!(!String::from_utf8_lossy(&l.stderr).contains("follow something"));
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// The walker of `move-indoor-aoa` from its anchors' records: `foxhunt track` with the
 /// indoor motion and the 10 s offset memory the bench's tracker uses follows the walker as
 /// well as the bench does on the same runs' measurements in memory (docs/src/tracking.md,

@@ -3,7 +3,8 @@
 use crate::inputs::capture::Decoded;
 use crate::locate::report::RegionReport;
 use foxhunt_core::fix::locate::motion::Motion;
-use foxhunt_core::fix::locate::{ChannelOutcome, NoEmitter};
+use foxhunt_core::fix::locate::{ChannelOutcome, NoEmitter, Observation};
+use foxhunt_core::model::bearing::wrap;
 use foxhunt_core::{Bearing, Error};
 
 /// Why a capture gives no position for the vehicle, in words a user can act on.
@@ -238,6 +239,61 @@ pub(crate) fn no_emitter(why: NoEmitter, n: u32, bearings: &[Bearing], max_sigma
     }
 }
 
+/// How much a station's bearing changes from one to the next, degrees: the robust sd of the
+/// steps between its consecutive bearings (at most [`STEP_GAP_S`] apart) over root 2, pooled
+/// over the stations of `observations` (one channel's, any order); `None` below
+/// [`STEADY_PAIRS`] such pairs. Noise makes each step about root 2 of its sd; bearings that
+/// follow something which changes smoothly (an emitter that moves, an error that turns with
+/// the vehicle) step by far less than they scatter about any one point.
+pub(crate) fn step_deg(observations: &[Observation]) -> Option<f32> {
+    let mut seen: Vec<&Observation> = observations.iter().collect();
+    seen.sort_by(|a, b| {
+        a.station
+            .cmp(&b.station)
+            .then(a.time_s.total_cmp(&b.time_s))
+    });
+    let mut steps: Vec<f32> = seen
+        .windows(2)
+        .filter(|p| p[0].station == p[1].station && p[1].time_s - p[0].time_s <= STEP_GAP_S)
+        .map(|p| wrap(p[1].bearing.theta - p[0].bearing.theta).abs())
+        .collect();
+    if steps.len() < STEADY_PAIRS {
+        return None;
+    }
+    steps.sort_by(f32::total_cmp);
+    let median = steps[steps.len() / 2];
+    // The median absolute step of Gaussian noise is 0.674 of the steps' sd, root 2 of the
+    // bearings'.
+    Some((median / 0.6745 / core::f32::consts::SQRT_2).to_degrees())
+}
+
+/// Consecutive bearings of a station at most this far apart, seconds, count as a step.
+const STEP_GAP_S: f32 = 5.0;
+
+/// Steps needed before [`step_deg`] says anything.
+const STEADY_PAIRS: usize = 20;
+
+/// What a channel with no consistent emitter whose bearings step by `step` degrees (its
+/// [`step_deg`]) adds to `why` (the bearings scatter, agree on nothing, or pin no point):
+/// bearings that step by under a third of the noise ceiling `max_sigma` (radians) follow
+/// something, not noise. Nothing for the other reasons.
+pub(crate) fn steady_clause(why: NoEmitter, step: Option<f32>, max_sigma: f32) -> String {
+    let spread = matches!(
+        why,
+        NoEmitter::TooNoisy | NoEmitter::NoConsensus | NoEmitter::Geometry(_)
+    );
+    match step {
+        Some(s) if spread && s < max_sigma.to_degrees() / 3.0 => format!(
+            "; yet each bearing differs from its station's one before by only about {s:.1} \
+             degrees: they follow something that changes, not noise: an emitter that moves \
+             (one station cannot place it; with a second, `foxhunt track` follows it), or an \
+             error that changes with the vehicle's heading or place (multipath, a \
+             direction-dependent error)"
+        ),
+        _ => String::new(),
+    }
+}
+
 /// The reason code of an emitter that moves ([`reason_code`]).
 pub const MOVING: &str = "moving";
 
@@ -297,4 +353,74 @@ pub(crate) fn offset_beyond(b: &foxhunt_core::fix::locate::OffsetBeyond) -> Stri
         b.prior.mean.to_degrees(),
         b.prior.sd.to_degrees()
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use foxhunt_core::Bearing;
+
+    fn at(station: u16, t: f32, theta: f32) -> Observation {
+        Observation {
+            bearing: Bearing {
+                vehicle: [0.0, 0.0],
+                theta,
+                sigma: 0.035,
+            },
+            time_s: t,
+            freq_mhz: None,
+            station,
+            stamped: true,
+        }
+    }
+
+    #[test]
+    fn steps_read_noise_as_noise_and_a_sweep_as_steady() {
+        // Two stations interleaved, 2 degrees of noise on bearings that sweep 40 degrees: the
+        // steps give the noise back (within a tenth: 200 steps' median), not the sweep.
+        let mut x = 0x2545_f491u32;
+        let mut normal = || {
+            // A sum of twelve uniforms less six: close enough to a normal draw here.
+            (0..12)
+                .map(|_| {
+                    x ^= x << 13;
+                    x ^= x >> 17;
+                    x ^= x << 5;
+                    x as f32 / u32::MAX as f32
+                })
+                .sum::<f32>()
+                - 6.0
+        };
+        let obs: Vec<Observation> = (0..200)
+            .map(|k| {
+                let sweep = (40.0f32 * k as f32 / 200.0).to_radians();
+                at(
+                    (k % 2) as u16,
+                    k as f32,
+                    sweep + 2f32.to_radians() * normal(),
+                )
+            })
+            .collect();
+        let s = step_deg(&obs).expect("enough steps");
+        assert!((s - 2.0).abs() < 0.2 * 2.0 + 0.2, "{s}");
+        // Uniform bearings step by about a third of the circle: far past any ceiling.
+        let wild: Vec<Observation> = (0..100)
+            .map(|k| at(0, k as f32, std::f32::consts::PI * normal() / 2.0))
+            .collect();
+        assert!(step_deg(&wild).expect("steps") > 30.0);
+        // Steps more than five seconds apart, or too few, say nothing.
+        let sparse: Vec<Observation> = (0..100).map(|k| at(0, 10.0 * k as f32, 0.0)).collect();
+        assert_eq!(step_deg(&sparse), None);
+        assert_eq!(step_deg(&obs[..20]), None);
+    }
+
+    #[test]
+    fn the_clause_speaks_only_for_steady_bearings_that_meet_nowhere() {
+        let ceiling = 10f32.to_radians();
+        assert!(steady_clause(NoEmitter::TooNoisy, Some(3.0), ceiling).contains("moves"));
+        assert!(steady_clause(NoEmitter::NoConsensus, Some(3.0), ceiling).contains("moves"));
+        assert_eq!(steady_clause(NoEmitter::TooNoisy, Some(3.5), ceiling), "");
+        assert_eq!(steady_clause(NoEmitter::TooNoisy, None, ceiling), "");
+        assert_eq!(steady_clause(NoEmitter::TooFew, Some(1.0), ceiling), "");
+    }
 }

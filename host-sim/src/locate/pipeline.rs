@@ -7,7 +7,9 @@ use crate::inputs::capture::Decoded;
 use crate::inputs::stations::Reference;
 use crate::locate::Parts;
 use crate::locate::Unlocated;
-use crate::locate::explain::{explain, no_emitter, open_range, points_away, reason_code};
+use crate::locate::explain::{
+    explain, no_emitter, open_range, points_away, reason_code, steady_clause, step_deg,
+};
 use crate::locate::report::{
     ChannelSummary, Drawn, EllipseReport, MotionReport, OffsetCheckReport, RegionReport,
     SourceReport, geodetic,
@@ -171,12 +173,15 @@ pub(crate) fn located_by_pipeline(
                     motion = Some(MotionReport::of(&m, frame));
                 }
                 let text = geometry.unwrap_or_else(|| {
-                    no_emitter(
-                        why,
-                        c.bearings,
-                        &bearings,
-                        setup.priors.config(&o.config()).max_sigma,
-                    )
+                    let max_sigma = setup.priors.config(&o.config()).max_sigma;
+                    // The channel's own bearings: do they step like noise, or follow something?
+                    let mine: Vec<Observation> = obs
+                        .iter()
+                        .filter(|x| same_channel(x.freq_mhz, c.freq_mhz, o.channel_width_mhz))
+                        .copied()
+                        .collect();
+                    no_emitter(why, c.bearings, &bearings, max_sigma)
+                        + &steady_clause(why, step_deg(&mine), max_sigma)
                 });
                 why_none.get_or_insert((text.clone(), reason));
                 text
@@ -249,4 +254,14 @@ pub(crate) fn located_by_pipeline(
         ),
         stations,
     ))
+}
+
+/// Whether a bearing on `freq` belongs to the channel at `channel` (MHz, within `width`; no
+/// frequency with none).
+fn same_channel(freq: Option<f32>, channel: Option<f32>, width: f32) -> bool {
+    match (freq, channel) {
+        (Some(f), Some(c)) => (f - c).abs() <= width,
+        (None, None) => true,
+        _ => false,
+    }
 }
