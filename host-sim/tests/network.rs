@@ -117,3 +117,44 @@ fn a_simulated_network_reads_back_with_its_stations_and_offsets() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The advice guides a vehicle: in a network of fixed masts there is none, and `locate` says
+/// so instead of telling a mast where to drive; with a car among the masts the advice is the
+/// car's (its heading and place, not the last mast heard).
+#[test]
+fn advice_is_for_a_vehicle_and_fixed_masts_get_none() {
+    let dir = std::env::temp_dir().join(format!("foxhunt-network-advice-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("scratch");
+    for (condition, vehicle) in [("network-fixed3", false), ("network-mobile", true)] {
+        let out = dir.join(format!("{condition}.xml"));
+        let path = out.to_str().expect("path");
+        let s = foxhunt(&[
+            "simulate",
+            "--condition",
+            condition,
+            "--out",
+            path,
+            "--force",
+        ]);
+        assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
+        let stations = out.with_extension("stations.toml");
+        let l = foxhunt(&[
+            "locate",
+            path,
+            "--stations",
+            stations.to_str().expect("path"),
+            "--json",
+        ]);
+        assert!(l.status.success(), "{}", String::from_utf8_lossy(&l.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&l.stdout).expect("one JSON object");
+        if vehicle {
+            assert!(v["advice"].is_object(), "{v}");
+            assert!(v["advice_error"].is_null(), "{v}");
+        } else {
+            assert!(v["advice"].is_null(), "{v}");
+            let why = v["advice_error"].as_str().expect("why no advice");
+            assert!(why.contains("no vehicle to guide"), "{why}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -357,23 +357,52 @@ fn claimed(mut v: Verdict, f: &Source, o: &GuidanceOptions) -> Verdict {
     v
 }
 
-/// Where the vehicle is, every bearing so far (at `o`'s sigma if it sets one) and the track's
-/// heading.
+/// Where the guided vehicle is ([`guided_station`]), every bearing so far (at `o`'s sigma if
+/// it sets one) and the vehicle's heading.
 type SoFar = ([f32; 2], Vec<Bearing>, Option<f32>);
 
 /// [`SoFar`] of the drive `d`.
 fn drive_so_far(d: &Decoded, o: &LocateOptions) -> Result<SoFar, String> {
-    let vehicle = d
-        .bearings()
-        .last()
-        .map(|b| b.vehicle)
-        .ok_or("no bearing yet")?;
     let all: Vec<Bearing> = match o.sigma_deg {
         Some(s) => d.bearings_with_sigma(s.to_radians()),
         None => d.bearings().copied().collect(),
     };
-    let heading = track_heading(&all);
+    // Where the guided vehicle is and where it heads: its own bearings, not the network's.
+    let own: Vec<Bearing> = match guided_station(d)? {
+        Some(k) => d
+            .observations
+            .iter()
+            .zip(&all)
+            .filter(|(x, _)| x.station == k)
+            .map(|(_, b)| *b)
+            .collect(),
+        None => all.clone(),
+    };
+    let vehicle = own.last().map(|b| b.vehicle).ok_or("no bearing yet")?;
+    let heading = track_heading(&own);
     Ok((vehicle, all, heading))
+}
+
+/// The station the advice guides: the one of the latest bearing among those that moved
+/// (`None`: none has yet, so the one of the latest bearing, as a lone unit before it drives
+/// off). Several stations heard and none moved is a network of fixed stations: no vehicle to
+/// guide, and no advice for a mast to drive.
+fn guided_station(d: &Decoded) -> Result<Option<u16>, String> {
+    if d.stations.len() > 1 && d.stations.iter().all(|s| s.fixed) {
+        return Err(format!(
+            "every station stands still ({} stations, none moved): no vehicle to guide",
+            d.stations.len()
+        ));
+    }
+    Ok(d.observations
+        .iter()
+        .rev()
+        .find(|x| {
+            d.stations
+                .get(usize::from(x.station))
+                .is_some_and(|s| !s.fixed)
+        })
+        .map(|x| x.station))
 }
 
 /// How much noisier the fix found the bearings than they say: its noise over their median
@@ -396,6 +425,62 @@ fn noise_scale(f: &Source, bearings: &[Bearing]) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::inputs::capture::StationInfo;
+    use foxhunt_core::fix::locate::Observation;
+
+    fn station(id: &str, fixed: bool) -> StationInfo {
+        StationInfo {
+            id: id.into(),
+            named: true,
+            fixed,
+            position: None,
+            span_m: if fixed { 0.0 } else { 900.0 },
+            bearings: 2,
+        }
+    }
+
+    fn heard(station: u16, at: [f32; 2], t: f32) -> Observation {
+        Observation {
+            bearing: Bearing {
+                vehicle: at,
+                theta: 0.0,
+                sigma: 0.03,
+            },
+            time_s: t,
+            freq_mhz: None,
+            station,
+            stamped: true,
+        }
+    }
+
+    #[test]
+    fn the_advice_guides_the_vehicle_not_the_last_mast_heard() {
+        // A car (station 1) driving east between two masts' bearings: the advice starts at the
+        // car and heads east, though a mast was heard last.
+        let mut d = Decoded {
+            stations: vec![station("mast", true), station("car", false)],
+            observations: vec![
+                heard(1, [0.0, 0.0], 0.0),
+                heard(0, [5000.0, 5000.0], 0.5),
+                heard(1, [100.0, 0.0], 1.0),
+                heard(0, [5000.0, 5000.0], 1.5),
+            ],
+            ..Decoded::default()
+        };
+        let o = LocateOptions::default();
+        let (vehicle, all, heading) = drive_so_far(&d, &o).expect("a vehicle");
+        assert_eq!(vehicle, [100.0, 0.0]);
+        assert_eq!(all.len(), 4);
+        assert!(heading.expect("a heading").abs() < 1e-6);
+        // Two masts and nothing that moves: no vehicle, and the words say so.
+        d.stations[1] = station("mast 2", true);
+        let e = drive_so_far(&d, &o).unwrap_err();
+        assert!(e.contains("no vehicle to guide"), "{e}");
+        // One unit that has not driven off yet is still guided from where it stands.
+        d.stations.truncate(1);
+        d.observations.retain(|x| x.station == 0);
+        assert_eq!(drive_so_far(&d, &o).expect("the unit").0, [5000.0, 5000.0]);
+    }
 
     #[test]
     fn a_target_no_rule_can_use_is_refused_by_name() {
