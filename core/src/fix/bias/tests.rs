@@ -733,6 +733,20 @@ fn ring_network(
     Ok((items, n, table, fix))
 }
 
+/// [`no_rival`] for station 0 at `at`: a rival 30 degrees away within a deviance of 9, the
+/// ambiguity check's.
+fn no_rival_for_0<T: Sighting>(items: &[T], table: &mut [StationSlot], at: [f32; 2]) -> bool {
+    no_rival(
+        items,
+        table,
+        0,
+        at,
+        BiasedOptions::default(),
+        30.0 * DEG,
+        9.0,
+    )
+}
+
 #[test]
 fn a_network_pins_the_position_and_leaves_a_station_no_rival() {
     // Forty stations 8 km round the emitter, two bearings each: no offset of station 0 far
@@ -741,15 +755,7 @@ fn a_network_pins_the_position_and_leaves_a_station_no_rival() {
     let (items, n, mut table, fix) = ring_network(40, 2, 8000.0, 2.0 * DEG, &mut rng).unwrap();
     let before = table[0].offset();
     let options = BiasedOptions::default();
-    assert!(no_rival(
-        &items[..n],
-        &mut table,
-        0,
-        fix.position,
-        options,
-        30.0 * DEG,
-        9.0
-    ));
+    assert!(no_rival_for_0(&items[..n], &mut table, fix.position));
     assert_eq!(table[0].offset(), before);
     let c = offset_circle(&items[..n], &mut table, 0, fix.position, options).unwrap();
     assert!(!c.rival(table[0].offset().0, 30.0 * DEG, 9.0), "{c:?}");
@@ -768,27 +774,11 @@ fn a_station_alone_or_a_loose_network_walks_the_circle() {
     };
     let options = BiasedOptions::default();
     let fix = ml_sources(&bs, &mut table, start, &crate::Gaussian, options).unwrap();
-    assert!(!no_rival(
-        &bs,
-        &mut table,
-        0,
-        fix.position,
-        options,
-        30.0 * DEG,
-        9.0
-    ));
+    assert!(!no_rival_for_0(&bs, &mut table, fix.position));
     // Three fixed stations 8 km out: each other station's cross-range is its prior's share,
     // hundreds of metres, so a far rival is not ruled out by the bound.
     let (items, n, mut table, fix) = ring_network(3, 40, 8000.0, 2.0 * DEG, &mut rng).unwrap();
-    assert!(!no_rival(
-        &items[..n],
-        &mut table,
-        0,
-        fix.position,
-        options,
-        30.0 * DEG,
-        9.0
-    ));
+    assert!(!no_rival_for_0(&items[..n], &mut table, fix.position));
 }
 
 #[test]
@@ -811,7 +801,7 @@ fn no_rival_is_never_said_where_the_circle_finds_one() {
         };
         let options = BiasedOptions::default();
         let items = &items[..n];
-        let none = no_rival(items, &mut table, 0, fix.position, options, 30.0 * DEG, 9.0);
+        let none = no_rival_for_0(items, &mut table, fix.position);
         let c = offset_circle(items, &mut table, 0, fix.position, options).unwrap();
         let rival = c.rival(table[0].offset().0, 30.0 * DEG, 9.0);
         assert!(!(none && rival), "case {case}: {c:?}");
