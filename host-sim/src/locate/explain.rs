@@ -273,22 +273,30 @@ const STEP_GAP_S: f32 = 5.0;
 /// Steps needed before [`step_deg`] says anything.
 const STEADY_PAIRS: usize = 20;
 
-/// What a channel with no consistent emitter whose bearings step by `step` degrees (its
-/// [`step_deg`]) adds to `why` (the bearings scatter, agree on nothing, or pin no point):
-/// bearings that step by under a third of the noise ceiling `max_sigma` (radians) follow
-/// something, not noise. Nothing for the other reasons.
-pub(crate) fn steady_clause(why: NoEmitter, step: Option<f32>, max_sigma: f32) -> String {
+/// What a channel with no consistent emitter, heard by `stations` DF stations, whose bearings
+/// step by `step` degrees (its [`step_deg`]) adds to `why` (the bearings scatter, agree on
+/// nothing, or pin no point): bearings that step by under a third of the noise ceiling
+/// `max_sigma` (radians) follow something, not noise. Nothing for the other reasons.
+pub(crate) fn steady_clause(
+    why: NoEmitter,
+    step: Option<f32>,
+    stations: usize,
+    max_sigma: f32,
+) -> String {
     let spread = matches!(
         why,
         NoEmitter::TooNoisy | NoEmitter::NoConsensus | NoEmitter::Geometry(_)
     );
+    let track = match stations {
+        1 => "one station cannot place it; with a second, `foxhunt track` follows it",
+        _ => "`foxhunt track` follows it",
+    };
     match step {
         Some(s) if spread && s < max_sigma.to_degrees() / 3.0 => format!(
             "; yet each bearing differs from its station's one before by only about {s:.1} \
              degrees: they follow something that changes, not noise: an emitter that moves \
-             (one station cannot place it; with a second, `foxhunt track` follows it), or an \
-             error that changes with the vehicle's heading or place (multipath, a \
-             direction-dependent error)"
+             ({track}), or an error that changes with the vehicle's heading or place \
+             (multipath, a direction-dependent error)"
         ),
         _ => String::new(),
     }
@@ -417,10 +425,18 @@ mod tests {
     #[test]
     fn the_clause_speaks_only_for_steady_bearings_that_meet_nowhere() {
         let ceiling = 10f32.to_radians();
-        assert!(steady_clause(NoEmitter::TooNoisy, Some(3.0), ceiling).contains("moves"));
-        assert!(steady_clause(NoEmitter::NoConsensus, Some(3.0), ceiling).contains("moves"));
-        assert_eq!(steady_clause(NoEmitter::TooNoisy, Some(3.5), ceiling), "");
-        assert_eq!(steady_clause(NoEmitter::TooNoisy, None, ceiling), "");
-        assert_eq!(steady_clause(NoEmitter::TooFew, Some(1.0), ceiling), "");
+        let one = steady_clause(NoEmitter::TooNoisy, Some(3.0), 1, ceiling);
+        assert!(one.contains("moves (one station cannot place it"), "{one}");
+        let three = steady_clause(NoEmitter::NoConsensus, Some(3.0), 3, ceiling);
+        assert!(
+            three.contains("moves (`foxhunt track` follows it)"),
+            "{three}"
+        );
+        assert_eq!(
+            steady_clause(NoEmitter::TooNoisy, Some(3.5), 1, ceiling),
+            ""
+        );
+        assert_eq!(steady_clause(NoEmitter::TooNoisy, None, 1, ceiling), "");
+        assert_eq!(steady_clause(NoEmitter::TooFew, Some(1.0), 1, ceiling), "");
     }
 }

@@ -180,8 +180,11 @@ pub(crate) fn located_by_pipeline(
                         .filter(|x| same_channel(x.freq_mhz, c.freq_mhz, o.channel_width_mhz))
                         .copied()
                         .collect();
+                    let mut heard: Vec<u16> = mine.iter().map(|x| x.station).collect();
+                    heard.sort_unstable();
+                    heard.dedup();
                     no_emitter(why, c.bearings, &bearings, max_sigma)
-                        + &steady_clause(why, step_deg(&mine), max_sigma)
+                        + &steady_clause(why, step_deg(&mine), heard.len(), max_sigma)
                 });
                 why_none.get_or_insert((text.clone(), reason));
                 text
