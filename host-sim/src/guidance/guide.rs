@@ -363,23 +363,28 @@ type SoFar = ([f32; 2], Vec<Bearing>, Option<f32>);
 
 /// [`SoFar`] of the drive `d`.
 fn drive_so_far(d: &Decoded, o: &LocateOptions) -> Result<SoFar, String> {
+    let guided = guided_station(d)?;
     let all: Vec<Bearing> = match o.sigma_deg {
         Some(s) => d.bearings_with_sigma(s.to_radians()),
         None => d.bearings().copied().collect(),
     };
     // Where the guided vehicle is and where it heads: its own bearings, not the network's.
-    let own: Vec<Bearing> = match guided_station(d)? {
-        Some(k) => d
-            .observations
-            .iter()
-            .zip(&all)
-            .filter(|(x, _)| x.station == k)
-            .map(|(_, b)| *b)
-            .collect(),
-        None => all.clone(),
+    let own: Vec<Bearing>;
+    let track: &[Bearing] = match guided {
+        Some(k) => {
+            own = d
+                .observations
+                .iter()
+                .zip(&all)
+                .filter(|(x, _)| x.station == k)
+                .map(|(_, b)| *b)
+                .collect();
+            &own
+        }
+        None => &all,
     };
-    let vehicle = own.last().map(|b| b.vehicle).ok_or("no bearing yet")?;
-    let heading = track_heading(&own);
+    let vehicle = track.last().map(|b| b.vehicle).ok_or("no bearing yet")?;
+    let heading = track_heading(track);
     Ok((vehicle, all, heading))
 }
 
