@@ -5,9 +5,12 @@
 //!
 //! A bearing's latency: from its send to the arrival (at a subscriber beside the stations) of
 //! the first fix of its channel whose bearings reach its time (the fix's `time_span_s`; the
-//! synthetic bearings' times are their send schedule). The workers' peak resident memory is
-//! their own `--stats` figure; their resident memory is also sampled every few seconds, to show
-//! whether it stays flat over a long run.
+//! synthetic bearings' times are their send schedule), published after it was sent; counted
+//! for each tick's last bearing on each channel, the latest any station sent (a fix that came
+//! before the tick's last station had sent its other channels' bearings is on time), from the
+//! channel's first fix on; the start-up, to the last channel's first fix, is its own figure.
+//! The workers' peak resident memory is their own `--stats` figure; their resident memory is
+//! also sampled every few seconds, to show whether it stays flat over a long run.
 
 use crate::inputs::mqtt::{BearingMessage, MqttUrl, channel_name};
 use crate::outputs::mqtt::{Backlog, Link, Message};
@@ -68,8 +71,10 @@ pub struct Figures {
     pub fixes: u64,
     /// Latency percentiles, ms: 50, 99, max.
     pub latency_ms: [f64; 3],
-    /// Bearings whose time no fix reached.
+    /// Bearings whose time no fix reached (of those sent after their channel's first fix).
     pub never: u64,
+    /// From the start of sending to the last channel's first fix, ms.
+    pub first_fix_ms: f64,
     /// The largest worker's peak resident memory, bytes.
     pub worker_peak_bytes: u64,
     /// Each worker's bearings taken and updates (solves) made.
@@ -281,8 +286,8 @@ pub fn run(load: &Load, exe: &Path) -> Result<Figures, String> {
     let freqs: Vec<f64> = (0..load.channels).map(|c| 430.0 + 0.2 * c as f64).collect();
     let ticks = (load.rate_hz * load.seconds).round() as u64;
     let epoch0: i64 = 1_780_308_000_000;
-    // Each tick's send time (the last station's), by tick.
-    let (stx, srx) = mpsc::channel::<(u64, Instant)>();
+    // When each tick's last bearing on each channel was sent (by any station).
+    let (stx, srx) = mpsc::channel::<(u64, usize, Instant)>();
     let start = Instant::now() + Duration::from_millis(200);
     let mut threads = Vec::new();
     for k in 0..load.stations {
@@ -307,7 +312,7 @@ pub fn run(load: &Load, exe: &Path) -> Result<Figures, String> {
                 if let Some(w) = due.checked_duration_since(Instant::now()) {
                     std::thread::sleep(w);
                 }
-                for &f in &freqs {
+                for (c, &f) in freqs.iter().enumerate() {
                     let m = BearingMessage {
                         station: id.clone(),
                         time_ms: epoch0 + (i as f64 * 1000.0 / rate).round() as i64,
@@ -323,8 +328,8 @@ pub fn run(load: &Load, exe: &Path) -> Result<Figures, String> {
                         topic: url.sharded_topic(shards, &m.channel(), &m.station),
                         payload: serde_json::to_vec(&m).map_err(|e| e.to_string())?,
                     })?;
+                    let _ = stx.send((i, c, Instant::now()));
                 }
-                let _ = stx.send((i, Instant::now()));
             }
             Ok(link.finish().acked)
         }));
@@ -334,10 +339,11 @@ pub fn run(load: &Load, exe: &Path) -> Result<Figures, String> {
     for t in threads {
         acked += t.join().map_err(|_| "a station thread panicked")??;
     }
-    let mut sent_at = vec![start; ticks as usize];
-    for (i, t) in srx.iter() {
-        let s = &mut sent_at[i as usize];
-        if t > *s {
+    let mut sent_at = vec![vec![start; freqs.len()]; ticks as usize];
+    for (i, c, t) in srx.iter() {
+        if let Some(s) = sent_at.get_mut(i as usize).and_then(|s| s.get_mut(c))
+            && t > *s
+        {
             *s = t;
         }
     }
@@ -379,17 +385,28 @@ pub fn run(load: &Load, exe: &Path) -> Result<Figures, String> {
     if !failed.is_empty() {
         return Err(format!("a worker failed: {}", failed.join(" | ")));
     }
-    // Each bearing's latency, by the tick it was sent in.
+    // Each bearing's latency, by the tick it was sent in, from each channel's first fix on:
+    // before it the channel has none to update (start-up: its first solve needs every
+    // station's first bearings), timed apart.
     let mut lat = Vec::new();
     let mut by_tick: Vec<Vec<f64>> = vec![Vec::new(); sent_at.len()];
     let mut never = 0;
-    for f in &freqs {
+    let mut first_fix_ms = 0.0f64;
+    for (c, f) in freqs.iter().enumerate() {
         let channel = channel_name(Some(*f));
         let mine: Vec<&(String, f64, Instant)> = seen.iter().filter(|s| s.0 == channel).collect();
+        let Some(first) = mine.first().map(|s| s.2) else {
+            never += sent_at.len() as u64;
+            continue;
+        };
+        first_fix_ms = first_fix_ms.max(first.duration_since(start).as_secs_f64() * 1000.0);
         // The fixes arrive in order: the first that reaches a tick is found from the last
         // tick's.
         let mut from = 0;
-        for (i, sent) in sent_at.iter().enumerate() {
+        for (i, sent) in sent_at.iter().map(|s| &s[c]).enumerate() {
+            if *sent < first {
+                continue;
+            }
             let t = i as f64 / load.rate_hz;
             match mine[from..]
                 .iter()
@@ -438,6 +455,7 @@ pub fn run(load: &Load, exe: &Path) -> Result<Figures, String> {
         fixes: seen.len() as u64,
         latency_ms: [q(&mut lat, 0.5), q(&mut lat, 0.99), q(&mut lat, 1.0)],
         never,
+        first_fix_ms,
         worker_peak_bytes: notes
             .iter()
             .filter_map(|n| number(n, "peak_bytes ", "\n"))
@@ -467,11 +485,11 @@ pub fn table(l: &Load, f: &Figures) -> String {
     let cpu: Vec<String> = f.worker_cpu_s.iter().map(|c| format!("{c:.1}")).collect();
     format!(
         "| stations | channels | rate Hz | bearings/s | workers | sent | taken | fixes | updates | \
-         worker CPU s | p50 ms | p99 ms | max ms | no fix | RSS MB at 1 min | at end | worker \
-         peak MB |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n\
-         | {} | {} | {} | {:.0} | {}{} | {} | {} | {} | {} | {} | {:.0} | {:.0} | {:.0} | {} | \
-         {:.1} | {:.1} | {:.1} |",
+         worker CPU s | first fix ms | p50 ms | p99 ms | max ms | no fix | RSS MB at 1 min | at \
+         end | worker peak MB |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n\
+         | {} | {} | {} | {:.0} | {}{} | {} | {} | {} | {} | {} | {:.0} | {:.0} | {:.0} | {:.0} | \
+         {} | {:.1} | {:.1} | {:.1} |",
         l.stations,
         l.channels,
         l.rate_hz,
@@ -483,6 +501,7 @@ pub fn table(l: &Load, f: &Figures) -> String {
         f.fixes,
         updates.join(" + "),
         cpu.join(" + "),
+        f.first_fix_ms,
         f.latency_ms[0],
         f.latency_ms[1],
         f.latency_ms[2],
