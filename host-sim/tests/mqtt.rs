@@ -956,3 +956,35 @@ fn a_worker_the_broker_gives_nothing_says_so() {
     });
     assert!(said, "{err:?} {out:?}");
 }
+
+/// A window that holds fewer than two bearings a station: the worker names the channel and
+/// the `--mqtt-keep` it needs (each station's offset takes about one bearing; 256 from 200
+/// stations left too few to estimate the noise in 7-8 % of a network's solves).
+#[test]
+fn a_window_too_small_for_its_stations_is_named_with_the_keep_it_needs() {
+    let _one_broker = serial();
+    let broker = Broker::start("crowded");
+    let files = station_files(&broker.dir);
+    let url = broker.url("crowded");
+    let w = Worker::start_with(&url, "crowded-worker", 3, &["--mqtt-keep", "5"]);
+    // Paced, so that the stations' bearings come interleaved, as a network's do (one file
+    // after another would fill the window with one station's).
+    let pubs: Vec<Child> = files.iter().map(|f| publish(f, &url, Some(300))).collect();
+    for p in pubs {
+        published(p);
+    }
+    let mut child = w.child;
+    child.wait().expect("wait");
+    let err: Vec<String> = w.early.into_iter().chain(w.stderr.iter()).collect();
+    println!("{err:?}");
+    let named: Vec<&String> = err
+        .iter()
+        .filter(|l| l.contains("its window of 5 bearings (--mqtt-keep) filled with 3 stations'"))
+        .collect();
+    assert_eq!(named.len(), 1, "named once: {err:?}");
+    assert!(
+        named[0].starts_with("channel 433.920 MHz: ") && named[0].ends_with("keep at least 6"),
+        "{}",
+        named[0]
+    );
+}

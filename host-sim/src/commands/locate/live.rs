@@ -17,7 +17,7 @@
 //! unit running foxhunt's firmware: every line (`--json`: `unit`, also when there is no fix
 //! yet) carries what the unit said ([`crate::inputs::unit`]).
 
-use super::window::{ChannelWindow, Pending};
+use super::window::{ChannelWindow, PER_STATION, Pending};
 use crate::estimate::options::LocateOptions;
 use crate::estimate::pool;
 use crate::guidance::guide::Guide;
@@ -422,6 +422,19 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
             let new = dec.decoded.observations.get(seen..).unwrap_or(&[]);
             pending.arrived(new, Instant::now());
             w.trim(&mut dec.decoded.observations);
+            for (key, stations) in w.crowded() {
+                let channel = match key {
+                    k if k >= 0 => format!("channel {} MHz", channel_name(Some(k as f64 / 1e3))),
+                    _ => "the bearings without a frequency".into(),
+                };
+                note(&format!(
+                    "{channel}: its window of {} bearings (--mqtt-keep) filled with {stations} \
+                     stations' bearings: each station's offset takes about one, too few are \
+                     left to estimate the noise; keep at least {}",
+                    w.keep(),
+                    PER_STATION * stations
+                ));
+            }
             seen = dec.decoded.observations.len();
             for _ in 0..pool().current_num_threads() {
                 channels.extend(pending.next(&dec.decoded.observations, width));

@@ -5,7 +5,7 @@
 //! when it moves or stops.
 
 use foxhunt_core::fix::locate::Observation;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::time::Instant;
 
 /// The bearings kept per channel by default: minutes of a small network, seconds of a large
@@ -18,7 +18,20 @@ pub struct ChannelWindow {
     keep: usize,
     /// Bearings dropped so far.
     pub dropped: u64,
+    /// Each full channel's bearings dropped so far, and as many when its stations were last
+    /// counted: counted when it fills, and again each time its window has turned over.
+    turnover: HashMap<i64, (u64, Option<u64>)>,
+    /// Channels found crowded, each named once.
+    named: HashSet<i64>,
+    /// Channels found crowded and not yet taken by [`ChannelWindow::crowded`]: (key,
+    /// stations).
+    crowded: Vec<(i64, usize)>,
 }
+
+/// Bearings per station a channel's window should hold: each station's offset takes about
+/// one of its bearings, the noise estimate needs the rest. A window of 256 bearings from 200
+/// stations left too few in 7-8 % of its solves (docs/src/speed.md, "Through an MQTT broker").
+pub const PER_STATION: usize = 2;
 
 /// A bearing's channel as the topics name it ([`crate::inputs::mqtt::channel_name`]): its
 /// frequency to the kHz.
@@ -35,6 +48,9 @@ impl ChannelWindow {
         Self {
             keep: keep.max(1),
             dropped: 0,
+            turnover: HashMap::new(),
+            named: HashSet::new(),
+            crowded: Vec::new(),
         }
     }
 
@@ -59,6 +75,17 @@ impl ChannelWindow {
             return 0;
         }
         let before = obs.len();
+        let mut due = Vec::new();
+        for (&key, &n) in &excess {
+            let (dropped, counted) = self.turnover.entry(key).or_insert((0, None));
+            if !self.named.contains(&key)
+                && counted.is_none_or(|c| *dropped - c >= self.keep as u64)
+            {
+                *counted = Some(*dropped);
+                due.push(key);
+            }
+            *dropped += n as u64;
+        }
         obs.retain(|o| match excess.get_mut(&channel_key(o)) {
             Some(n) if *n > 0 => {
                 *n -= 1;
@@ -68,7 +95,33 @@ impl ChannelWindow {
         });
         let gone = before - obs.len();
         self.dropped += gone as u64;
+        // A full channel, when it fills and each time its window turns over: are its
+        // stations too many for it?
+        for key in due {
+            let mut stations: Vec<u16> = obs
+                .iter()
+                .filter(|o| channel_key(o) == key)
+                .map(|o| o.station)
+                .collect();
+            stations.sort_unstable();
+            stations.dedup();
+            if self.keep < PER_STATION * stations.len() {
+                self.named.insert(key);
+                self.crowded.push((key, stations.len()));
+            }
+        }
         gone
+    }
+
+    /// The channels found crowded since the last call, each once: its key (kHz) and the
+    /// stations its full window held, fewer than [`PER_STATION`] bearings a station.
+    pub fn crowded(&mut self) -> Vec<(i64, usize)> {
+        std::mem::take(&mut self.crowded)
+    }
+
+    /// The window's size.
+    pub fn keep(&self) -> usize {
+        self.keep
     }
 }
 
@@ -164,6 +217,50 @@ mod tests {
         assert!(v.windows(2).all(|p| p[0].time_s <= p[1].time_s));
         assert_eq!(w.trim(&mut v), 0);
         assert_eq!(w.dropped, 9);
+    }
+
+    #[test]
+    fn a_window_too_small_for_its_stations_is_named_once() {
+        let mut v = Vec::new();
+        for t in 0..3 {
+            for station in 0..5 {
+                v.push(Observation {
+                    station,
+                    ..obs(145.5, t as f32)
+                });
+            }
+            v.push(obs(433.92, t as f32));
+        }
+        // 145.5: 5 stations in a window of 8 bearings; 433.92: one station, never full.
+        let mut w = ChannelWindow::new(8);
+        w.trim(&mut v);
+        assert_eq!(w.crowded(), vec![(145_500, 5)]);
+        v.push(obs(145.5, 4.0));
+        w.trim(&mut v);
+        assert!(w.crowded().is_empty());
+        // Room for two a station: not crowded.
+        let mut w = ChannelWindow::new(10);
+        v.extend((0..5).map(|station| Observation {
+            station,
+            ..obs(145.5, 5.0)
+        }));
+        w.trim(&mut v);
+        assert!(w.crowded().is_empty());
+        // Filled by one station, then crowded by four: named once its window has turned over.
+        let mut w = ChannelWindow::new(4);
+        let mut v: Vec<Observation> = (0..5).map(|t| obs(145.5, t as f32)).collect();
+        w.trim(&mut v);
+        assert!(w.crowded().is_empty());
+        let mut named = Vec::new();
+        for t in 5..12 {
+            v.extend((0..4).map(|station| Observation {
+                station,
+                ..obs(145.5, t as f32)
+            }));
+            w.trim(&mut v);
+            named.extend(w.crowded());
+        }
+        assert_eq!(named, vec![(145_500, 4)]);
     }
 
     #[test]
