@@ -271,6 +271,15 @@ fn published(c: Child) -> String {
     err
 }
 
+/// Every file of `files` published at once (each its own station's publisher, `pace` as
+/// [`publish`]'s), each to success.
+fn publish_all(files: &[PathBuf], url: &str, pace: Option<u32>) {
+    let pubs: Vec<Child> = files.iter().map(|f| publish(f, url, pace)).collect();
+    for p in pubs {
+        published(p);
+    }
+}
+
 /// `foxhunt locate FILES --json`: the recorded files' report.
 fn recorded(files: &[PathBuf]) -> Value {
     let out = Command::new(FOXHUNT)
@@ -347,10 +356,7 @@ fn three_stations_through_the_broker_give_the_recorded_files_fix() {
     let files = station_files(&broker.dir);
     let url = broker.url("net");
     let worker = Worker::start(&url, "fix-worker", 3);
-    let pubs: Vec<Child> = files.iter().map(|f| publish(f, &url, None)).collect();
-    for p in pubs {
-        published(p);
-    }
+    publish_all(&files, &url, None);
     let (live, err) = worker.finish();
     eprintln!("{}", err.join("\n"));
     let file = recorded(&files);
@@ -816,13 +822,7 @@ fn the_live_map_follows_three_stations_through_the_broker() {
             break a.to_string();
         }
     };
-    for p in files
-        .iter()
-        .map(|f| publish(f, &url, None))
-        .collect::<Vec<_>>()
-    {
-        published(p);
-    }
+    publish_all(&files, &url, None);
     loop {
         let l = next();
         if l.contains("input ended") {
@@ -971,10 +971,7 @@ fn a_window_too_small_for_its_stations_is_named_with_the_keep_it_needs() {
     let w = Worker::start_with(&url, "crowded-worker", 3, &["--mqtt-keep", "5"]);
     // Paced, so that the stations' bearings come interleaved, as a network's do (one file
     // after another would fill the window with one station's).
-    let pubs: Vec<Child> = files.iter().map(|f| publish(f, &url, Some(300))).collect();
-    for p in pubs {
-        published(p);
-    }
+    publish_all(&files, &url, Some(300));
     let mut child = w.child;
     child.wait().expect("wait");
     let err: Vec<String> = w.early.into_iter().chain(w.stderr.iter()).collect();
