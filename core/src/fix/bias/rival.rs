@@ -8,6 +8,7 @@
 //! gap. Both are bounded here from one accumulation of the normal equations at the fix, so a
 //! live network's solve skips the walk where it could not find a rival (docs/src/speed.md).
 
+use super::direction::DirectionPrior;
 use super::problem::{residual, set_up, usable};
 use super::stations::{StationSlot, reduce};
 use super::{BiasedOptions, OffsetCircle, Sighting, Start, StartOffsets};
@@ -33,7 +34,8 @@ const FAR_MARGIN: f32 = 2.0;
 /// fix, `g` its slope, and `k = R / (R + d)` for `R` the nearest other bearing's range: a
 /// bearing turns by at least `k` of its linear turn that far out). Both must exceed the gap
 /// plus the deviance the circle's nearest step already costs at the fix (the lowest is no
-/// higher).
+/// higher); far out, a fixed station's own bearings pay part of it: their scatter about their
+/// mean, which no position or offset takes away.
 pub fn no_rival<T: Sighting>(
     items: &[T],
     stations: &mut [StationSlot],
@@ -53,6 +55,7 @@ pub fn no_rival<T: Sighting>(
     let nearest_step = OffsetCircle::offset(k0);
     let turn = apart / 2.0;
     let (mut nearest, mut near, mut at_step, mut own) = (f32::INFINITY, 0.0f32, 0.0f32, 0u32);
+    let mut scatter = Scatter::new(row.direction() == DirectionPrior::NONE);
     for (b, _, u) in usable(items, stations.len()).filter(|&(_, s, _)| s == station) {
         let e = residual(b, [0.0, 0.0], at, fitted + dot(&row.hfit, &u));
         let w = 1.0 / (options.scale * b.sigma * options.scale * b.sigma);
@@ -62,6 +65,7 @@ pub fn no_rival<T: Sighting>(
         let off = wrap(e + fitted - nearest_step);
         at_step += w * off * off;
         own += 1;
+        scatter.add(b.vehicle, e, w);
     }
     let others = usable(items, stations.len())
         .filter(|&(_, s, _)| s != station)
@@ -78,7 +82,62 @@ pub fn no_rival<T: Sighting>(
     let d = nearest * libm::sinf(turn);
     let k = others / (others + d);
     let far = k * k * lambda * d * d - 2.0 * pull * d;
-    near - 2.0 * decrease >= need && far >= FAR_MARGIN * need
+    // A fixed station's own bearings keep their scatter about their mean wherever the
+    // position and offset go; only the rest of what a rival needs is asked of the others.
+    let beyond = need - scatter.least();
+    near - 2.0 * decrease >= need && far > 0.0 && far >= FAR_MARGIN * beyond
+}
+
+/// The least a station's own deviance can be at any position and offset, when its bearings
+/// all come from one place and no direction-dependent error turns them: the predicted
+/// bearing and the offset then shift them all alike, and no shift takes away their scatter
+/// about their weighted mean. Wrapping cannot either while they lie within 45 degrees of it:
+/// a shift that wraps one leaves every one at least 90 degrees off. Zero otherwise.
+struct Scatter {
+    /// The one place so far, while there is one.
+    at: Option<[f32; 2]>,
+    /// Whether the bound can hold at all (no direction-dependent error).
+    alike: bool,
+    /// The weights' sum, the residuals' weighted mean and their weighted squared deviations
+    /// from it (updated a bearing at a time, so no large sums cancel), and their range.
+    w: f32,
+    mean: f32,
+    spread: f32,
+    range: [f32; 2],
+}
+
+impl Scatter {
+    fn new(alike: bool) -> Self {
+        Self {
+            at: None,
+            alike,
+            w: 0.0,
+            mean: 0.0,
+            spread: 0.0,
+            range: [f32::INFINITY, f32::NEG_INFINITY],
+        }
+    }
+
+    /// A bearing from `vehicle` missing by `e` at the fit, of weight `w`.
+    fn add(&mut self, vehicle: [f32; 2], e: f32, w: f32) {
+        if *self.at.get_or_insert(vehicle) != vehicle {
+            self.alike = false;
+        }
+        self.w += w;
+        let before = e - self.mean;
+        self.mean += w * before / self.w;
+        self.spread += w * before * (e - self.mean);
+        self.range = [self.range[0].min(e), self.range[1].max(e)];
+    }
+
+    fn least(&self) -> f32 {
+        if !(self.alike && self.w > 0.0) {
+            return 0.0;
+        }
+        let quarter = core::f32::consts::FRAC_PI_4;
+        let within = self.range[0] >= self.mean - quarter && self.range[1] <= self.mean + quarter;
+        if within { self.spread.max(0.0) } else { 0.0 }
+    }
 }
 
 /// The other stations' deviance about `at` as the normal equations' quadratic (every station
