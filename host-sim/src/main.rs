@@ -135,9 +135,10 @@ enum Command {
     /// Send a DF station's bearings to an MQTT broker, for `foxhunt locate --mqtt` to fuse.
     ///
     /// Reads any source `locate` reads (capture files, - for standard input, a serial device
-    /// with --baud, --kraken URL) through the same decoder and sends each bearing as one JSON
-    /// message (station, time_ms UTC, lat, lon, bearing_deg true, sigma_deg, freq_mhz,
-    /// quality, kind) to PREFIX/bearings/CHANNEL/STATION at QoS 1 on a persistent session.
+    /// with --baud, --kraken URL; a vehicle's positions and heading from gpsd with --gpsd)
+    /// through the same decoder and sends each bearing as one JSON message (station, time_ms
+    /// UTC, lat, lon, bearing_deg true, sigma_deg, freq_mhz, quality, kind) to
+    /// PREFIX/bearings/CHANNEL/STATION at QoS 1 on a persistent session.
     /// While the broker is away the bearings wait (--buffer), and what it had not acknowledged
     /// is sent again when it is back. --pace replays a recorded capture in (scaled) real time.
     /// Exit status: 0 when the broker acknowledged every bearing, 1 when it could not be
@@ -147,6 +148,7 @@ enum Command {
     ///   foxhunt publish north.xml --mqtt mqtt://broker:1883/net
     ///   foxhunt publish drive.nmea --station car-1 --pace 1 --mqtt mqtt://127.0.0.1/net
     ///   foxhunt publish --kraken http://192.168.1.20:8081 --mqtt mqtt://broker/net
+    ///   foxhunt publish /dev/ttyUSB0 --baud 4800 --gpsd --station car-1 --mqtt mqtt://broker/net
     #[command(verbatim_doc_comment, allow_negative_numbers = true)]
     Publish(commands::publish::Args),
     /// What a run's history holds (`foxhunt locate --db FILE`): its bearings, stations,

@@ -6,7 +6,7 @@
 //! what `locate` would have used: true bearings at the station's position, on UTC.
 
 use super::locate::live::{LiveSource, reader};
-use super::locate::{Given, given, kraken_urls};
+use super::locate::{GPSD_NEEDS_A_LINE, Given, GpsdArgs, given, kraken_urls};
 use super::values;
 use crate::inputs::capture::Decoder;
 use crate::inputs::files::{Source, stream};
@@ -52,6 +52,10 @@ pub struct Args {
     /// Poll a KrakenSDR's web page (repeatable) instead of a SOURCE.
     #[arg(long, value_name = "URL")]
     pub kraken: Vec<String>,
+    /// Positions and headings from gpsd beside a live line (a vehicle's DF unit that sends
+    /// bearings alone).
+    #[command(flatten)]
+    pub gpsd: GpsdArgs,
     /// Recorded captures: send each bearing at its own time, this many times faster than
     /// real time (1: as it happened); default: as fast as the broker takes them.
     #[arg(long, value_name = "X",
@@ -175,6 +179,10 @@ pub fn run(a: &Args) -> Outcome {
         .map_err(Stop::Usage)?;
     let input = input(a)?;
     let live = matches!(input, Input::Live(_));
+    let gpsd = a.gpsd.address()?;
+    if gpsd.is_some() && !live {
+        return Err(Stop::usage(GPSD_NEEDS_A_LINE));
+    }
     if a.pace.is_some() && live {
         return Err(Stop::usage(
             "--pace replays a recorded capture; a live line keeps its own pace",
@@ -252,7 +260,7 @@ pub fn run(a: &Args) -> Outcome {
                     dec.begin_input(u.base.trim_start_matches("http://"))?;
                 }
             }
-            let mut line = reader(&source, None, None)?;
+            let mut line = reader(&source, gpsd.as_ref(), None)?;
             loop {
                 let ended = line
                     .take(&mut dec, quiet, true)

@@ -2,6 +2,8 @@
 // Each test file compiles this module alone and uses only some of the fixtures.
 #![allow(dead_code)]
 
+pub mod broker;
+
 use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::Child;

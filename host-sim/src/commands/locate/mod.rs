@@ -113,17 +113,9 @@ pub struct Args {
     /// Print `stats: bearings N, seconds S, peak_bytes B` on stderr at the end.
     #[arg(long)]
     pub stats: bool,
-    /// Live: positions (TPV) and heading (ATT) from a running gpsd, while the bearings come
-    /// from the serial device (--baud) or standard input (-): `--gpsd` for localhost:2947,
-    /// or `--gpsd=HOST[:PORT]`.
-    #[arg(
-        long,
-        value_name = "HOST[:PORT]",
-        num_args = 0..=1,
-        require_equals = true,
-        default_missing_value = ""
-    )]
-    pub gpsd: Option<String>,
+    /// Positions and headings from gpsd beside a live line.
+    #[command(flatten)]
+    pub gpsd: GpsdArgs,
     /// The roads and the stop rule's target of the advice.
     #[command(flatten)]
     pub guidance: GuidanceArgs,
@@ -242,13 +234,40 @@ enum Input {
     History(PathBuf, Window),
 }
 
+/// `--gpsd`: positions and headings from a running gpsd beside a live line of bearings (a
+/// vehicle whose DF unit sends bearings alone), for every command that reads one.
+#[derive(Debug, clap::Args)]
+pub struct GpsdArgs {
+    /// Live: positions (TPV) and heading (ATT) from a running gpsd, while the bearings come
+    /// from the serial device (--baud), standard input (-) or a KrakenSDR (--kraken):
+    /// `--gpsd` for localhost:2947, or `--gpsd=HOST[:PORT]`.
+    #[arg(
+        long,
+        value_name = "HOST[:PORT]",
+        num_args = 0..=1,
+        require_equals = true,
+        default_missing_value = ""
+    )]
+    pub gpsd: Option<String>,
+}
+
+impl GpsdArgs {
+    /// The daemon's address, if one was given.
+    pub fn address(&self) -> Result<Option<GpsdAddress>, Stop> {
+        self.gpsd
+            .as_deref()
+            .map(GpsdAddress::parse)
+            .transpose()
+            .map_err(Stop::Usage)
+    }
+}
+
+/// What `--gpsd` beside a recorded capture is told.
+pub(crate) const GPSD_NEEDS_A_LINE: &str = "--gpsd gives positions beside a live line of \
+    bearings: a serial device with --baud, - for standard input, or --kraken URL";
+
 fn input(a: &Args) -> Result<Input, Stop> {
-    let gpsd = a
-        .gpsd
-        .as_deref()
-        .map(GpsdAddress::parse)
-        .transpose()
-        .map_err(Stop::Usage)?;
+    let gpsd = a.gpsd.address()?;
     let source = !a.captures.is_empty()
         || a.baud.is_some()
         || !a.kraken.is_empty()
@@ -291,10 +310,7 @@ fn input(a: &Args) -> Result<Input, Stop> {
     if let Some(g) = gpsd {
         return match line_input(a)? {
             Input::Live(source) => Ok(Input::Gpsd(source, g)),
-            _ => Err(Stop::usage(
-                "--gpsd gives positions beside a live line of bearings: a serial device \
-                 with --baud, or - for standard input",
-            )),
+            _ => Err(Stop::usage(GPSD_NEEDS_A_LINE)),
         };
     }
     line_input(a)
