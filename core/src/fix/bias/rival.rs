@@ -34,8 +34,9 @@ const FAR_MARGIN: f32 = 2.0;
 /// fix, `g` its slope, and `k = R / (R + d)` for `R` the nearest other bearing's range: a
 /// bearing turns by at least `k` of its linear turn that far out). Both must exceed the gap
 /// plus the deviance the circle's nearest step already costs at the fix (the lowest is no
-/// higher); far out, a fixed station's own bearings pay part of it: their scatter about their
-/// mean, which no position or offset takes away.
+/// higher; for a fixed station, the less of that and its cost at the fix turned about the
+/// station by the step's difference); far out, a fixed station's own bearings pay part of it:
+/// their scatter about their mean, which no position or offset takes away.
 pub fn no_rival<T: Sighting>(
     items: &[T],
     stations: &mut [StationSlot],
@@ -74,18 +75,54 @@ pub fn no_rival<T: Sighting>(
     if own == 0 || !(nearest.is_finite() && nearest > 0.0 && others.is_finite()) {
         return false;
     }
-    let need = at_step + gap;
-    let Some((lambda, decrease, pull)) = others_quadratic(items, stations, station, at, options)
-    else {
+    let Some(q) = others_quadratic(items, stations, station, at, options) else {
         return false;
     };
+    // The circle's nearest step, at the fix, costs `at_step`. A fixed station's step can cost
+    // less: with the fix turned about the station by the step's difference its own residuals
+    // are the fit's, and only the others' rise is added (from their quadratic, with the far
+    // bound's margin).
+    let turned = scatter.place().map(|s0| {
+        let (sin, cos) = libm::sincosf(-wrap(nearest_step - fitted));
+        let r = [at[0] - s0[0], at[1] - s0[1]];
+        let delta = [
+            s0[0] + cos * r[0] - sin * r[1] - at[0],
+            s0[1] + sin * r[0] + cos * r[1] - at[1],
+        ];
+        scatter.at_fit() + FAR_MARGIN * q.rise(delta)
+    });
+    let need = turned.map_or(at_step, |t| t.min(at_step)) + gap;
     let d = nearest * libm::sinf(turn);
     let k = others / (others + d);
-    let far = k * k * lambda * d * d - 2.0 * pull * d;
+    let far = k * k * q.lambda * d * d - 2.0 * q.pull * d;
     // A fixed station's own bearings keep their scatter about their mean wherever the
     // position and offset go; only the rest of what a rival needs is asked of the others.
     let beyond = need - scatter.least();
-    near - 2.0 * decrease >= need && far > 0.0 && far >= FAR_MARGIN * beyond
+    near - 2.0 * q.decrease >= need && far > 0.0 && far >= FAR_MARGIN * beyond
+}
+
+/// The other stations' deviance about the fix as the normal equations' quadratic:
+/// `-2 g . delta + delta' M delta` for a move `delta`.
+struct Quadratic {
+    /// M's smallest eigenvalue.
+    lambda: f32,
+    /// The most the deviance can fall, g' M^-1 g.
+    decrease: f32,
+    /// |g|.
+    pull: f32,
+    m: [[f32; 2]; 2],
+    g: [f32; 2],
+}
+
+impl Quadratic {
+    /// The most the deviance rises by for a move `delta`, as the quadratic has it.
+    fn rise(&self, delta: [f32; 2]) -> f32 {
+        let m = self.m;
+        let curve = m[0][0] * delta[0] * delta[0]
+            + 2.0 * m[0][1] * delta[0] * delta[1]
+            + m[1][1] * delta[1] * delta[1];
+        curve + 2.0 * libm::fabsf(self.g[0] * delta[0] + self.g[1] * delta[1])
+    }
 }
 
 /// The least a station's own deviance can be at any position and offset, when its bearings
@@ -130,6 +167,16 @@ impl Scatter {
         self.range = [self.range[0].min(e), self.range[1].max(e)];
     }
 
+    /// The one place of bearings that no direction-dependent error turns.
+    fn place(&self) -> Option<[f32; 2]> {
+        self.at.filter(|_| self.alike && self.w > 0.0)
+    }
+
+    /// The bearings' deviance at the fit, sum w e^2.
+    fn at_fit(&self) -> f32 {
+        self.spread.max(0.0) + self.w * self.mean * self.mean
+    }
+
     fn least(&self) -> f32 {
         if !(self.alike && self.w > 0.0) {
             return 0.0;
@@ -141,16 +188,15 @@ impl Scatter {
 }
 
 /// The other stations' deviance about `at` as the normal equations' quadratic (every station
-/// but `station`, offsets eliminated, priors in force): its Hessian's smallest eigenvalue, the
-/// most it can fall (g' M^-1 g) and its gradient's length. `None` when harmonics are free
-/// or the matrix is not positive definite. The table's fit is left as it came.
+/// but `station`, offsets eliminated, priors in force). `None` when harmonics are free or the
+/// matrix is not positive definite. The table's fit is left as it came.
 fn others_quadratic<T: Sighting>(
     items: &[T],
     stations: &mut [StationSlot],
     station: usize,
     at: [f32; 2],
     options: BiasedOptions,
-) -> Option<(f32, f32, f32)> {
+) -> Option<Quadratic> {
     for s in stations.iter_mut() {
         s.hold();
     }
@@ -187,5 +233,11 @@ fn others_quadratic<T: Sighting>(
     // g' M^-1 g with the 2 x 2 inverse written out.
     let decrease =
         (m[1][1] * g[0] * g[0] - 2.0 * m[0][1] * g[0] * g[1] + m[0][0] * g[1] * g[1]) / det;
-    Some((lambda, decrease, libm::hypotf(g[0], g[1])))
+    Some(Quadratic {
+        lambda,
+        decrease,
+        pull: libm::hypotf(g[0], g[1]),
+        m,
+        g,
+    })
 }
