@@ -81,7 +81,9 @@ pub fn no_rival<T: Sighting>(
     // The circle's nearest step, at the fix, costs `at_step`. A fixed station's step can cost
     // less: with the fix turned about the station by the step's difference its own residuals
     // are the fit's, and only the others' rise is added (from their quadratic, with the far
-    // bound's margin).
+    // bound's margin). The walk's step descends from the fix, not from there: in a network
+    // that pins the position both lie in the one basin, whose floor is lower than either (the
+    // property tests check the two never disagree).
     let turned = scatter.place().map(|s0| {
         let (sin, cos) = libm::sincosf(-wrap(nearest_step - fitted));
         let r = [at[0] - s0[0], at[1] - s0[1]];
