@@ -25,6 +25,13 @@ pub trait Likelihood: Copy {
     /// finite for finite input. The scale is an argument because a mixture's weight depends on
     /// it, not only on u.
     fn irls_weight(&self, r: f32, sigma: f32) -> f32;
+    /// The summed [`Likelihood::ln`] of `n` residuals with scale `sigma` from their mean and
+    /// their scatter about it (the sum of squared deviations), where the loss allows it: a
+    /// quadratic does, so a fixed station's many bearings cost one term; `None` (the default)
+    /// for a loss that needs every residual.
+    fn ln_sum(&self, _n: f32, _mean: f32, _scatter: f32, _sigma: f32) -> Option<f32> {
+        None
+    }
 }
 
 /// Gaussian: exp(-u^2 / 2). Optimal for clean data, ruined by one wild bearing.
@@ -45,6 +52,10 @@ impl Likelihood for Gaussian {
     #[inline]
     fn irls_weight(&self, _r: f32, _sigma: f32) -> f32 {
         1.0
+    }
+    #[inline]
+    fn ln_sum(&self, n: f32, mean: f32, scatter: f32, sigma: f32) -> Option<f32> {
+        Some(-0.5 * (n * mean * mean + scatter) / (sigma * sigma))
     }
 }
 

@@ -37,6 +37,7 @@ mod profile_likelihood;
 mod rival;
 mod solve;
 mod stations;
+mod summary;
 #[cfg(test)]
 mod tests;
 

@@ -6,6 +6,7 @@ use super::super::{Geometry, geometry_of};
 use super::direction::{HARMONICS, harmonics};
 use super::stations::HarmonicStart;
 use super::stations::StationSlot;
+use super::summary::Summary;
 use super::{BiasedOptions, Sighting, Start, StartOffsets};
 use crate::error::{Error, check_finite};
 use crate::likelihood::Likelihood;
@@ -39,6 +40,9 @@ pub(super) struct Known {
     /// needed (otherwise they only multiply zeros, so zeros stand in for them and their sine
     /// and cosine are never taken).
     harmonics: bool,
+    /// The loss is quadratic and no station has a direction-dependent error: a station's
+    /// bearings from one place stand summed ([`super::summary`]).
+    summed: bool,
 }
 
 impl Default for Known {
@@ -47,6 +51,7 @@ impl Default for Known {
         Self {
             checked: false,
             harmonics: true,
+            summed: false,
         }
     }
 }
@@ -100,11 +105,16 @@ impl<T: Sighting, L: Likelihood> Problem<'_, T, L> {
 
     /// The bearing's sd at centred position `p` (the position error's share included).
     fn sigma(&self, b: &Bearing, p: [f32; 2]) -> f32 {
-        let plain = self.scale * b.sigma;
+        self.sigma_of(b.vehicle, b.sigma, p)
+    }
+
+    /// The sd at centred position `p` of a bearing of sd `sigma` taken at `place`.
+    fn sigma_of(&self, place: [f32; 2], sigma: f32, p: [f32; 2]) -> f32 {
+        let plain = self.scale * sigma;
         if self.position_sd > 0.0 {
             let (dx, dy) = (
-                p[0] - (b.vehicle[0] - self.origin[0]),
-                p[1] - (b.vehicle[1] - self.origin[1]),
+                p[0] - (place[0] - self.origin[0]),
+                p[1] - (place[1] - self.origin[1]),
             );
             let d2 = (dx * dx + dy * dy).max(1e-6);
             libm::sqrtf(plain * plain + self.position_sd * self.position_sd / d2)
@@ -120,9 +130,13 @@ impl<T: Sighting, L: Likelihood> Problem<'_, T, L> {
             At::Trial => s.trial,
         };
         let trial = at == At::Trial;
-        let mut c = 0.0f32;
+        let summed = self.summed_cost(stations, p, offset);
+        let mut c = summed.unwrap_or(0.0);
         for (b, s, u) in self.sightings(stations.len()) {
             let Some(row) = stations.get(s) else { continue };
+            if summed.is_some() && row.summed.is_some() {
+                continue;
+            }
             let r = residual(
                 b,
                 self.origin,
@@ -146,6 +160,31 @@ impl<T: Sighting, L: Likelihood> Problem<'_, T, L> {
         c
     }
 
+    /// The summed stations' share of the cost at centred position `p` with the rows' offsets
+    /// `offset`; `None` where none is summed or some residual might wrap (every bearing then
+    /// counts alone).
+    fn summed_cost(
+        &self,
+        stations: &[StationSlot],
+        p: [f32; 2],
+        offset: impl Fn(&StationSlot) -> f32,
+    ) -> Option<f32> {
+        if !self.known.summed {
+            return None;
+        }
+        let mut c = 0.0f32;
+        for row in stations {
+            let Some(g) = row.summed else { continue };
+            let r = g.residual(self.origin, p, offset(row))?;
+            let sigma = self.sigma_of(g.place, g.sigma, p);
+            c -= self.loss.ln_sum(g.n, r, g.scatter, sigma)?;
+            if self.position_sd > 0.0 {
+                c += g.n * libm::logf(sigma / (self.scale * g.sigma));
+            }
+        }
+        Some(c)
+    }
+
     /// Accumulate the normal equations at centred position `p` and the rows' current offsets
     /// (IRLS weights) into the rows; with `along`, the position's Jacobian is taken along that
     /// unit vector only (its first component; the second is zero).
@@ -158,24 +197,53 @@ impl<T: Sighting, L: Likelihood> Problem<'_, T, L> {
         for s in stations.iter_mut() {
             s.clear_blocks();
         }
+        // The summed stations first, each as one bearing of weight n, where none wraps.
+        let summed = self.known.summed
+            && stations.iter().all(|row| {
+                row.summed
+                    .is_none_or(|g| g.residual(self.origin, p, row.x).is_some())
+            });
+        if summed {
+            for row in stations.iter_mut() {
+                let Some(g) = row.summed else { continue };
+                let Some(r) = g.residual(self.origin, p, row.x) else {
+                    continue;
+                };
+                let sigma = self.sigma_of(g.place, g.sigma, p);
+                let w = g.n * self.loss.irls_weight(r, sigma) / (sigma * sigma);
+                let jac = self.jacobian(g.place, p, along);
+                row.add(jac, [0.0; HARMONICS], w, r);
+            }
+        }
         let n = stations.len();
         for (b, s, u) in self.sightings(n) {
             let Some(row) = stations.get_mut(s) else {
                 continue;
             };
+            if summed && row.summed.is_some() {
+                continue;
+            }
             let v = [b.vehicle[0] - self.origin[0], b.vehicle[1] - self.origin[1]];
-            let (dx, dy) = (p[0] - v[0], p[1] - v[1]);
-            let d2 = (dx * dx + dy * dy).max(1e-6);
             let r = wrap(b.theta - predicted(&p, &v) - row.x - dot(&row.hx, &u));
             let sigma = self.sigma(b, p);
             let w = self.loss.irls_weight(r, sigma) / (sigma * sigma);
-            // d h / d [x, y] for h = atan2(dy, dx) + b_s.
-            let jac = [-dy / d2, dx / d2];
-            let jac = match along {
-                Some([a, c]) => [jac[0] * a + jac[1] * c, 0.0],
-                None => jac,
-            };
+            let jac = self.jacobian(b.vehicle, p, along);
             row.add(jac, u, w, r);
+        }
+    }
+
+    /// d h / d [x, y] at centred position `p` of h = atan2 from `place` (+ the offset); with
+    /// `along`, along that unit vector only (first component; the second is zero).
+    fn jacobian(&self, place: [f32; 2], p: [f32; 2], along: Option<[f32; 2]>) -> [f32; 2] {
+        let (dx, dy) = (
+            p[0] - (place[0] - self.origin[0]),
+            p[1] - (place[1] - self.origin[1]),
+        );
+        let d2 = (dx * dx + dy * dy).max(1e-6);
+        let jac = [-dy / d2, dx / d2];
+        match along {
+            Some([a, c]) => [jac[0] * a + jac[1] * c, 0.0],
+            None => jac,
         }
     }
 }
@@ -215,18 +283,21 @@ pub(super) fn set_up<'a, T: Sighting, L: Likelihood>(
     let geo = sighting_geometry(items, stations.len())?;
     for s in stations.iter_mut() {
         s.n = 0;
+        s.summary = Summary::EMPTY;
     }
     let mut counted = 0usize;
-    for (_, s, _) in usable_as(
+    for (b, s, _) in usable_as(
         items,
         stations.len(),
         Known {
             checked: false,
             harmonics: false,
+            summed: false,
         },
     ) {
         if let Some(row) = stations.get_mut(s) {
             row.n += 1;
+            row.summary.add(b);
             counted += 1;
         }
     }
@@ -255,6 +326,10 @@ pub(super) fn set_up<'a, T: Sighting, L: Likelihood>(
     let harmonics = stations
         .iter()
         .any(|s| s.hfree || s.hx.iter().chain(&s.htrial).any(|&h| h != 0.0));
+    let summed = !harmonics && loss.ln_sum(1.0, 0.0, 0.0, 1.0).is_some();
+    for s in stations.iter_mut() {
+        s.summed = if summed { s.summary.summed() } else { None };
+    }
     let problem = Problem {
         items,
         loss,
@@ -264,6 +339,7 @@ pub(super) fn set_up<'a, T: Sighting, L: Likelihood>(
         known: Known {
             checked: counted == items.len(),
             harmonics,
+            summed,
         },
     };
     let p = [

@@ -20,6 +20,7 @@
 
 use super::BiasPrior;
 use super::direction::{DirectionPrior, HARMONICS};
+use super::summary::{Summary, Summed};
 use crate::error::{Error, check_finite};
 use crate::linalg::dot;
 use crate::linalg::inverse_scaled;
@@ -93,6 +94,10 @@ pub struct StationSlot {
     track: Option<[f32; 2]>,
     course: Option<f32>,
     first_course: Option<f32>,
+    /// The current problem's bearings of this station as set-up counted them, and where they
+    /// stand summed for the solver's passes ([`super::summary`]).
+    pub(super) summary: Summary,
+    pub(super) summed: Option<Summed>,
 }
 
 /// Where the solver's harmonic coefficients start (as [`super::StartOffsets`] for offsets).
@@ -158,6 +163,8 @@ impl StationSlot {
             track: None,
             course: None,
             first_course: None,
+            summary: Summary::EMPTY,
+            summed: None,
         }
     }
 

@@ -930,3 +930,79 @@ fn a_fixed_stations_scatter_never_hides_a_rival_the_walk_finds() {
     // finds rivals in 9 (two masts).
     assert!(said >= 10 && rivals >= 1, "said {said}, rivals {rivals}");
 }
+
+/// The Gaussian without its summed form: every bearing counts alone.
+#[derive(Debug, Clone, Copy)]
+struct OneByOne;
+
+impl crate::likelihood::Likelihood for OneByOne {
+    fn ln(&self, r: f32, sigma: f32) -> f32 {
+        crate::Gaussian.ln(r, sigma)
+    }
+    fn irls_weight(&self, r: f32, sigma: f32) -> f32 {
+        crate::Gaussian.irls_weight(r, sigma)
+    }
+}
+
+#[test]
+fn a_fixed_stations_bearings_summed_give_the_fix_they_give_one_by_one() {
+    // Rings of masts, each mast's bearings from one place: the solver's summed form (one term a
+    // mast) and the bearings one by one find the same fix, offsets and ellipse. Twenty-one
+    // masts put one due west of the emitter, its bearings either side of +-180 degrees; the
+    // position's share of the sd (position_sd_m) makes the sd depend on the position.
+    use crate::likelihood::Likelihood;
+    let mut rng = XorShiftRng::seed_from_u64(23);
+    for (stations, each, sigma, position_sd_m) in [
+        (3, 40, 2.0, 0.0),
+        (8, 5, 1.0, 0.0),
+        (21, 30, 8.0, 0.0),
+        (21, 12, 3.0, 20.0),
+    ] {
+        let (items, _, _) = big_ring(stations, each, 6000.0, sigma * DEG, &mut rng).unwrap();
+        let options = BiasedOptions {
+            position_sd_m,
+            ..Default::default()
+        };
+        let start = Start {
+            position: [150.0, -100.0],
+            offsets: StartOffsets::Prior,
+        };
+        let mut summed = [StationSlot::default(); 64];
+        let mut alone = [StationSlot::default(); 64];
+        let (summed, alone) = (&mut summed[..stations], &mut alone[..stations]);
+        let a = ml_sources(&items, summed, start, &crate::Gaussian, options).unwrap();
+        let b = ml_sources(&items, alone, start, &OneByOne, options).unwrap();
+        let moved = libm::hypotf(a.position[0] - b.position[0], a.position[1] - b.position[1]);
+        let sd = |f: &BiasedFix| libm::sqrtf(f.covariance[0][0] + f.covariance[1][1]);
+        let offsets = summed
+            .iter()
+            .zip(alone.iter())
+            .map(|(x, y)| libm::fabsf(x.offset().0 - y.offset().0))
+            .fold(0.0f32, f32::max);
+        std::println!(
+            "{stations} x {each}, {sigma} deg: fixes {moved:.4} m apart, sd {:.3} and {:.3} m, \
+             offsets {:.2e} deg apart",
+            sd(&a),
+            sd(&b),
+            offsets / DEG
+        );
+        // The two differ only in f32 rounding and where the solver's tolerance stops it.
+        assert!(moved < 0.05 * sd(&b), "{moved} m against sd {}", sd(&b));
+        assert!(libm::fabsf(sd(&a) / sd(&b) - 1.0) < 1e-3);
+        assert!(offsets < 1e-3 * DEG);
+        assert!(
+            libm::fabsf(a.chi2 / b.chi2 - 1.0) < 1e-3,
+            "{} {}",
+            a.chi2,
+            b.chi2
+        );
+    }
+    // The summed form is the Gaussian's; a loss that needs every residual has none.
+    assert!(crate::Gaussian.ln_sum(2.0, 0.1, 0.01, 1.0).is_some());
+    assert!(OneByOne.ln_sum(2.0, 0.1, 0.01, 1.0).is_none());
+    assert!(
+        crate::likelihood::Huber::default()
+            .ln_sum(2.0, 0.1, 0.01, 1.0)
+            .is_none()
+    );
+}
