@@ -16,8 +16,9 @@
 //! widened by two standard errors below (0.90 - 0.06, rounded up) and up to where ellipses
 //! would be uselessly wide: it fails when the ellipses become much too small (a confident
 //! wrong track) or far too large. The rmse bar is a regression bar on the measured 1.49-1.74x
-//! the bound (not the 1.3x the issue asks: the trackers forget the offsets on purpose, the
-//! book says why): 2.2x, a quarter above the worst, so a tracker a quarter worse fails.
+//! the bound (not the 1.3x the issue asks: the particles forget the offsets on purpose, the
+//! book says why): 2.2x, a quarter above the worst, so a tracker a quarter worse fails. The
+//! IMM of EKFs, which can remember them, meets the 1.3x (the last test).
 
 use foxhunt_core::Method;
 use foxhunt_sim::runs::moving::MovingScenario;
@@ -25,6 +26,37 @@ use foxhunt_sim::runs::moving::bench::{one, pcrb};
 use foxhunt_sim::track::moving::{DEFAULT_METHOD, PARTICLES};
 
 const RUNS: usize = 24;
+
+/// `method`'s time-averaged figures over runs 0..`runs` of scenario `s`: coverage, rmse /
+/// PCRB and the share of updates whose P(moving) was right; printed.
+fn figures(s: &MovingScenario, method: Method, runs: usize) -> (f64, f64, f64) {
+    let bound = pcrb(s).expect("bound");
+    let (mut se, mut n, mut covered, mut mode) = (0.0f64, 0usize, 0usize, 0usize);
+    for run in 0..runs {
+        let f = one(s, method, PARTICLES, false, run).expect("track");
+        se += f.errors.iter().map(|e| f64::from(*e).powi(2)).sum::<f64>();
+        n += f.errors.len();
+        covered += f.covered.iter().filter(|c| **c).count();
+        mode += f.mode_right.iter().filter(|c| **c).count();
+    }
+    let rmse = (se / n as f64).sqrt();
+    let coverage = covered as f64 / n as f64;
+    let mode = mode as f64 / n as f64;
+    let ratio = rmse / bound;
+    let particles = if method == Method::Ekf {
+        String::new()
+    } else {
+        format!(" N {PARTICLES}")
+    };
+    println!(
+        "{} at {} Hz, {}{particles}, {runs} runs: coverage {coverage:.3}, rmse {rmse:.0} m, \
+         PCRB {bound:.0} m (x{ratio:.2}), P(moving) right {mode:.3}",
+        s.name,
+        s.rate_hz,
+        Method::name(method),
+    );
+    (coverage, ratio, mode)
+}
 
 #[test]
 fn the_default_tracker_follows_a_drone_with_honest_ellipses() {
@@ -35,24 +67,7 @@ fn the_default_tracker_follows_a_drone_with_honest_ellipses() {
         "move-fixed-stop-and-go",
     ] {
         let s = MovingScenario::named(name).expect("scenario");
-        let bound = pcrb(&s).expect("bound");
-        let (mut se, mut n, mut covered, mut mode) = (0.0f64, 0usize, 0usize, 0usize);
-        for run in 0..RUNS {
-            let f = one(&s, DEFAULT_METHOD, PARTICLES, false, run).expect("track");
-            se += f.errors.iter().map(|e| f64::from(*e).powi(2)).sum::<f64>();
-            n += f.errors.len();
-            covered += f.covered.iter().filter(|c| **c).count();
-            mode += f.mode_right.iter().filter(|c| **c).count();
-        }
-        let rmse = (se / n as f64).sqrt();
-        let coverage = covered as f64 / n as f64;
-        let mode = mode as f64 / n as f64;
-        let ratio = rmse / bound;
-        println!(
-            "{name} {} N {PARTICLES}: coverage {coverage:.3}, rmse {rmse:.0} m, PCRB {bound:.0} m \
-             (x{ratio:.2}), P(moving) right {mode:.3}",
-            Method::name(DEFAULT_METHOD),
-        );
+        let (coverage, ratio, _) = figures(&s, DEFAULT_METHOD, RUNS);
         if !(0.85..=0.99).contains(&coverage) {
             failed.push(format!("{name}: coverage {coverage:.3} outside 0.85-0.99"));
         }
@@ -83,25 +98,42 @@ fn at_ten_updates_a_second_the_ellipses_stay_honest() {
     let mut s = MovingScenario::named("move-fixed-turning").expect("scenario");
     s.rate_hz = 10.0;
     s.runs = RUNS_10HZ;
-    let bound = pcrb(&s).expect("bound");
-    let (mut se, mut n, mut covered) = (0.0f64, 0usize, 0usize);
-    for run in 0..RUNS_10HZ {
-        let f = one(&s, DEFAULT_METHOD, PARTICLES, false, run).expect("track");
-        se += f.errors.iter().map(|e| f64::from(*e).powi(2)).sum::<f64>();
-        n += f.errors.len();
-        covered += f.covered.iter().filter(|c| **c).count();
-    }
-    let rmse = (se / n as f64).sqrt();
-    let coverage = covered as f64 / n as f64;
-    let ratio = rmse / bound;
-    println!(
-        "move-fixed-turning at 10 Hz, {} N {PARTICLES}, {RUNS_10HZ} runs: coverage {coverage:.3}, \
-         rmse {rmse:.0} m, PCRB {bound:.0} m (x{ratio:.2})",
-        Method::name(DEFAULT_METHOD),
-    );
+    let (coverage, ratio, _) = figures(&s, DEFAULT_METHOD, RUNS_10HZ);
     assert!(
         (0.85..=1.0).contains(&coverage),
         "coverage {coverage:.3} outside 0.85-1.0"
     );
     assert!(ratio <= 3.5, "rmse {ratio:.2}x the bound, above 3.5x");
+}
+
+/// The IMM of EKFs with its 1 500 s memory on every scenario with bearings from two or more
+/// stations: within the 1.3x of the bound the particle filters miss, with honest ellipses
+/// (the book's tracking chapter, "The IMM of EKFs' memory"). Measured over these 24 runs:
+/// 1.07-1.26x the bound, coverage 0.913 (two vehicles) to 0.989 (straight). Bars: 1.3x is the
+/// bar itself (the worst measured, 1.26x, is 3 % under it; the runs are seeded, so the
+/// figure moves only with the code); coverage 0.85-0.99 as for the default above (standard
+/// error about 0.03 over 24 runs). At 120 s (the memory before) the fixed masts were 1.42-1.66x
+/// and fail the first bar; never forgetting, the two vehicles' ellipses hold 0.835 and fail the
+/// second.
+#[test]
+fn the_imm_of_ekfs_remembers_the_offsets_and_tracks_within_the_bound() {
+    let mut failed = Vec::new();
+    for name in [
+        "move-fixed-straight",
+        "move-fixed-turning",
+        "move-fixed-stop-and-go",
+        "move-vehicles-turning",
+        "move-mixed-stop-and-go",
+        "move-mixed-both",
+    ] {
+        let s = MovingScenario::named(name).expect("scenario");
+        let (coverage, ratio, _) = figures(&s, Method::Ekf, RUNS);
+        if !(0.85..=0.99).contains(&coverage) {
+            failed.push(format!("{name}: coverage {coverage:.3} outside 0.85-0.99"));
+        }
+        if ratio > 1.3 {
+            failed.push(format!("{name}: rmse {ratio:.2}x the bound, above 1.3x"));
+        }
+    }
+    assert!(failed.is_empty(), "{}", failed.join("; "));
 }

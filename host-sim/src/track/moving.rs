@@ -42,13 +42,15 @@ pub const fn max_sources(rssi: bool) -> usize {
 /// Updates the fixed-lag smoother holds: each smoothed point has seen this many - 1 later
 /// updates.
 pub const LAG: usize = 16;
-/// Seconds in which the parameters' statistics forget (chosen on the moving scenarios,
-/// docs/src/tracking.md).
+/// Seconds in which the particle filters' parameter statistics forget (chosen on the moving
+/// scenarios, docs/src/tracking.md: a longer memory narrows the ellipses below the truth, as
+/// the particles come to share their ancestors' offsets).
 pub const MEMORY_S: f32 = 250.0;
-/// The longest the IMM of EKFs' parameters remember, seconds: its ellipses never narrowed with
-/// a particle kernel, so it keeps the memory chosen for it before (a longer one left its last
-/// ellipse on the bundled one-vehicle drive short of the still emitter's fix).
-pub const EKF_MEMORY_S: f32 = 120.0;
+/// Seconds in which the IMM of EKFs' parameters forget: its one Gaussian keeps the offsets'
+/// covariance with the position, so it can remember far longer (chosen on the moving
+/// scenarios, docs/src/tracking.md: 1.06-1.17x the bound on the fixed masts at 1 500 s,
+/// 1.4-1.7x at the particle filters' 250; at 2 000 s the two vehicles' ellipses fall short).
+pub const EKF_MEMORY_S: f32 = 1500.0;
 /// Particles unless told otherwise.
 pub const PARTICLES: usize = 1000;
 /// The default method: the tuned SIR with its shrinkage kernel (a regularised PF) and a
@@ -96,8 +98,9 @@ pub struct Settings {
     /// Where to start when the first update has no bearing: centre and sd, metres.
     pub region: Option<([f32; 2], f32)>,
     /// Seconds in which the parameters' statistics forget what they learned (their variance
-    /// regains the prior's: [`Forgetting`]).
-    pub memory_s: f32,
+    /// regains the prior's: [`Forgetting`]); none: the method's own ([`MEMORY_S`], the EKF's
+    /// [`EKF_MEMORY_S`]).
+    pub memory_s: Option<f32>,
     /// Also smooth the track with the fixed lag ([`LAG`] updates).
     pub smooth: bool,
     /// Seed.
@@ -118,7 +121,7 @@ impl Settings {
             exponent_sd: 0.0,
             moving: 0.5,
             region: None,
-            memory_s: MEMORY_S,
+            memory_s: None,
             smooth: false,
             seed: 1,
         }
@@ -147,11 +150,11 @@ impl Settings {
             layout: self.layout,
             room: self.room,
             forgetting: Forgetting {
-                memory_s: if self.method == Method::Ekf {
-                    self.memory_s.min(EKF_MEMORY_S)
+                memory_s: self.memory_s.unwrap_or(if self.method == Method::Ekf {
+                    EKF_MEMORY_S
                 } else {
-                    self.memory_s
-                },
+                    MEMORY_S
+                }),
                 offset_var,
                 power_var: var(self.power_sd),
                 exponent_var: var(self.exponent_sd),

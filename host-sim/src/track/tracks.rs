@@ -27,8 +27,9 @@ pub struct Options {
     pub motion: Option<Motion>,
     /// Acceleration sd of the moving model, m/s^2 (none: the motion's own).
     pub accel_sd: Option<f32>,
-    /// Seconds in which the stations' offsets forget what they learned.
-    pub memory_s: f32,
+    /// Seconds in which the stations' offsets forget what they learned (none: the method's
+    /// own).
+    pub memory_s: Option<f32>,
     /// Every bearing's noise, radians (none: each record's own).
     pub sigma: Option<f32>,
     /// Channel width for grouping bearings by frequency, MHz.

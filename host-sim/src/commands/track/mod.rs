@@ -98,10 +98,11 @@ pub struct Args {
     /// Acceleration sd of the moving emitter, m/s^2 (default: the motion's).
     #[arg(long)]
     pub accel_sd: Option<f32>,
-    /// Seconds in which each station's offset forgets what it learned (an error that changes
-    /// with where the emitter is, as an indoor array's toward its boresight, wants about 10).
-    #[arg(long, default_value_t = crate::track::moving::MEMORY_S)]
-    pub memory_s: f32,
+    /// Seconds in which each station's offset forgets what it learned (default 250; 1500 for
+    /// `ekf`; an error that changes with where the emitter is, as an indoor array's toward its
+    /// boresight, wants about 10).
+    #[arg(long)]
+    pub memory_s: Option<f32>,
     /// Every bearing's noise, degrees (default: the stations file's, else each record's own).
     #[arg(long)]
     pub sigma: Option<f32>,
@@ -163,7 +164,7 @@ impl Args {
                 _ => Motion::OUTDOOR,
             }),
             accel_sd: self.accel_sd.map(|a| positive("accel-sd", a)).transpose()?,
-            memory_s: positive("memory-s", self.memory_s)?,
+            memory_s: self.memory_s.map(|m| positive("memory-s", m)).transpose()?,
             sigma: self
                 .sigma
                 .map(|s| positive("sigma", s).map(f32::to_radians))
