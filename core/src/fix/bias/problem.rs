@@ -123,8 +123,35 @@ impl<T: Sighting, L: Likelihood> Problem<'_, T, L> {
         }
     }
 
+    /// Each row's direction from its one place to centred position `p` (rows whose bearings
+    /// were taken at one place; but for the summed rows when `summed`, whose bearings do not
+    /// count one by one): the same `atan2` every one of those bearings would take.
+    fn aim(&self, stations: &mut [StationSlot], p: [f32; 2], summed: bool) {
+        for row in stations.iter_mut() {
+            if summed && row.summed.is_some() {
+                continue;
+            }
+            if let Some(place) = row.place {
+                let s = [place[0] - self.origin[0], place[1] - self.origin[1]];
+                row.toward = predicted(&p, &s);
+            }
+        }
+    }
+
+    /// Bearing `b`'s predicted direction from centred position `p`, from its row's `aim`ed
+    /// direction where the row has one place.
+    #[inline]
+    fn toward(&self, b: &Bearing, row: &StationSlot, p: [f32; 2]) -> f32 {
+        if row.place.is_some() {
+            row.toward
+        } else {
+            let s = [b.vehicle[0] - self.origin[0], b.vehicle[1] - self.origin[1]];
+            predicted(&p, &s)
+        }
+    }
+
     /// The cost at centred position `p` with the rows' offsets `at`.
-    pub(super) fn cost(&self, stations: &[StationSlot], p: [f32; 2], at: At) -> f32 {
+    pub(super) fn cost(&self, stations: &mut [StationSlot], p: [f32; 2], at: At) -> f32 {
         let offset = |s: &StationSlot| match at {
             At::Current => s.x,
             At::Trial => s.trial,
@@ -132,17 +159,14 @@ impl<T: Sighting, L: Likelihood> Problem<'_, T, L> {
         let trial = at == At::Trial;
         let summed = self.summed_cost(stations, p, offset);
         let mut c = summed.unwrap_or(0.0);
+        self.aim(stations, p, summed.is_some());
         for (b, s, u) in self.sightings(stations.len()) {
             let Some(row) = stations.get(s) else { continue };
             if summed.is_some() && row.summed.is_some() {
                 continue;
             }
-            let r = residual(
-                b,
-                self.origin,
-                p,
-                offset(row) + dot(row.harmonics_at(trial), &u),
-            );
+            let bias = offset(row) + dot(row.harmonics_at(trial), &u);
+            let r = wrap(b.theta - self.toward(b, row, p) - bias);
             let sigma = self.sigma(b, p);
             c -= self.loss.ln(r, sigma);
             if self.position_sd > 0.0 {
@@ -215,6 +239,7 @@ impl<T: Sighting, L: Likelihood> Problem<'_, T, L> {
                 row.add(jac, [0.0; HARMONICS], w, r);
             }
         }
+        self.aim(stations, p, summed);
         let n = stations.len();
         for (b, s, u) in self.sightings(n) {
             let Some(row) = stations.get_mut(s) else {
@@ -223,8 +248,7 @@ impl<T: Sighting, L: Likelihood> Problem<'_, T, L> {
             if summed && row.summed.is_some() {
                 continue;
             }
-            let v = [b.vehicle[0] - self.origin[0], b.vehicle[1] - self.origin[1]];
-            let r = wrap(b.theta - predicted(&p, &v) - row.x - dot(&row.hx, &u));
+            let r = wrap(b.theta - self.toward(b, row, p) - row.x - dot(&row.hx, &u));
             let sigma = self.sigma(b, p);
             let w = self.loss.irls_weight(r, sigma) / (sigma * sigma);
             let jac = self.jacobian(b.vehicle, p, along);
@@ -329,6 +353,7 @@ pub(super) fn set_up<'a, T: Sighting, L: Likelihood>(
     let summed = !harmonics && loss.ln_sum(1.0, 0.0, 0.0, 1.0).is_some();
     for s in stations.iter_mut() {
         s.summed = if summed { s.summary.summed() } else { None };
+        s.place = s.summary.one_place();
     }
     let problem = Problem {
         items,

@@ -98,6 +98,10 @@ pub struct StationSlot {
     /// stand summed for the solver's passes ([`super::summary`]).
     pub(super) summary: Summary,
     pub(super) summed: Option<Summed>,
+    /// Where all its bearings in the current problem were taken (two or more), and the
+    /// direction from there to the position the solver last evaluated: one `atan2` a pass.
+    pub(super) place: Option<[f32; 2]>,
+    pub(super) toward: f32,
 }
 
 /// Where the solver's harmonic coefficients start (as [`super::StartOffsets`] for offsets).
@@ -165,6 +169,8 @@ impl StationSlot {
             first_course: None,
             summary: Summary::EMPTY,
             summed: None,
+            place: None,
+            toward: 0.0,
         }
     }
 

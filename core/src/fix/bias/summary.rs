@@ -35,7 +35,9 @@ pub(super) struct Summary {
     scatter: f32,
     low: f32,
     high: f32,
-    /// A bearing from another place or with another sd, or too far from the first.
+    /// A bearing from another place.
+    moved: bool,
+    /// A bearing with another sd, or too far from the first.
     mixed: bool,
 }
 
@@ -65,6 +67,7 @@ impl Summary {
         scatter: 0.0,
         low: 0.0,
         high: 0.0,
+        moved: false,
         mixed: false,
     };
 
@@ -81,9 +84,8 @@ impl Summary {
             return;
         }
         let d = wrap(b.theta - self.first);
-        if b.vehicle != self.place || b.sigma != self.sigma || libm::fabsf(d) > WIDEST {
-            self.mixed = true;
-        }
+        self.moved |= b.vehicle != self.place;
+        self.mixed |= b.sigma != self.sigma || libm::fabsf(d) > WIDEST;
         self.n += 1;
         let before = d - self.mean;
         self.mean += before / self.n as f32;
@@ -92,9 +94,15 @@ impl Summary {
         self.high = self.high.max(d);
     }
 
+    /// Where the bearings were all taken, if two or more and from one place: the direction
+    /// they predict is one `atan2` for all of them, whatever the loss.
+    pub(super) fn one_place(&self) -> Option<[f32; 2]> {
+        (self.n >= 2 && !self.moved).then_some(self.place)
+    }
+
     /// The summary, where it stands for two or more bearings from one place with one sd.
     pub(super) fn summed(&self) -> Option<Summed> {
-        (self.n >= 2 && !self.mixed).then(|| Summed {
+        (self.n >= 2 && !self.moved && !self.mixed).then(|| Summed {
             n: self.n as f32,
             place: self.place,
             sigma: self.sigma,
@@ -168,5 +176,10 @@ mod tests {
         let mut two = one;
         two.add(&at([0.0, 0.0], 0.4));
         assert!(two.summed().is_some());
+        // One place is one direction whatever the sds and the spread.
+        assert_eq!(sd.one_place(), Some([0.0, 0.0]));
+        assert_eq!(wide.one_place(), Some([0.0, 0.0]));
+        assert_eq!(moved.one_place(), None);
+        assert_eq!(one.one_place(), None);
     }
 }

@@ -1006,3 +1006,41 @@ fn a_fixed_stations_bearings_summed_give_the_fix_they_give_one_by_one() {
             .is_none()
     );
 }
+
+#[test]
+fn a_stations_one_place_is_one_direction_for_any_loss() {
+    // Masts' bearings under Tukey (no summed form): each mast's direction taken once a pass
+    // gives the very cost and normal equations of each bearing taking its own.
+    use super::problem::{At, set_up};
+    let mut rng = XorShiftRng::seed_from_u64(29);
+    let (items, mut table, fix) = big_ring(21, 12, 6000.0, 3.0 * DEG, &mut rng).unwrap();
+    let table = &mut table[..21];
+    let start = Start {
+        position: fix.position,
+        offsets: StartOffsets::Fitted,
+    };
+    let tukey = crate::likelihood::Tukey::default();
+    let (problem, p, _) = set_up(&items, table, start, &tukey, BiasedOptions::default()).unwrap();
+    assert!(
+        table
+            .iter()
+            .all(|s| s.place.is_some() && s.summed.is_none())
+    );
+    let probe = [p[0] + 250.0, p[1] - 400.0];
+    let aimed = problem.cost(table, probe, At::Current);
+    problem.accumulate(table, probe, None);
+    let blocks: std::vec::Vec<StationSlot> = table.to_vec();
+    for s in table.iter_mut() {
+        s.place = None;
+    }
+    let alone = problem.cost(table, probe, At::Current);
+    problem.accumulate(table, probe, None);
+    std::println!("cost {aimed} aimed, {alone} one by one");
+    assert_eq!(aimed.to_bits(), alone.to_bits());
+    for (a, b) in blocks.iter().zip(table.iter()) {
+        let mut a = *a;
+        a.place = None;
+        a.toward = b.toward;
+        assert_eq!(a, *b);
+    }
+}
