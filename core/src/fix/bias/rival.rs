@@ -11,6 +11,7 @@
 use super::direction::DirectionPrior;
 use super::problem::{residual, set_up, usable};
 use super::stations::{StationSlot, reduce};
+use super::summary::OnePlace;
 use super::{BiasedOptions, OffsetCircle, Sighting, Start, StartOffsets};
 use crate::likelihood::Gaussian;
 use crate::linalg::{dot, eigen2};
@@ -133,59 +134,42 @@ impl Quadratic {
 /// about their weighted mean. Wrapping cannot either while they lie within 45 degrees of it:
 /// a shift that wraps one leaves every one at least 90 degrees off. Zero otherwise.
 struct Scatter {
-    /// The one place so far, while there is one.
-    at: Option<[f32; 2]>,
     /// Whether the bound can hold at all (no direction-dependent error).
     alike: bool,
-    /// The weights' sum, the residuals' weighted mean and their weighted squared deviations
-    /// from it (updated a bearing at a time, so no large sums cancel), and their range.
-    w: f32,
-    mean: f32,
-    spread: f32,
-    range: [f32; 2],
+    /// The residuals at the fit, weighted, and where they were taken.
+    e: OnePlace,
 }
 
 impl Scatter {
     fn new(alike: bool) -> Self {
         Self {
-            at: None,
             alike,
-            w: 0.0,
-            mean: 0.0,
-            spread: 0.0,
-            range: [f32::INFINITY, f32::NEG_INFINITY],
+            e: OnePlace::EMPTY,
         }
     }
 
     /// A bearing from `vehicle` missing by `e` at the fit, of weight `w`.
     fn add(&mut self, vehicle: [f32; 2], e: f32, w: f32) {
-        if *self.at.get_or_insert(vehicle) != vehicle {
-            self.alike = false;
-        }
-        self.w += w;
-        let before = e - self.mean;
-        self.mean += w * before / self.w;
-        self.spread += w * before * (e - self.mean);
-        self.range = [self.range[0].min(e), self.range[1].max(e)];
+        self.e.add(vehicle, e, w);
     }
 
     /// The one place of bearings that no direction-dependent error turns.
     fn place(&self) -> Option<[f32; 2]> {
-        self.at.filter(|_| self.alike && self.w > 0.0)
+        self.e.place().filter(|_| self.alike && self.e.w > 0.0)
     }
 
     /// The bearings' deviance at the fit, sum w e^2.
     fn at_fit(&self) -> f32 {
-        self.spread.max(0.0) + self.w * self.mean * self.mean
+        self.e.scatter.max(0.0) + self.e.w * self.e.mean * self.e.mean
     }
 
     fn least(&self) -> f32 {
-        if !(self.alike && self.w > 0.0) {
+        if self.place().is_none() {
             return 0.0;
         }
-        let quarter = core::f32::consts::FRAC_PI_4;
-        let within = self.range[0] >= self.mean - quarter && self.range[1] <= self.mean + quarter;
-        if within { self.spread.max(0.0) } else { 0.0 }
+        let (e, quarter) = (&self.e, core::f32::consts::FRAC_PI_4);
+        let within = e.low >= e.mean - quarter && e.high <= e.mean + quarter;
+        if within { e.scatter.max(0.0) } else { 0.0 }
     }
 }
 

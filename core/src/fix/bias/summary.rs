@@ -20,23 +20,63 @@ const WIDEST: f32 = FRAC_PI_2;
 /// residual that wraps count as one that does not.
 const NO_WRAP: f32 = 3.1;
 
-/// One station's bearings as the problem's set-up counted them (see the module doc).
+/// Values seen from one place or several, with weights: their weighted mean, their weighted
+/// squared deviations from it (updated a value at a time, Welford's way, so no large sums
+/// cancel) and their range, and whether they all came from one place. A station's bearings
+/// ([`Summary`]) and its residuals at a fit (the no-rival bound's scatter) both count so.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct OnePlace {
+    /// The first value's place, and whether a later one came from another.
+    at: Option<[f32; 2]>,
+    moved: bool,
+    /// The weights' sum, the mean, the squared deviations and the range.
+    pub(super) w: f32,
+    pub(super) mean: f32,
+    pub(super) scatter: f32,
+    pub(super) low: f32,
+    pub(super) high: f32,
+}
+
+impl OnePlace {
+    /// Nothing seen.
+    pub(super) const EMPTY: Self = Self {
+        at: None,
+        moved: false,
+        w: 0.0,
+        mean: 0.0,
+        scatter: 0.0,
+        low: f32::INFINITY,
+        high: f32::NEG_INFINITY,
+    };
+
+    /// Count value `x` of weight `w` seen from `place`.
+    pub(super) fn add(&mut self, place: [f32; 2], x: f32, w: f32) {
+        if *self.at.get_or_insert(place) != place {
+            self.moved = true;
+        }
+        self.w += w;
+        let before = x - self.mean;
+        self.mean += w * before / self.w;
+        self.scatter += w * before * (x - self.mean);
+        self.low = self.low.min(x);
+        self.high = self.high.max(x);
+    }
+
+    /// The one place every value came from, if any came.
+    pub(super) fn place(&self) -> Option<[f32; 2]> {
+        self.at.filter(|_| !self.moved)
+    }
+}
+
+/// One station's bearings as the problem's set-up counted them: their differences from the
+/// first, of weight one each.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Summary {
-    /// Bearings counted.
-    n: u32,
-    /// Where they were taken, and their sd (radians), both as the first bearing's.
-    place: [f32; 2],
-    sigma: f32,
-    /// The first bearing (theta) and the running mean, scatter and extremes of the others'
-    /// wrapped difference from it.
+    /// The first bearing (theta) and its sd (radians).
     first: f32,
-    mean: f32,
-    scatter: f32,
-    low: f32,
-    high: f32,
-    /// A bearing from another place.
-    moved: bool,
+    sigma: f32,
+    /// The bearings' wrapped differences from the first.
+    values: OnePlace,
     /// A bearing with another sd, or too far from the first.
     mixed: bool,
 }
@@ -59,56 +99,40 @@ pub(super) struct Summed {
 impl Summary {
     /// No bearings.
     pub(super) const EMPTY: Self = Self {
-        n: 0,
-        place: [0.0; 2],
-        sigma: 0.0,
         first: 0.0,
-        mean: 0.0,
-        scatter: 0.0,
-        low: 0.0,
-        high: 0.0,
-        moved: false,
+        sigma: 0.0,
+        values: OnePlace::EMPTY,
         mixed: false,
     };
 
-    /// Count bearing `b` (Welford's update of the mean and scatter).
+    /// Count bearing `b`.
     pub(super) fn add(&mut self, b: &Bearing) {
-        if self.n == 0 {
-            *self = Self {
-                n: 1,
-                place: b.vehicle,
-                sigma: b.sigma,
-                first: b.theta,
-                ..Self::EMPTY
-            };
-            return;
+        if self.values.w == 0.0 {
+            self.first = b.theta;
+            self.sigma = b.sigma;
         }
         let d = wrap(b.theta - self.first);
-        self.moved |= b.vehicle != self.place;
         self.mixed |= b.sigma != self.sigma || libm::fabsf(d) > WIDEST;
-        self.n += 1;
-        let before = d - self.mean;
-        self.mean += before / self.n as f32;
-        self.scatter += before * (d - self.mean);
-        self.low = self.low.min(d);
-        self.high = self.high.max(d);
+        self.values.add(b.vehicle, d, 1.0);
     }
 
     /// Where the bearings were all taken, if two or more and from one place: the direction
     /// they predict is one `atan2` for all of them, whatever the loss.
     pub(super) fn one_place(&self) -> Option<[f32; 2]> {
-        (self.n >= 2 && !self.moved).then_some(self.place)
+        self.values.place().filter(|_| self.values.w >= 2.0)
     }
 
     /// The summary, where it stands for two or more bearings from one place with one sd.
     pub(super) fn summed(&self) -> Option<Summed> {
-        (self.n >= 2 && !self.moved && !self.mixed).then(|| Summed {
-            n: self.n as f32,
-            place: self.place,
+        let v = &self.values;
+        let place = self.one_place().filter(|_| !self.mixed)?;
+        Some(Summed {
+            n: v.w,
+            place,
             sigma: self.sigma,
-            mean: wrap(self.first + self.mean),
-            scatter: self.scatter.max(0.0),
-            spread: (self.high - self.mean).max(self.mean - self.low),
+            mean: wrap(self.first + v.mean),
+            scatter: v.scatter.max(0.0),
+            spread: (v.high - v.mean).max(v.mean - v.low),
         })
     }
 }
