@@ -221,22 +221,25 @@ impl<T: Sighting, L: Likelihood> Problem<'_, T, L> {
         for s in stations.iter_mut() {
             s.clear_blocks();
         }
-        // The summed stations first, each as one bearing of weight n, where none wraps.
-        let summed = self.known.summed
-            && stations.iter().all(|row| {
-                row.summed
-                    .is_none_or(|g| g.residual(self.origin, p, row.x).is_some())
-            });
+        // The summed stations first, each as one bearing of weight n; where one might wrap,
+        // they are cleared again and every bearing counts alone (as in `cost`).
+        let mut summed = self.known.summed;
         if summed {
             for row in stations.iter_mut() {
                 let Some(g) = row.summed else { continue };
                 let Some(r) = g.residual(self.origin, p, row.x) else {
-                    continue;
+                    summed = false;
+                    break;
                 };
                 let sigma = self.sigma_of(g.place, g.sigma, p);
                 let w = g.n * self.loss.irls_weight(r, sigma) / (sigma * sigma);
                 let jac = self.jacobian(g.place, p, along);
                 row.add(jac, [0.0; HARMONICS], w, r);
+            }
+            if !summed {
+                for s in stations.iter_mut() {
+                    s.clear_blocks();
+                }
             }
         }
         self.aim(stations, p, summed);
