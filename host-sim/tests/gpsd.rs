@@ -12,7 +12,7 @@ use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::{LatLon, write_sentence};
 use foxhunt_sim::runs::scenario::Scenario;
 use foxhunt_sim::runs::simulate::{CaptureFormat, CaptureOptions, drive_capture};
-use std::io::{BufRead, BufReader, Write};
+use std::io::Write;
 use std::net::TcpStream;
 use std::process::{Child, Command, Stdio};
 use std::sync::mpsc;
@@ -121,20 +121,6 @@ impl Drop for Daemon {
     }
 }
 
-/// Lines from a reader thread, as they come.
-fn lines(r: impl std::io::Read + Send + 'static) -> mpsc::Receiver<String> {
-    let (tx, rx) = mpsc::channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(r).lines() {
-            let Ok(line) = line else { return };
-            if tx.send(line).is_err() {
-                return;
-            }
-        }
-    });
-    rx
-}
-
 /// gpsfake replaying [`drive`]'s GPS log on a port of its own, a watcher of its reports
 /// (which paces the bearings: it sees what foxhunt sees), and the drive's bearings.
 struct GpsDrive {
@@ -181,7 +167,7 @@ impl GpsDrive {
             .expect("watch");
         Self {
             port,
-            reports: lines(watcher),
+            reports: common::lines(watcher),
             bearings,
             scenario,
             dir,
@@ -259,7 +245,7 @@ fn locate_takes_positions_and_headings_from_a_real_gpsd() {
         .stderr(Stdio::piped())
         .spawn()
         .expect("run foxhunt");
-    let updates = lines(child.stdout.take().expect("stdout"));
+    let updates = common::lines(child.stdout.take().expect("stdout"));
     let headings = g.feed(child.stdin.take().expect("stdin"));
     let mut used = Vec::new();
     let mut last = serde_json::Value::Null;
@@ -314,8 +300,8 @@ fn a_vehicle_publishes_bearings_placed_by_gpsd_and_the_broker_fuses_them() {
         .stderr(Stdio::piped())
         .spawn()
         .expect("run locate --mqtt");
-    let fixes = lines(worker.stdout.take().expect("stdout"));
-    let notes = lines(worker.stderr.take().expect("stderr"));
+    let fixes = common::lines(worker.stdout.take().expect("stdout"));
+    let notes = common::lines(worker.stderr.take().expect("stderr"));
     let said = notes
         .recv_timeout(PATIENCE)
         .expect("the worker's first note");

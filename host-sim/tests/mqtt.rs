@@ -7,10 +7,9 @@
 use foxhunt_bridge::nmea::LatLon;
 use foxhunt_sim::runs::network::{NetworkCondition, capture};
 use serde_json::Value;
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
-use std::sync::mpsc::{Receiver, channel};
+use std::sync::mpsc::Receiver;
 use std::time::{Duration, Instant};
 
 mod common;
@@ -55,19 +54,6 @@ struct Worker {
     early: Vec<String>,
 }
 
-fn lines_of(r: impl std::io::Read + Send + 'static) -> Receiver<String> {
-    let (tx, rx) = channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(r).lines() {
-            let Ok(line) = line else { return };
-            if tx.send(line).is_err() {
-                return;
-            }
-        }
-    });
-    rx
-}
-
 impl Worker {
     fn start(url: &str, id: &str, quiet_s: u32) -> Self {
         Self::start_with(url, id, quiet_s, &[])
@@ -89,8 +75,8 @@ impl Worker {
             .stderr(Stdio::piped())
             .spawn()
             .expect("run locate --mqtt");
-        let stdout = lines_of(child.stdout.take().expect("stdout"));
-        let stderr = lines_of(child.stderr.take().expect("stderr"));
+        let stdout = common::lines(child.stdout.take().expect("stdout"));
+        let stderr = common::lines(child.stderr.take().expect("stderr"));
         let mut w = Self {
             child,
             stdout,
@@ -709,7 +695,7 @@ fn the_live_map_follows_three_stations_through_the_broker() {
         .stderr(Stdio::piped())
         .spawn()
         .expect("run serve --mqtt");
-    let stderr = lines_of(child.stderr.take().expect("stderr"));
+    let stderr = common::lines(child.stderr.take().expect("stderr"));
     let next = || {
         stderr
             .recv_timeout(Duration::from_secs(30))

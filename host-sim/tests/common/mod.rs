@@ -75,10 +75,14 @@ pub fn piped(args: &[&str]) -> Child {
 /// The lines of `child`'s standard output as they come, read on a thread of their own (a live
 /// command prints while its input is still open).
 pub fn line_reader(child: &mut Child) -> Receiver<String> {
+    lines(child.stdout.take().expect("stdout piped"))
+}
+
+/// The lines of `r` as they come, read on a thread of their own.
+pub fn lines(r: impl std::io::Read + Send + 'static) -> Receiver<String> {
     let (tx, rx) = channel();
-    let stdout = child.stdout.take().expect("stdout piped");
     std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines() {
+        for line in BufReader::new(r).lines() {
             let Ok(line) = line else { return };
             if tx.send(line).is_err() {
                 return;
