@@ -20,7 +20,7 @@ use std::time::{Duration, Instant};
 
 mod common;
 
-use common::broker::Broker;
+use common::broker::{Broker, Worker};
 
 /// A deadline for waits that guard against a hang (not timing assertions).
 const PATIENCE: Duration = Duration::from_secs(60);
@@ -286,26 +286,7 @@ fn a_vehicle_publishes_bearings_placed_by_gpsd_and_the_broker_fuses_them() {
     let broker = Broker::start("gpsd");
     let url = broker.url("cars");
     let g = GpsDrive::start("publish");
-    let mut worker = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
-        .args([
-            "locate",
-            "--json",
-            "--mqtt",
-            &url,
-            "--mqtt-client-id",
-            "gpsd-worker",
-        ])
-        .args(["--quiet-exit", "5"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run locate --mqtt");
-    let fixes = common::lines(worker.stdout.take().expect("stdout"));
-    let notes = common::lines(worker.stderr.take().expect("stderr"));
-    let said = notes
-        .recv_timeout(PATIENCE)
-        .expect("the worker's first note");
-    assert!(said.contains("subscribed"), "{said}");
+    let worker = Worker::start_command(&["locate", "--json"], &url, "gpsd-worker", 5, &[]);
     let mut publisher = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
         .args([
             "publish",
@@ -326,13 +307,7 @@ fn a_vehicle_publishes_bearings_placed_by_gpsd_and_the_broker_fuses_them() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "publish: {err}");
     assert!(headings == g.bearings.len(), "{headings} ATT reports");
-    let mut last = serde_json::Value::Null;
-    while let Ok(line) = fixes.recv_timeout(PATIENCE) {
-        last = serde_json::from_str(&line).expect("JSON");
-    }
-    let status = worker.wait().expect("the worker ends");
-    let notes: Vec<String> = notes.iter().collect();
-    assert!(status.success(), "locate --mqtt: {notes:?}");
+    let (last, _) = worker.finish();
     // Every bearing the publisher sent was placed (one may precede its first position), and
     // the worker used them all.
     let sent = err

@@ -9,12 +9,11 @@ use foxhunt_sim::runs::network::{NetworkCondition, capture};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
-use std::sync::mpsc::Receiver;
 use std::time::{Duration, Instant};
 
 mod common;
 
-use common::broker::{Broker, serial};
+use common::broker::{Broker, Worker, serial};
 
 const FOXHUNT: &str = env!("CARGO_BIN_EXE_foxhunt");
 
@@ -42,81 +41,6 @@ fn station_files(dir: &Path) -> Vec<PathBuf> {
             p
         })
         .collect()
-}
-
-/// `foxhunt locate --mqtt` started: its standard output's lines, and standard error's, as
-/// they come; returns once it has subscribed.
-struct Worker {
-    child: Child,
-    stdout: Receiver<String>,
-    stderr: Receiver<String>,
-    /// Standard error's lines read before the subscription's.
-    early: Vec<String>,
-}
-
-impl Worker {
-    fn start(url: &str, id: &str, quiet_s: u32) -> Self {
-        Self::start_with(url, id, quiet_s, &[])
-    }
-
-    /// Started with `more` arguments.
-    fn start_with(url: &str, id: &str, quiet_s: u32, more: &[&str]) -> Self {
-        Self::start_command(&["locate", "--json", "--stats"], url, id, quiet_s, more)
-    }
-
-    /// `foxhunt COMMAND --mqtt URL ...` (a `locate` or a `track`) started.
-    fn start_command(command: &[&str], url: &str, id: &str, quiet_s: u32, more: &[&str]) -> Self {
-        let mut child = Command::new(FOXHUNT)
-            .args(command)
-            .args(["--mqtt", url, "--mqtt-client-id", id])
-            .args(["--quiet-exit", &quiet_s.to_string()])
-            .args(more)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("run locate --mqtt");
-        let stdout = common::lines(child.stdout.take().expect("stdout"));
-        let stderr = common::lines(child.stderr.take().expect("stderr"));
-        let mut w = Self {
-            child,
-            stdout,
-            stderr,
-            early: Vec::new(),
-        };
-        // Its first notes: what it resumed from a history, if any, and the subscription.
-        let mut line = String::new();
-        for _ in 0..2 {
-            line = w
-                .stderr
-                .recv_timeout(Duration::from_secs(10))
-                .expect("locate --mqtt says it subscribed");
-            w.early.push(line.clone());
-            if !line.starts_with("history: ") {
-                break;
-            }
-        }
-        assert!(line.contains("subscribed"), "{line}");
-        w
-    }
-
-    /// Wait for the end: its last JSON line and its standard error.
-    fn finish(self) -> (Value, Vec<String>) {
-        let (mut lines, err) = self.finish_all();
-        (lines.pop().expect("an update"), err)
-    }
-
-    /// Wait for the end: every JSON line and its standard error.
-    fn finish_all(mut self) -> (Vec<Value>, Vec<String>) {
-        let status = self.child.wait().expect("wait");
-        let out: Vec<String> = self.stdout.iter().collect();
-        let err: Vec<String> = self.early.into_iter().chain(self.stderr.iter()).collect();
-        assert!(status.success(), "foxhunt --mqtt: {status}: {err:?}");
-        let lines = out
-            .iter()
-            .map(|l| serde_json::from_str(l).expect("JSON"))
-            .collect();
-        (lines, err)
-    }
 }
 
 /// `foxhunt publish FILE` started (paced: `pace` times real time).
@@ -832,10 +756,7 @@ fn a_worker_the_broker_gives_nothing_says_so() {
         1,
         &["--mqtt-shard", "1/2"],
     );
-    let mut child = w.child;
-    let status = child.wait().expect("wait");
-    let err: Vec<String> = w.early.into_iter().chain(w.stderr.iter()).collect();
-    let out: Vec<String> = w.stdout.iter().collect();
+    let (status, out, err) = w.end();
     println!("{err:?} {out:?}");
     // No fix: exit 1, and the reason is the broker's silence on its shard's topics.
     assert_eq!(status.code(), Some(1), "{err:?}");
@@ -858,9 +779,7 @@ fn a_window_too_small_for_its_stations_is_named_with_the_keep_it_needs() {
     // Paced, so that the stations' bearings come interleaved, as a network's do (one file
     // after another would fill the window with one station's).
     publish_all(&files, &url, Some(300));
-    let mut child = w.child;
-    child.wait().expect("wait");
-    let err: Vec<String> = w.early.into_iter().chain(w.stderr.iter()).collect();
+    let (_, _, err) = w.end();
     println!("{err:?}");
     let named: Vec<&String> = err
         .iter()

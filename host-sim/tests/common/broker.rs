@@ -1,8 +1,10 @@
 //! A private mosquitto for the tests that need a real broker (Debian's, installed by
 //! .ci/run): its own port, directory and persistence.
 
+use serde_json::Value;
 use std::path::PathBuf;
-use std::process::{Child, Command};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc::Receiver;
 use std::time::{Duration, Instant};
 
 /// One broker at a time: a port freed by one test's broker restart could otherwise be handed
@@ -127,5 +129,95 @@ impl Drop for Broker {
             let _ = c.wait();
         }
         let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+/// `foxhunt locate --mqtt` started: its standard output's lines, and standard error's, as
+/// they come; returns once it has subscribed.
+pub struct Worker {
+    /// The process.
+    pub child: Child,
+    /// Standard output's lines.
+    pub stdout: Receiver<String>,
+    /// Standard error's lines after the subscription's.
+    pub stderr: Receiver<String>,
+    /// Standard error's lines read before the subscription's.
+    early: Vec<String>,
+}
+
+impl Worker {
+    pub fn start(url: &str, id: &str, quiet_s: u32) -> Self {
+        Self::start_with(url, id, quiet_s, &[])
+    }
+
+    /// Started with `more` arguments.
+    pub fn start_with(url: &str, id: &str, quiet_s: u32, more: &[&str]) -> Self {
+        Self::start_command(&["locate", "--json", "--stats"], url, id, quiet_s, more)
+    }
+
+    /// `foxhunt COMMAND --mqtt URL ...` (a `locate` or a `track`) started.
+    pub fn start_command(
+        command: &[&str],
+        url: &str,
+        id: &str,
+        quiet_s: u32,
+        more: &[&str],
+    ) -> Self {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+            .args(command)
+            .args(["--mqtt", url, "--mqtt-client-id", id])
+            .args(["--quiet-exit", &quiet_s.to_string()])
+            .args(more)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("run locate --mqtt");
+        let stdout = super::lines(child.stdout.take().expect("stdout"));
+        let stderr = super::lines(child.stderr.take().expect("stderr"));
+        let mut w = Self {
+            child,
+            stdout,
+            stderr,
+            early: Vec::new(),
+        };
+        // Its first notes: what it resumed from a history, if any, and the subscription.
+        let mut line = String::new();
+        for _ in 0..2 {
+            line = w
+                .stderr
+                .recv_timeout(Duration::from_secs(10))
+                .expect("locate --mqtt says it subscribed");
+            w.early.push(line.clone());
+            if !line.starts_with("history: ") {
+                break;
+            }
+        }
+        assert!(line.contains("subscribed"), "{line}");
+        w
+    }
+
+    /// Wait for the end: its last JSON line and its standard error.
+    pub fn finish(self) -> (Value, Vec<String>) {
+        let (mut lines, err) = self.finish_all();
+        (lines.pop().expect("an update"), err)
+    }
+
+    /// Wait for the end: its exit status, standard output's lines and standard error's.
+    pub fn end(mut self) -> (std::process::ExitStatus, Vec<String>, Vec<String>) {
+        let status = self.child.wait().expect("wait");
+        let out: Vec<String> = self.stdout.iter().collect();
+        let err: Vec<String> = self.early.into_iter().chain(self.stderr.iter()).collect();
+        (status, out, err)
+    }
+
+    /// Wait for the end: every JSON line and its standard error.
+    pub fn finish_all(self) -> (Vec<Value>, Vec<String>) {
+        let (status, out, err) = self.end();
+        assert!(status.success(), "foxhunt --mqtt: {status}: {err:?}");
+        let lines = out
+            .iter()
+            .map(|l| serde_json::from_str(l).expect("JSON"))
+            .collect();
+        (lines, err)
     }
 }
