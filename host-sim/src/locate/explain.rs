@@ -276,7 +276,10 @@ const STEADY_PAIRS: usize = 20;
 /// What a channel with no consistent emitter, heard by `stations` DF stations, whose bearings
 /// step by `step` degrees (its [`step_deg`]) adds to `why` (the bearings scatter, agree on
 /// nothing, or pin no point): bearings that step by under a third of the noise ceiling
-/// `max_sigma` (radians) follow something, not noise. Nothing for the other reasons.
+/// `max_sigma` (radians) follow something, not noise. One station's offset beyond its prior
+/// may be an emitter that moves: one station's bearings on a drone circling 500 m away fit a
+/// still point with a 15 or 60 degree offset (`move-vehicle-turning` run 1), and nothing in
+/// them tells the two apart. Nothing for the other reasons.
 pub(crate) fn steady_clause(
     why: NoEmitter,
     step: Option<f32>,
@@ -298,6 +301,11 @@ pub(crate) fn steady_clause(
              ({track}), or an error that changes with the vehicle's heading or place \
              (multipath, a direction-dependent error)"
         ),
+        _ if matches!(why, NoEmitter::OffsetBeyondPrior(_)) && stations == 1 => {
+            "; or the emitter moves: one station's bearings on an emitter that moves can fit a \
+             still one with a large offset (a second station tells them apart)"
+                .into()
+        }
         _ => String::new(),
     }
 }
@@ -438,5 +446,15 @@ mod tests {
         );
         assert_eq!(steady_clause(NoEmitter::TooNoisy, None, 1, ceiling), "");
         assert_eq!(steady_clause(NoEmitter::TooFew, Some(1.0), 1, ceiling), "");
+        let beyond = NoEmitter::OffsetBeyondPrior(foxhunt_core::fix::locate::OffsetBeyond {
+            station: 0,
+            offset: -0.26,
+            second: None,
+            prior: foxhunt_core::fix::bias::BiasPrior { mean: 0.0, sd: 0.1 },
+            z: 4.0,
+        });
+        let alone = steady_clause(beyond, Some(3.0), 1, ceiling);
+        assert!(alone.contains("or the emitter moves"), "{alone}");
+        assert_eq!(steady_clause(beyond, Some(3.0), 3, ceiling), "");
     }
 }
