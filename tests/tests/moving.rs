@@ -1,8 +1,9 @@
 //! A moving emitter is followed with ellipses that hold it about as often as they claim
 //! (`foxhunt bench --scenario moving`, the book's tracking chapter, "How well it follows"):
-//! the default tracker (the regularised SIR with the Gaussian + uniform likelihood, 1000
-//! particles) on a drone crossing the city straight, circling, and stopping and going, seen by
-//! four fixed stations with 2 degree noise and unknown 2 degree offsets.
+//! the default tracker (the regularised SIR with the Gaussian + uniform likelihood, 10 000
+//! particles remembering the offsets 1 500 s) on a drone crossing the city straight, circling,
+//! and stopping and going, seen by four fixed stations with 2 degree noise and unknown 2
+//! degree offsets.
 //!
 //! Figures: the 95 % ellipse's time-averaged coverage over the updates after the warm-up of
 //! RUNS seeded runs, the rmse against the posterior Cramér-Rao bound, and how often P(moving)
@@ -11,14 +12,14 @@
 //! Bars, and why: the updates of one run are strongly correlated (an offset learned wrong
 //! shifts a whole stretch), so a run counts as far fewer than its 570 updates; the per-run
 //! coverage ranges from 0.5 to 1.0, an sd of about 0.15, so over 24 runs the time-averaged
-//! figure has a standard error of about 0.03. Measured: 0.985 straight, 0.976 turning, 0.926
-//! stop-and-go (the issue's band is 0.90-0.98). The band asserted, 0.85-0.99, is that band
+//! figure has a standard error of about 0.03. Measured: 0.991 straight, 0.958 turning, 0.935
+//! stop-and-go (the issue's band is 0.90-0.98). The band asserted, 0.85-0.995, is that band
 //! widened by two standard errors below (0.90 - 0.06, rounded up) and up to where ellipses
-//! would be uselessly wide: it fails when the ellipses become much too small (a confident
-//! wrong track) or far too large. The rmse bar is a regression bar on the measured 1.49-1.74x
-//! the bound (not the 1.3x the issue asks: the particles forget the offsets on purpose, the
-//! book says why): 2.2x, a quarter above the worst, so a tracker a quarter worse fails. The
-//! IMM of EKFs, which can remember them, meets the 1.3x (the last test).
+//! would be uselessly wide (0.995: about 1.3x the axes they need): it fails when the ellipses
+//! become much too small (a confident wrong track) or far too large. The rmse bar: measured
+//! 1.18, 1.21 and 1.33x the bound (stop-and-go a little over the 1.3x the issue asks; at 1 000
+//! particles and 250 s, 1.49-1.74x); 1.4x, 5 % above the worst, so a tracker that forgets the
+//! offsets as the 1 000 particles had to fails.
 
 use foxhunt_core::Method;
 use foxhunt_sim::runs::moving::MovingScenario;
@@ -58,15 +59,17 @@ fn figures(s: &MovingScenario, method: Method, runs: usize) -> (f64, f64) {
     (coverage, ratio)
 }
 
-/// `method` over [`RUNS`] runs of each scenario of `names`: its coverage within 0.85-0.99 and
-/// its rmse at most `bar` times the bound, or every miss said.
-fn judge(names: &[&str], method: Method, bar: f64) {
+/// `method` over [`RUNS`] runs of each scenario of `names`: its coverage within 0.85-`widest`
+/// and its rmse at most `bar` times the bound, or every miss said.
+fn judge(names: &[&str], method: Method, bar: f64, widest: f64) {
     let mut failed = Vec::new();
     for name in names {
         let s = MovingScenario::named(name).expect("scenario");
         let (coverage, ratio) = figures(&s, method, RUNS);
-        if !(0.85..=0.99).contains(&coverage) {
-            failed.push(format!("{name}: coverage {coverage:.3} outside 0.85-0.99"));
+        if !(0.85..=widest).contains(&coverage) {
+            failed.push(format!(
+                "{name}: coverage {coverage:.3} outside 0.85-{widest}"
+            ));
         }
         if ratio > bar {
             failed.push(format!("{name}: rmse {ratio:.2}x the bound, above {bar}x"));
@@ -82,10 +85,10 @@ fn the_default_tracker_follows_a_drone_with_honest_ellipses() {
         "move-fixed-turning",
         "move-fixed-stop-and-go",
     ];
-    judge(&fixed, DEFAULT_METHOD, 2.2);
+    judge(&fixed, DEFAULT_METHOD, 1.4, 0.995);
 }
 
-/// Runs of the ten-updates-a-second test (about 1.6 s each in the ci profile).
+/// Runs of the ten-updates-a-second test (about 16 s each in the ci profile).
 const RUNS_10HZ: usize = 12;
 
 /// The same tracker with four fixed stations each reporting ten bearings a second (the load
@@ -97,9 +100,10 @@ const RUNS_10HZ: usize = 12;
 /// Bar, and why: as above, a run counts as few independent updates (per-run coverage sd
 /// about 0.15), so over 12 runs the time-averaged figure has a standard error of about 0.045;
 /// the band 0.85-1.0 is 0.95 less two standard errors (rounded up) and nothing above, since
-/// the figure is a mean of shares; the old kernel's 0.55 is far below it. The rmse bar is a
-/// regression bar on the measured 2.8x the bound (which sharpens tenfold faster with the data
-/// than a tracker whose offsets forget can): 3.5x.
+/// the figure is a mean of shares; the old kernel's 0.55 is far below it (measured now: 0.943).
+/// The rmse bar is a regression bar on the measured 1.88x the bound (which sharpens tenfold
+/// faster with the data than a tracker whose offsets forget can; 2.8x at 1 000 particles and
+/// 250 s): 2.4x, a quarter above, so the old memory fails.
 #[test]
 fn at_ten_updates_a_second_the_ellipses_stay_honest() {
     let mut s = MovingScenario::named("move-fixed-turning").expect("scenario");
@@ -110,7 +114,7 @@ fn at_ten_updates_a_second_the_ellipses_stay_honest() {
         (0.85..=1.0).contains(&coverage),
         "coverage {coverage:.3} outside 0.85-1.0"
     );
-    assert!(ratio <= 3.5, "rmse {ratio:.2}x the bound, above 3.5x");
+    assert!(ratio <= 2.4, "rmse {ratio:.2}x the bound, above 2.4x");
 }
 
 /// The IMM of EKFs with its 1 500 s memory on every scenario with bearings from two or more
@@ -132,5 +136,5 @@ fn the_imm_of_ekfs_remembers_the_offsets_and_tracks_within_the_bound() {
         "move-mixed-stop-and-go",
         "move-mixed-both",
     ];
-    judge(&networks, Method::Ekf, 1.3);
+    judge(&networks, Method::Ekf, 1.3, 0.99);
 }

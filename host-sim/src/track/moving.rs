@@ -42,17 +42,33 @@ pub const fn max_sources(rssi: bool) -> usize {
 /// Updates the fixed-lag smoother holds: each smoothed point has seen this many - 1 later
 /// updates.
 pub const LAG: usize = 16;
-/// Seconds in which the particle filters' parameter statistics forget (chosen on the moving
-/// scenarios, docs/src/tracking.md: a longer memory narrows the ellipses below the truth, as
-/// the particles come to share their ancestors' offsets).
+/// The particle filters' shortest memory, seconds: their parameter statistics forget in
+/// [`MEMORY_S_PER_PARTICLE`] times the particles, never in less (chosen at N = 1 000 on the
+/// moving scenarios, docs/src/tracking.md).
 pub const MEMORY_S: f32 = 250.0;
+/// Seconds of memory a particle buys. The particles come to share their ancestors' offsets
+/// after a time that grows with their number, and statistics remembered beyond it grow surer
+/// than the data allow (the ellipses narrow below the truth); forgetting sooner costs accuracy.
+/// Chosen on the moving scenarios (docs/src/tracking.md, "How well it follows"): at N = 1 000,
+/// 250 s holds the truth 93-99 % of the time and 1 000 s 74-94 %; at N = 10 000, 1 500 s gives
+/// 1.05-1.33x the bound at 94-99 %, 2 000 s 90-98 %, 250 s 1.14-1.52x.
+pub const MEMORY_S_PER_PARTICLE: f32 = 0.15;
+
+/// The particle filters' memory at `particles` ([`MEMORY_S_PER_PARTICLE`], at least
+/// [`MEMORY_S`]).
+pub fn particle_memory_s(particles: usize) -> f32 {
+    (MEMORY_S_PER_PARTICLE * particles as f32).max(MEMORY_S)
+}
 /// Seconds in which the IMM of EKFs' parameters forget: its one Gaussian keeps the offsets'
 /// covariance with the position, so it can remember far longer (chosen on the moving
 /// scenarios, docs/src/tracking.md: 1.06-1.17x the bound on the fixed masts at 1 500 s,
 /// 1.4-1.7x at the particle filters' 250; at 2 000 s the two vehicles' ellipses fall short).
 pub const EKF_MEMORY_S: f32 = 1500.0;
-/// Particles unless told otherwise.
-pub const PARTICLES: usize = 1000;
+/// Particles unless told otherwise: enough for the offsets to be remembered 1 500 s
+/// ([`particle_memory_s`]), the default's rmse within 1.05-1.33x the bound where it is
+/// 1.2-1.75x at 1 000 (docs/src/tracking.md), at 200-400x real time for four stations at 1 Hz
+/// on one core.
+pub const PARTICLES: usize = 10_000;
 /// The default method: the tuned SIR with its shrinkage kernel (a regularised PF) and a
 /// Gaussian + uniform likelihood that survives wild bearings.
 pub const DEFAULT_METHOD: Method = Method::SirRobust;
@@ -98,8 +114,8 @@ pub struct Settings {
     /// Where to start when the first update has no bearing: centre and sd, metres.
     pub region: Option<([f32; 2], f32)>,
     /// Seconds in which the parameters' statistics forget what they learned (their variance
-    /// regains the prior's: [`Forgetting`]); none: the method's own ([`MEMORY_S`], the EKF's
-    /// [`EKF_MEMORY_S`]).
+    /// regains the prior's: [`Forgetting`]); none: the method's own ([`particle_memory_s`],
+    /// the EKF's [`EKF_MEMORY_S`]).
     pub memory_s: Option<f32>,
     /// Also smooth the track with the fixed lag ([`LAG`] updates).
     pub smooth: bool,
@@ -153,7 +169,7 @@ impl Settings {
                 memory_s: self.memory_s.unwrap_or(if self.method == Method::Ekf {
                     EKF_MEMORY_S
                 } else {
-                    MEMORY_S
+                    particle_memory_s(self.particles)
                 }),
                 offset_var,
                 power_var: var(self.power_sd),

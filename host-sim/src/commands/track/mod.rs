@@ -98,8 +98,8 @@ pub struct Args {
     /// Acceleration sd of the moving emitter, m/s^2 (default: the motion's).
     #[arg(long)]
     pub accel_sd: Option<f32>,
-    /// Seconds in which each station's offset forgets what it learned (default 250; 1500 for
-    /// `ekf`; an error that changes with where the emitter is, as an indoor array's toward its
+    /// Seconds in which each station's offset forgets what it learned (default 0.15 s a
+    /// particle, at least 250: 1500 at the default 10000; 1500 for `ekf`; an error that changes with where the emitter is, as an indoor array's toward its
     /// boresight, wants about 10).
     #[arg(long)]
     pub memory_s: Option<f32>,
