@@ -239,13 +239,34 @@ pub(crate) fn no_emitter(why: NoEmitter, n: u32, bearings: &[Bearing], max_sigma
     }
 }
 
-/// How much a station's bearing changes from one to the next, degrees: the robust sd of the
-/// steps between its consecutive bearings (at most [`STEP_GAP_S`] apart) over root 2, pooled
-/// over the stations of `observations` (one channel's, any order); `None` below
-/// [`STEADY_PAIRS`] such pairs. Noise makes each step about root 2 of its sd; bearings that
-/// follow something which changes smoothly (an emitter that moves, an error that turns with
-/// the vehicle) step by far less than they scatter about any one point.
-pub(crate) fn step_deg(observations: &[Observation]) -> Option<f32> {
+/// How much a channel's bearings change from one to the next ([`step_deg`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Steps {
+    /// The robust sd of a step over root 2, degrees: the bearings' noise, if noise is all.
+    pub deg: f32,
+    /// The steps it was taken from.
+    pub pairs: usize,
+}
+
+impl Steps {
+    /// Whether these steps are too small for noise that scatters by more than `max_deg`: the
+    /// median of n steps of Gaussian noise has a relative sd of about 1.17 / root n (the
+    /// sample median of |N(0, 2 sd^2)|), so a step under 1 - 3.5 / root n of the ceiling is
+    /// three sds below the least noise that scatters beyond it; and under a third of it
+    /// whatever n (a step that small was noise in none of the field captures, measured).
+    pub fn steady(&self, max_deg: f32) -> bool {
+        let below = 1.0 - 3.5 / (self.pairs as f32).sqrt();
+        self.deg < max_deg * below.max(1.0 / 3.0)
+    }
+}
+
+/// How much a station's bearing changes from one to the next: the robust sd of the steps
+/// between its consecutive bearings (at most [`STEP_GAP_S`] apart) over root 2, pooled over
+/// the stations of `observations` (one channel's, any order); `None` below [`STEADY_PAIRS`]
+/// such pairs. Noise makes each step about root 2 of its sd; bearings that follow something
+/// which changes smoothly (an emitter that moves, an error that turns with the vehicle) step
+/// by far less than they scatter about any one point.
+pub(crate) fn step_deg(observations: &[Observation]) -> Option<Steps> {
     let mut seen: Vec<&Observation> = observations.iter().collect();
     seen.sort_by(|a, b| {
         a.station
@@ -264,7 +285,10 @@ pub(crate) fn step_deg(observations: &[Observation]) -> Option<f32> {
     let median = steps[steps.len() / 2];
     // The median absolute step of Gaussian noise is 0.674 of the steps' sd, root 2 of the
     // bearings'.
-    Some((median / 0.6745 / core::f32::consts::SQRT_2).to_degrees())
+    Some(Steps {
+        deg: (median / 0.6745 / core::f32::consts::SQRT_2).to_degrees(),
+        pairs: steps.len(),
+    })
 }
 
 /// Consecutive bearings of a station at most this far apart, seconds, count as a step.
@@ -274,15 +298,15 @@ const STEP_GAP_S: f32 = 5.0;
 const STEADY_PAIRS: usize = 20;
 
 /// What a channel with no consistent emitter, heard by `stations` DF stations, whose bearings
-/// step by `step` degrees (its [`step_deg`]) adds to `why` (the bearings scatter, agree on
-/// nothing, or pin no point): bearings that step by under a third of the noise ceiling
-/// `max_sigma` (radians) follow something, not noise. One station's offset beyond its prior
+/// step by `step` (its [`step_deg`]) adds to `why` (the bearings scatter, agree on nothing, or
+/// pin no point): bearings whose steps are too small for noise beyond the ceiling `max_sigma`
+/// (radians; [`Steps::steady`]) follow something, not noise. One station's offset beyond its prior
 /// may be an emitter that moves: one station's bearings on a drone circling 500 m away fit a
 /// still point with a 15 or 60 degree offset (`move-vehicle-turning` run 1), and nothing in
 /// them tells the two apart. Nothing for the other reasons.
 pub(crate) fn steady_clause(
     why: NoEmitter,
-    step: Option<f32>,
+    step: Option<Steps>,
     stations: usize,
     max_sigma: f32,
 ) -> String {
@@ -295,11 +319,12 @@ pub(crate) fn steady_clause(
         _ => "`foxhunt track` follows it",
     };
     match step {
-        Some(s) if spread && s < max_sigma.to_degrees() / 3.0 => format!(
-            "; yet each bearing differs from its station's one before by only about {s:.1} \
+        Some(s) if spread && s.steady(max_sigma.to_degrees()) => format!(
+            "; yet each bearing differs from its station's one before by only about {:.1} \
              degrees: they follow something that changes, not noise: an emitter that moves \
              ({track}), or an error that changes with the vehicle's heading or place \
-             (multipath, a direction-dependent error)"
+             (multipath, a direction-dependent error)",
+            s.deg
         ),
         _ if matches!(why, NoEmitter::OffsetBeyondPrior(_)) && stations == 1 => {
             "; or the emitter moves: one station's bearings on an emitter that moves can fit a \
@@ -418,12 +443,13 @@ mod tests {
             })
             .collect();
         let s = step_deg(&obs).expect("enough steps");
-        assert!((s - 2.0).abs() < 0.2 * 2.0 + 0.2, "{s}");
+        assert!((s.deg - 2.0).abs() < 0.2 * 2.0 + 0.2, "{s:?}");
+        assert_eq!(s.pairs, 198);
         // Uniform bearings step by about a third of the circle: far past any ceiling.
         let wild: Vec<Observation> = (0..100)
             .map(|k| at(0, k as f32, std::f32::consts::PI * normal() / 2.0))
             .collect();
-        assert!(step_deg(&wild).expect("steps") > 30.0);
+        assert!(step_deg(&wild).expect("steps").deg > 30.0);
         // Steps more than five seconds apart, or too few, say nothing.
         let sparse: Vec<Observation> = (0..100).map(|k| at(0, 10.0 * k as f32, 0.0)).collect();
         assert_eq!(step_deg(&sparse), None);
@@ -433,19 +459,33 @@ mod tests {
     #[test]
     fn the_clause_speaks_only_for_steady_bearings_that_meet_nowhere() {
         let ceiling = 10f32.to_radians();
-        let one = steady_clause(NoEmitter::TooNoisy, Some(3.0), 1, ceiling);
+        let steps = |deg: f32, pairs: usize| Some(Steps { deg, pairs });
+        let one = steady_clause(NoEmitter::TooNoisy, steps(3.0, 20), 1, ceiling);
         assert!(one.contains("moves (one station cannot place it"), "{one}");
-        let three = steady_clause(NoEmitter::NoConsensus, Some(3.0), 3, ceiling);
+        let three = steady_clause(NoEmitter::NoConsensus, steps(3.0, 20), 3, ceiling);
         assert!(
             three.contains("moves (`foxhunt track` follows it)"),
             "{three}"
         );
+        // Twenty steps: a third of the ceiling at most (their median's sd is a quarter of it).
         assert_eq!(
-            steady_clause(NoEmitter::TooNoisy, Some(3.5), 1, ceiling),
+            steady_clause(NoEmitter::TooNoisy, steps(3.5, 20), 1, ceiling),
+            ""
+        );
+        // 600 steps of noise beyond 10 degrees would not read under 8.57 (three sds).
+        let many = steady_clause(NoEmitter::TooNoisy, steps(3.5, 600), 1, ceiling);
+        assert!(many.contains("only about 3.5 degrees"), "{many}");
+        assert!(steps(8.5, 600).is_some_and(|s| s.steady(10.0)));
+        assert!(!steps(8.6, 600).is_some_and(|s| s.steady(10.0)));
+        assert_eq!(
+            steady_clause(NoEmitter::TooNoisy, steps(7.0, 100), 1, ceiling),
             ""
         );
         assert_eq!(steady_clause(NoEmitter::TooNoisy, None, 1, ceiling), "");
-        assert_eq!(steady_clause(NoEmitter::TooFew, Some(1.0), 1, ceiling), "");
+        assert_eq!(
+            steady_clause(NoEmitter::TooFew, steps(1.0, 20), 1, ceiling),
+            ""
+        );
         let beyond = NoEmitter::OffsetBeyondPrior(foxhunt_core::fix::locate::OffsetBeyond {
             station: 0,
             offset: -0.26,
@@ -453,8 +493,8 @@ mod tests {
             prior: foxhunt_core::fix::bias::BiasPrior { mean: 0.0, sd: 0.1 },
             z: 4.0,
         });
-        let alone = steady_clause(beyond, Some(3.0), 1, ceiling);
+        let alone = steady_clause(beyond, steps(3.0, 20), 1, ceiling);
         assert!(alone.contains("or the emitter moves"), "{alone}");
-        assert_eq!(steady_clause(beyond, Some(3.0), 3, ceiling), "");
+        assert_eq!(steady_clause(beyond, steps(3.0, 20), 3, ceiling), "");
     }
 }
