@@ -784,6 +784,22 @@ fn a_station_alone_or_a_loose_network_walks_the_circle() {
     assert!(!no_rival_for_0(&items[..n], &mut table, fix.position));
 }
 
+/// `cases` networks' [`bound_and_walk`] (`None`: the case's network could not be fitted),
+/// printed each: in how many the bound said no rival, and in how many the walk found one.
+fn tally(cases: u32, mut case: impl FnMut(u32) -> Option<(bool, bool)>) -> (u32, u32) {
+    extern crate std;
+    let (mut said, mut rivals) = (0, 0);
+    for k in 0..cases {
+        if let Some((none, rival)) = case(k) {
+            std::println!("case {k}: no rival said {none}, walk's {rival}");
+            said += u32::from(none);
+            rivals += u32::from(rival);
+        }
+    }
+    std::println!("no rival said in {said} of {cases} networks; the walk found one in {rivals}");
+    (said, rivals)
+}
+
 /// The bound and the walk for station 0 of a network fitted at `at`: whether the bound says
 /// there is no rival and whether the walk finds one, never both (`case` names the network).
 fn bound_and_walk<T: Sighting>(
@@ -803,25 +819,18 @@ fn bound_and_walk<T: Sighting>(
 fn no_rival_is_never_said_where_the_circle_finds_one() {
     // Networks from 2 to 40 stations, 1 to 40 bearings each, 1 to 8 degrees of noise, near
     // and far: where the bound says there is no rival, the walk finds none.
-    extern crate std;
     let mut rng = XorShiftRng::seed_from_u64(13);
-    let (mut said, mut rivals) = (0, 0);
-    for case in 0..60u32 {
+    let (said, rivals) = tally(60, |case| {
         let stations = [2usize, 3, 5, 8, 20, 40][(case % 6) as usize];
         let each = (160 / stations)
             .min([1usize, 2, 4, 40][(case / 6 % 4) as usize])
             .max(1);
         let sigma = [1.0, 3.0, 8.0][(case / 24 % 3) as usize] * DEG;
         let radius = [2000.0, 8000.0][(case / 3 % 2) as usize];
-        let Ok((items, n, mut table, fix)) = ring_network(stations, each, radius, sigma, &mut rng)
-        else {
-            continue;
-        };
-        let (none, rival) = bound_and_walk(&items[..n], &mut table, fix.position, case);
-        said += u32::from(none);
-        rivals += u32::from(rival);
-    }
-    std::println!("no rival said in {said} of 60 networks; the walk found one in {rivals}");
+        let (items, n, mut table, fix) =
+            ring_network(stations, each, radius, sigma, &mut rng).ok()?;
+        Some(bound_and_walk(&items[..n], &mut table, fix.position, case))
+    });
     // The bound speaks for the larger networks, and the cases hold rivals for it to miss.
     assert!(said >= 10 && rivals >= 3, "{said} {rivals}");
 }
@@ -908,23 +917,20 @@ fn a_fixed_stations_scatter_never_hides_a_rival_the_walk_finds() {
     // Networks of 2 to 30 masts with 10 to 60 bearings each, 1 and 8 degrees of noise, near
     // and far: where the bound (with the main station's own scatter) says no rival, the
     // walk finds none.
-    extern crate std;
     let mut rng = XorShiftRng::seed_from_u64(17);
-    let (mut said, mut rivals) = (0, 0);
-    for case in 0..72u32 {
+    let (said, rivals) = tally(72, |case| {
         let stations = [2usize, 3, 4, 6, 12, 30][(case % 6) as usize];
         let each = [10usize, 25, 60][(case / 6 % 3) as usize];
         let radius = [2000.0, 8000.0][(case / 18 % 2) as usize];
         let sigma = [1.0, 8.0][(case / 36 % 2) as usize] * DEG;
-        let Ok((items, mut table, fix)) = big_ring(stations, each, radius, sigma, &mut rng) else {
-            continue;
-        };
-        let (none, rival) = bound_and_walk(&items, &mut table[..stations], fix.position, case);
-        std::println!("{stations} x {each}, {radius} m: no rival said {none}, walk's {rival}");
-        said += u32::from(none);
-        rivals += u32::from(rival);
-    }
-    std::println!("no rival said in {said} of 72 networks; the walk found one in {rivals}");
+        let (items, mut table, fix) = big_ring(stations, each, radius, sigma, &mut rng).ok()?;
+        Some(bound_and_walk(
+            &items,
+            &mut table[..stations],
+            fix.position,
+            case,
+        ))
+    });
     // Both must happen for the test to mean anything: the bound speaks for 12 (networks of
     // 12 and 30 masts; 6 without the turned step, 1 without the scatter either), the walk
     // finds rivals in 9 (two masts).
