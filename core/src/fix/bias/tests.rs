@@ -708,32 +708,45 @@ fn ring_network(
     let offsets: [f32; 40] = core::array::from_fn(|_| 2.0 * DEG * random::normal(rng));
     let items: [S; 160] = core::array::from_fn(|k| {
         let s = (k / each).min(stations - 1);
-        let a = 2.0 * core::f32::consts::PI * s as f32 / stations as f32 + 0.3;
-        let v = [radius * libm::cosf(a), radius * libm::sinf(a)];
-        let noise = sigma * random::normal(rng);
-        let theta = wrap(predicted(&[0.0, 0.0], &v) + offsets[s] + noise);
-        S(
-            Bearing {
-                vehicle: v,
-                theta,
-                sigma,
-            },
-            s,
-        )
+        ring_sighting(s, stations, radius, offsets[s], sigma, rng)
     });
     let mut table = [StationSlot::default(); 40];
+    let fix = fit_ring(&items[..n], &mut table)?;
+    Ok((items, n, table, fix))
+}
+
+/// A bearing of station `s` of a ring of `stations` `radius` round the emitter at the origin,
+/// its offset `offset` and noise of sd `sigma`.
+fn ring_sighting(
+    s: usize,
+    stations: usize,
+    radius: f32,
+    offset: f32,
+    sigma: f32,
+    rng: &mut XorShiftRng,
+) -> S {
+    let a = 2.0 * core::f32::consts::PI * s as f32 / stations as f32 + 0.3;
+    let v = [radius * libm::cosf(a), radius * libm::sinf(a)];
+    let noise = sigma * random::normal(rng);
+    let theta = wrap(predicted(&[0.0, 0.0], &v) + offset + noise);
+    S(
+        Bearing {
+            vehicle: v,
+            theta,
+            sigma,
+        },
+        s,
+    )
+}
+
+/// A ring's bearings fitted from a start off the emitter, each station's offset from its
+/// prior.
+fn fit_ring(items: &[S], table: &mut [StationSlot]) -> Result<BiasedFix, Error> {
     let start = Start {
         position: [150.0, -100.0],
         offsets: StartOffsets::Prior,
     };
-    let fix = ml_sources(
-        &items[..n],
-        &mut table,
-        start,
-        &crate::Gaussian,
-        Default::default(),
-    )?;
-    Ok((items, n, table, fix))
+    ml_sources(items, table, start, &crate::Gaussian, Default::default())
 }
 
 /// [`no_rival`] for station 0 at `at`: a rival 30 degrees away within a deviance of 9, the
@@ -851,32 +864,11 @@ fn big_ring(
     let items = (0..stations * each)
         .map(|k| {
             let s = k % stations;
-            let a = 2.0 * core::f32::consts::PI * s as f32 / stations as f32 + 0.3;
-            let v = [radius * libm::cosf(a), radius * libm::sinf(a)];
-            let noise = sigma * random::normal(rng);
-            let theta = wrap(predicted(&[0.0, 0.0], &v) + offsets[s] + noise);
-            S(
-                Bearing {
-                    vehicle: v,
-                    theta,
-                    sigma,
-                },
-                s,
-            )
+            ring_sighting(s, stations, radius, offsets[s], sigma, rng)
         })
         .collect::<std::vec::Vec<S>>();
     let mut table = [StationSlot::default(); 64];
-    let start = Start {
-        position: [150.0, -100.0],
-        offsets: StartOffsets::Prior,
-    };
-    let fix = ml_sources(
-        &items,
-        &mut table[..stations],
-        start,
-        &crate::Gaussian,
-        Default::default(),
-    )?;
+    let fix = fit_ring(&items, &mut table[..stations])?;
     Ok((items, table, fix))
 }
 
