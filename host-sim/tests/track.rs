@@ -347,6 +347,14 @@ fn bad_options_are_one_line_refusals() {
         );
         assert!(out.stdout.is_empty());
     }
+    // A live line is printed as it comes: nothing to smooth it with.
+    let out = foxhunt(&["track", "-", "--smooth"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--smooth smooths a recording") && err.trim().lines().count() == 1,
+        "{err}"
+    );
     // An empty capture has nothing to track.
     let dir = scratch("empty");
     let f = dir.join("empty.nmea");

@@ -39,6 +39,9 @@ pub struct Options {
     /// The stations file: each station's noise and offset prior (none: `sigma` or each
     /// record's own noise, and `offset_sd` for every station).
     pub network: Option<Network>,
+    /// Give the fixed-lag smoother's points ([`crate::track::moving::LAG`] updates) instead
+    /// of the filter's (recordings).
+    pub smooth: bool,
 }
 
 /// One channel's track.
@@ -124,6 +127,7 @@ pub(crate) fn settings(
     s.particles = o.particles;
     s.seed = o.seed;
     s.memory_s = o.memory_s;
+    s.smooth = o.smooth;
     s.offsets = c
         .sources
         .iter()
@@ -218,7 +222,7 @@ pub fn tracks(m: &Measured, anchors: Option<&AnchorsFile>, o: &Options) -> Resul
         })?;
         out.push(ChannelTrack {
             freq_mhz: c.freq_mhz,
-            points: run.points,
+            points: if o.smooth { run.smoothed } else { run.points },
             left_out: c.left_out,
             untracked: None,
         });

@@ -99,10 +99,15 @@ pub struct Args {
     #[arg(long)]
     pub accel_sd: Option<f32>,
     /// Seconds in which each station's offset forgets what it learned (default 0.15 s a
-    /// particle, at least 250: 1500 at the default 10000; 1500 for `ekf`; an error that changes with where the emitter is, as an indoor array's toward its
-    /// boresight, wants about 10).
+    /// particle, at least 250: 1500 at the default 10000; 1500 for `ekf`; an error that
+    /// changes with where the emitter is, as an indoor array's toward its boresight, wants
+    /// about 10).
     #[arg(long)]
     pub memory_s: Option<f32>,
+    /// A recording's track smoothed: each point also from the 15 updates after it (a
+    /// fixed-lag smoother), so closer to the truth where the emitter turned or stopped.
+    #[arg(long)]
+    pub smooth: bool,
     /// Every bearing's noise, degrees (default: the stations file's, else each record's own).
     #[arg(long)]
     pub sigma: Option<f32>,
@@ -172,6 +177,7 @@ impl Args {
             width_mhz: positive("channel-width", self.channel_width)?,
             seed: self.seed,
             network,
+            smooth: self.smooth,
         })
     }
 }
@@ -221,6 +227,12 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
             return Err(Stop::usage(
                 "a live track prints each update: write --geojson, --kml, --csv and --svg from \
                  the recorded capture",
+            ));
+        }
+        if a.smooth {
+            return Err(Stop::usage(
+                "--smooth smooths a recording (each point from the 15 updates after it): a live \
+                 track prints each update as it comes",
             ));
         }
         let quiet = a
