@@ -242,7 +242,8 @@ impl Method {
     }
 
     /// Whether its likelihood or loss down-weights wild bearings (Huber, Gaussian + uniform,
-    /// widened Cauchy, the pipeline's and the unit's Tukey): the noise its residuals give is then estimated
+    /// widened Cauchy, the pipeline's and the unit's Tukey): the noise its residuals give is then
+    /// estimated
     /// robustly, from the inliers.
     pub const fn robust_loss(self) -> bool {
         matches!(

@@ -46,7 +46,8 @@ pub struct Reach {
     /// The walk's axis (a unit vector, east and north): the covariance's major axis.
     pub axis: [f32; 2],
     /// Along `+axis` then `-axis`: where the region ends, `None` where it ran out to
-    /// `max_range` along the axis ([`End::sideways`] where it ran off sideways). Where the range is open these say how near the
+    /// `max_range` along the axis ([`End::sideways`] where it ran off sideways). Where the range is
+    /// open these say how near the
     /// region comes ([`edge`]).
     pub ends: [Option<End>; 2],
     /// -2 ln L at the fix's slice: the deviance the region's threshold is counted from.

@@ -263,7 +263,8 @@ impl Hypotheses {
     }
 
     /// Before the bearings cross: points along the line of bearing `theta` from `vehicle` at
-    /// the given ranges (at most [`MAX_POINTS`]; docs/src/field.md's initialisation spreads them evenly
+    /// the given ranges (at most [`MAX_POINTS`]; docs/src/field.md's initialisation spreads them
+    /// evenly
     /// in log range).
     pub fn along(vehicle: [f32; 2], theta: f32, ranges: &[f32]) -> Result<Self, Error> {
         check_finite(&vehicle)?;

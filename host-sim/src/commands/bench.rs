@@ -31,7 +31,8 @@ pub struct Args {
     #[arg(long, value_parser = super::values::particles)]
     pub particles: Option<usize>,
     /// Moving scenarios: only this method's rows (repeatable), each at --particles (default
-    /// 10000, the tracker's) over every run, e.g. `--method sir-robust` for the default's row alone.
+    /// 10000, the tracker's) over every run, e.g. `--method sir-robust` for the default's row
+    /// alone.
     #[arg(long, value_name = "NAME")]
     pub method: Vec<String>,
     /// Moving scenarios: updates a second from every station (default: the scenario's, 1 Hz

@@ -330,7 +330,8 @@ pub fn locate_bearings(
         cloud: run.cloud,
     })
 }
-/// The thread pool of every estimation on the host (fixes and Monte Carlo runs): one worker per core, with 64 MiB stacks. Filters are sized at
+/// The thread pool of every estimation on the host (fixes and Monte Carlo runs): one worker per
+/// core, with 64 MiB stacks. Filters are sized at
 /// compile time and built on the stack (a 100 000-particle filter is megabytes); a rayon
 /// worker that waits on a join can also run a stolen run on top of its own, so the default
 /// 2 MiB stacks overflow. The reservation is virtual: only touched pages cost memory.

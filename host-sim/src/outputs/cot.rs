@@ -290,7 +290,8 @@ fn channel(freq_mhz: Option<f32>) -> String {
 /// The events of a fix: every emitter (type `a-u-G`, unknown ground; `ce` the 95 % ellipse's
 /// semi-major axis, a circle that holds the ellipse) with its 95 % ellipse (`u-d-c-e`, semi-axes
 /// in metres, the major axis's angle clockwise from north), and every station (`a-f-G-E-S`, a
-/// friendly sensor; a vehicle where its latest bearing was taken) with its latest line of bearing (`u-d-f`, from the station to the maps' ray
+/// friendly sensor; a vehicle where its latest bearing was taken) with its latest line of bearing
+/// (`u-d-f`, from the station to the maps' ray
 /// length, as measured: the station's estimated offset is in its remarks). Empty without a GPS
 /// fix (nothing can be placed).
 pub fn events(l: &Located, d: &Decoded, now: SystemTime) -> Vec<String> {

@@ -134,7 +134,8 @@ pub(super) fn confidence_region(
 /// bearing is a straight ray from it. Its direction is the one the region's far slices take.
 ///
 /// The half-width is the direction's at long range, where every station's offset is
-/// confounded with the direction ([`direction_half_width`]). It is widened to hold the fix and the region's near end when they lie off the ray
+/// confounded with the direction ([`direction_half_width`]). It is widened to hold the fix and the
+/// region's near end when they lie off the ray
 /// beyond the drive's own extent (a drive not small against the range).
 ///
 /// The range interval runs from the likelihood-ratio region's nearest point along the ray

@@ -87,7 +87,8 @@ pub struct OffsetCheck {
     /// The main station's offset, as first fitted with its prior, from the prior's mean in
     /// the sds the prior predicts for it ([`BiasPrior::surprise`]; 0 for a calibrated station).
     pub z: f32,
-    /// The data contradicted the prior (|z| above [`CONTRADICTED_Z`](crate::fix::bias::CONTRADICTED_Z)) and the fix is the one
+    /// The data contradicted the prior (|z| above
+    /// [`CONTRADICTED_Z`](crate::fix::bias::CONTRADICTED_Z)) and the fix is the one
     /// with the offset free, started from the single minimum of its profile round the circle
     /// ([`crate::fix::bias::offset_circle`]): its ellipse carries the offset's uncertainty, and
     /// the unit needs checking all the same.

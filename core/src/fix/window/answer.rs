@@ -6,7 +6,8 @@
 pub enum Status {
     /// A fix whose residuals agree with its noise.
     Valid,
-    /// A fix, but the bearings scatter more than [`super::WindowConfig::max_sigma`]: not to be trusted.
+    /// A fix, but the bearings scatter more than [`super::WindowConfig::max_sigma`]: not to be
+    /// trusted.
     Noisy,
     /// The geometry gives no fix: parallel bearings, a vehicle that has not moved, a range
     /// without bound.
