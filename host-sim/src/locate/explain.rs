@@ -300,10 +300,10 @@ const STEADY_PAIRS: usize = 20;
 /// What a channel with no consistent emitter, heard by `stations` DF stations, whose bearings
 /// step by `step` (its [`step_deg`]) adds to `why` (the bearings scatter, agree on nothing, or
 /// pin no point): bearings whose steps are too small for noise beyond the ceiling `max_sigma`
-/// (radians; [`Steps::steady`]) follow something, not noise. One station's offset beyond its prior
-/// may be an emitter that moves: one station's bearings on a drone circling 500 m away fit a
-/// still point with a 15 or 60 degree offset (`move-vehicle-turning` run 1), and nothing in
-/// them tells the two apart. Nothing for the other reasons.
+/// (radians; [`Steps::steady`]) follow something, not noise. One station's offset beyond its
+/// prior may be an emitter that moves: one station's bearings on a drone circling 500 m away
+/// fit a still point with a 15 or 60 degree offset (`move-vehicle-turning` run 1), and nothing
+/// in them tells the two apart. Nothing for the other reasons.
 pub(crate) fn steady_clause(
     why: NoEmitter,
     step: Option<Steps>,

@@ -51,7 +51,7 @@ pub const MEMORY_S: f32 = 250.0;
 /// than the data allow (the ellipses narrow below the truth); forgetting sooner costs accuracy.
 /// Chosen on the moving scenarios (docs/src/tracking.md, "How well it follows"): at N = 1 000,
 /// 250 s holds the truth 93-99 % of the time and 1 000 s 74-94 %; at N = 10 000, 1 500 s gives
-/// 1.05-1.33x the bound at 94-99 %, 2 000 s 90-98 %, 250 s 1.14-1.52x.
+/// 1.05-1.33x the bound at 93.5-99 %, 2 000 s 90-98 %, 250 s 1.14-1.52x.
 pub const MEMORY_S_PER_PARTICLE: f32 = 0.15;
 
 /// The particle filters' memory at `particles` ([`MEMORY_S_PER_PARTICLE`], at least
@@ -59,6 +59,7 @@ pub const MEMORY_S_PER_PARTICLE: f32 = 0.15;
 pub fn particle_memory_s(particles: usize) -> f32 {
     (MEMORY_S_PER_PARTICLE * particles as f32).max(MEMORY_S)
 }
+
 /// Seconds in which the IMM of EKFs' parameters forget: its one Gaussian keeps the offsets'
 /// covariance with the position, so it can remember far longer (chosen on the moving
 /// scenarios, docs/src/tracking.md: 1.06-1.17x the bound on the fixed masts at 1 500 s,
@@ -66,7 +67,7 @@ pub fn particle_memory_s(particles: usize) -> f32 {
 pub const EKF_MEMORY_S: f32 = 1500.0;
 /// Particles unless told otherwise: enough for the offsets to be remembered 1 500 s
 /// ([`particle_memory_s`]), the default's rmse within 1.05-1.33x the bound where it is
-/// 1.2-1.75x at 1 000 (docs/src/tracking.md), at 200-400x real time for four stations at 1 Hz
+/// 1.09-1.74x at 1 000 (docs/src/tracking.md), at 200-400x real time for four stations at 1 Hz
 /// on one core.
 pub const PARTICLES: usize = 10_000;
 /// The default method: the tuned SIR with its shrinkage kernel (a regularised PF) and a

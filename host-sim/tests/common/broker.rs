@@ -146,6 +146,7 @@ pub struct Worker {
 }
 
 impl Worker {
+    /// `foxhunt locate --mqtt URL` as client `id`, ending after `quiet_s` quiet seconds.
     pub fn start(url: &str, id: &str, quiet_s: u32) -> Self {
         Self::start_with(url, id, quiet_s, &[])
     }
