@@ -1,6 +1,6 @@
 //! Sequential filters behind one trait: step a measurement in, get an estimate out.
 //!
-//! The two particle filters ([`sir`] and [`gpf`]) share one skeleton ([`ParticleState`]): the
+//! The two particle filters ([`sir`] and [`gpf`]) share one skeleton (`ParticleState`): the
 //! prior they started from and restart from, the weighting and its collapse handling, the swarm
 //! move and the likelihood count. They differ only in what they do with the weighted cloud:
 //! the SIR resamples it, the GPF refits a Gaussian and draws afresh.

@@ -47,8 +47,7 @@ pub struct Reach {
     pub axis: [f32; 2],
     /// Along `+axis` then `-axis`: where the region ends, `None` where it ran out to
     /// `max_range` along the axis ([`End::sideways`] where it ran off sideways). Where the range is
-    /// open these say how near the
-    /// region comes ([`edge`]).
+    /// open these say how near the region comes.
     pub ends: [Option<End>; 2],
     /// -2 ln L at the fix's slice: the deviance the region's threshold is counted from.
     pub deviance: f32,
@@ -58,7 +57,7 @@ pub struct Reach {
 }
 
 /// Where the walk left the region on one side: the last slice inside and the first outside
-/// (best fits relative to the fix, metres); the edge is between them ([`edge`]).
+/// (best fits relative to the fix, metres); the region's edge lies between them.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct End {
     /// The last slice's best fit inside (the fix itself when the first slice was outside).

@@ -141,7 +141,7 @@ pub fn with_estimated_noise(
 }
 
 /// What a fix of `method` may claim from `bearings` (their sigmas the noise it used): nothing
-/// when its estimate lies outside the bearings' own region ([`within_the_bearings`]); else its
+/// when its estimate lies outside the bearings' own region (`within_the_bearings`); else its
 /// covariance at least the bound at its estimate ([`at_least_the_bound`]), its 95 % ellipse
 /// scale and CEP50 for its noise's degrees of freedom (chi-square when the sigmas were given).
 pub fn claim(method: Method, fix: &mut BearingFix, bearings: &[Bearing]) -> Result<(), Error> {

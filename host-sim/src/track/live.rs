@@ -198,7 +198,7 @@ impl LiveChannels {
     /// Step `r` with its channel's tracker (started on the channel's first update heard by two
     /// stations, and again after one that stopped; `prior_of` gives the offset prior of a
     /// station by its index on the line): its point, `None` while one station alone has been
-    /// heard on the channel (its range is not observable: [`one_station`]), or why there is
+    /// heard on the channel (its range is not observable: [`one_station`](crate::track::tracks::one_station)), or why there is
     /// none.
     pub fn step(
         &mut self,

@@ -10,7 +10,7 @@
 //! 300 m, one hypothesis) and `guidance-look` (the look-ahead: 9 headings within 90 degrees,
 //! three legs deep, 729 sequences, over three hypotheses), each "step" one whole decision from
 //! the aoa-afsa bearings with an unknown offset. The moving-emitter tracker:
-//! `track-<N>-<part> <steps> [seed]` (N 128 or 256; parts in [`track`], measured by
+//! `track-<N>-<part> <steps> [seed]` (N 128 or 256; parts in its `track` module, measured by
 //! `serial-bridge/qemu/track-steps.sh`). On the host this binary is an empty stub.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 

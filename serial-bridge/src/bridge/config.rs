@@ -63,7 +63,7 @@ pub struct BridgeConfig {
     /// The records' times were already judged on their source's clock by the station's own
     /// bridge (a broker's bearings, which `foxhunt publish` decoded): each passes at once, in
     /// whatever order the broker delivers them (a bearing redelivered after an outage comes
-    /// after later ones), instead of waiting for its source's next record ([`super::clock`]).
+    /// after later ones), instead of waiting for its source's next record (the bridge's `clock`).
     pub judged_clocks: bool,
 }
 

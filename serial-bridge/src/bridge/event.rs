@@ -132,7 +132,7 @@ pub struct BridgeCounters {
     /// Bearings of a station beyond the station table's capacity.
     pub stations_full: u32,
     /// Bearing records whose time jumped away from their source's clock on their own (a
-    /// corrupt digit): the records around them said so ([`super::clock`]).
+    /// corrupt digit): the records around them said so (the bridge's `clock`).
     pub time_jump: u32,
     /// Valid MT frames of other commands.
     pub other_mt: u32,

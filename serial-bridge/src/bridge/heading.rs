@@ -92,7 +92,7 @@ impl<const A: usize, const S: usize> Bridge<A, S> {
     }
 
     /// The vehicle's yaw rate at `time_ms`, degrees per second, from the heading samples of
-    /// its heading sensors and course ([`yaw_rate`]).
+    /// its heading sensors and course (`yaw_rate`).
     pub fn yaw_rate_at(&self, time_ms: i64) -> Option<f32> {
         let age = i64::from(self.config.heading_max_age_ms);
         let window = i64::from(self.config.yaw_window_ms);

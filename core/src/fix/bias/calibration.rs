@@ -266,7 +266,7 @@ fn solve_wide(a: &Normal, rhs: &[f32; UNKNOWNS], n: u32) -> Option<Wide> {
 /// [`calibrate`]: a first fit about the residuals' median, then the fit of the bearings within
 /// 3.5 robust sigmas of it; the covariance sigma^2 / N_eff times the inverse information, N_eff
 /// from the residuals' autocorrelation, the third and fourth harmonics integrated out
-/// ([`HIGHER`]). A drive that does not turn still gives its offset and
+/// (`HIGHER` terms). A drive that does not turn still gives its offset and
 /// a `span` below [`MIN_SPAN`]; then the offset-only [`calibrate`] is the one to use.
 pub fn calibrate_direction(
     bearings: &[Bearing],

@@ -1,6 +1,6 @@
 //! `foxhunt track`: an emitter that moves, tracked from recorded captures (bearings of any
 //! station and format, the RSSI an anchors file's anchors report in MT frames, or both) or
-//! live from a line ([`live`]).
+//! live from a line (`live`).
 
 mod live;
 

@@ -29,7 +29,7 @@ const WIDTH_MHZ: f32 = 0.025;
 pub struct MapTrack {
     /// Its channel's frequency, MHz.
     pub freq_mhz: Option<f32>,
-    /// The track so far (thinned evenly beyond [`TRACK_POINTS`]).
+    /// The track so far (thinned evenly beyond `TRACK_POINTS`).
     pub line: Vec<[f64; 2]>,
     /// Where it is now.
     pub at: [f64; 2],

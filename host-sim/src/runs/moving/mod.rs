@@ -2,7 +2,7 @@
 //! stopping and going, hovering, seen by fixed stations, by vehicles or both, through bearings,
 //! RSSI or both. Each scenario simulates
 //! its runs' updates and truth ([`MovingScenario::simulate`]), the bench measures every
-//! tracking method on them against the posterior Cramér-Rao bound ([`bench`]), and
+//! tracking method on them against the posterior Cramér-Rao bound ([`bench`](mod@bench)), and
 //! `foxhunt simulate --condition move-*` writes a run as its stations log it ([`capture`]).
 //!
 //! The city (chosen): an 8 km square with a fixed station at each corner. Paths at 12 m/s:
