@@ -6,7 +6,7 @@
 
 use crate::track::capture::{Measured, Reading};
 use crate::track::indoor::AnchorsFile;
-use crate::track::moving::{Update, max_sources};
+use crate::track::moving::{K, Update, max_sources};
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;
 use foxhunt_core::fix::channel::{NO_CHANNEL, group};
@@ -86,6 +86,8 @@ pub fn channels(
     let groups = group::<CHANNELS>(n, |i| Some(obs[i].freq_mhz), width_mhz, &mut order, &mut of)
         .map_err(|e| format!("cannot group the bearings by frequency: {e}"))?;
     let mut out = Vec::new();
+    // Each channel's bearings as its updates hold them (renumbered), for RSSI to join.
+    let mut kept: Vec<Vec<Observation>> = Vec::new();
     for c in 0..groups.len() {
         let mut mine: Vec<Observation> = obs
             .iter()
@@ -107,6 +109,7 @@ pub fn channels(
             rssi: false,
             left_out,
         });
+        kept.push(mine);
     }
     if let Some(file) = anchors
         && !m.readings.is_empty()
@@ -125,7 +128,7 @@ pub fn channels(
                     })
                     .collect();
                 let c = &mut out[0];
-                c.updates = merge(&c.updates, &timed);
+                c.updates = merge(&kept[0], &timed);
                 c.rssi = true;
             }
             (true, _) | (false, 0) => {
@@ -185,12 +188,17 @@ pub fn bearing_updates(obs: &[Observation]) -> Vec<Update> {
     out
 }
 
-/// Bearings grouped into updates as they arrive: a bearing joins the open update when it
-/// comes within [`WINDOW_S`] of the update's first and the update has room, else it closes
-/// that update and opens the next.
+/// Bearings and timed RSSI readings grouped into updates as they arrive (in time order, a
+/// recorded capture's and a live line's alike): a bearing joins the open update when it comes
+/// within [`WINDOW_S`] of the update's time, a bearing opened it and its bearings have room; a
+/// reading joins when it comes within [`WINDOW_S`] and the update has room. Anything else
+/// closes the open update and opens the next (an update a reading opened takes no bearing, so
+/// the bearings' updates are those of the bearings alone).
 #[derive(Debug, Clone, Default)]
 pub struct Window {
     open: Option<Update>,
+    /// Whether a bearing opened the open update.
+    by_bearing: bool,
     /// Time of the last update opened, seconds.
     previous: Option<f32>,
 }
@@ -198,22 +206,25 @@ pub struct Window {
 impl Window {
     /// Add bearing `o`; the update it closed, if any.
     pub fn push(&mut self, o: Observation) -> Option<Update> {
-        let joins = self
-            .open
-            .as_ref()
-            .is_some_and(|u| o.time_s - u.t_s <= WINDOW_S && !u.epoch.is_full());
-        let mut closed = None;
-        if !joins {
-            closed = self.open.take();
-            let dt = self.previous.map_or(0.0, |p| (o.time_s - p).max(0.0));
-            self.open = Some(Update {
-                t_s: o.time_s,
-                epoch: Epoch::new(dt),
-            });
-            self.previous = Some(o.time_s);
-        }
+        let room = self.open.as_ref().is_some_and(|u| u.epoch.bearings().len() < K);
+        let joins = self.by_bearing && room && self.within(o.time_s);
+        let closed = if joins { None } else { self.open_at(o.time_s, true) };
         if let Some(u) = self.open.as_mut() {
             let _ = u.epoch.push_bearing(o);
+        }
+        closed
+    }
+
+    /// Add the RSSI reading `l` taken at `t_s`; the update it closed, if any.
+    pub fn push_level(&mut self, t_s: f32, l: Level) -> Option<Update> {
+        let room = self.open.as_ref().is_some_and(|u| !u.epoch.is_full());
+        let closed = if room && self.within(t_s) {
+            None
+        } else {
+            self.open_at(t_s, false)
+        };
+        if let Some(u) = self.open.as_mut() {
+            let _ = u.epoch.push_level(l);
         }
         closed
     }
@@ -222,40 +233,44 @@ impl Window {
     pub fn close(&mut self) -> Option<Update> {
         self.open.take()
     }
+
+    /// Whether `t` is within the open update's window.
+    fn within(&self, t: f32) -> bool {
+        self.open.as_ref().is_some_and(|u| t - u.t_s <= WINDOW_S)
+    }
+
+    /// Close the open update and open one at `t`; the closed one.
+    fn open_at(&mut self, t: f32, by_bearing: bool) -> Option<Update> {
+        let dt = self.previous.map_or(0.0, |p| (t - p).max(0.0));
+        self.previous = Some(t);
+        self.by_bearing = by_bearing;
+        self.open.replace(Update {
+            t_s: t,
+            epoch: Epoch::new(dt),
+        })
+    }
 }
 
-/// Bearing updates and timed RSSI readings in one time order: a reading within [`WINDOW_S`]
-/// after an update's time joins it, others make updates of their own.
-fn merge(updates: &[Update], levels: &[(f32, Level)]) -> Vec<Update> {
-    let mut all: Vec<(f32, Option<&Update>, Option<&Level>)> = updates
+/// A channel's bearings (in time order) and timed RSSI readings as one time order's updates
+/// ([`Window`]; at equal times a bearing first).
+fn merge(bearings: &[Observation], levels: &[(f32, Level)]) -> Vec<Update> {
+    let mut all: Vec<(f32, Option<&Observation>, Option<&Level>)> = bearings
         .iter()
-        .map(|u| (u.t_s, Some(u), None))
+        .map(|o| (o.time_s, Some(o), None))
         .chain(levels.iter().map(|(t, l)| (*t, None, Some(l))))
         .collect();
+    // Stable: at equal times the bearings first, each kind in its own order.
     all.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut out: Vec<Update> = Vec::new();
-    let mut previous: Option<f32> = None;
-    for (t, u, l) in all {
-        let joins = out
-            .last()
-            .is_some_and(|last| t - last.t_s <= WINDOW_S && u.is_none() && !last.epoch.is_full());
-        if !joins {
-            let dt = previous.map_or(0.0, |p| (t - p).max(0.0));
-            let mut epoch = Epoch::new(dt);
-            if let Some(u) = u {
-                epoch = u.epoch;
-                epoch.dt = dt;
-            }
-            out.push(Update { t_s: t, epoch });
-            previous = Some(t);
-            if u.is_some() {
-                continue;
-            }
-        }
-        if let (Some(l), Some(last)) = (l, out.last_mut()) {
-            let _ = last.epoch.push_level(*l);
-        }
-    }
+    let mut window = Window::default();
+    let mut out: Vec<Update> = all
+        .into_iter()
+        .filter_map(|(t, o, l)| match (o, l) {
+            (Some(o), _) => window.push(*o),
+            (None, Some(l)) => window.push_level(t, *l),
+            (None, None) => None,
+        })
+        .collect();
+    out.extend(window.close());
     out
 }
 
@@ -328,7 +343,6 @@ impl AnchorEpochs {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::track::moving::K;
     use foxhunt_core::model::bearing::Bearing;
 
     fn at(t: f32) -> Observation {
@@ -355,6 +369,44 @@ mod tests {
         let u = bearing_updates(&many);
         assert_eq!(u.len(), 2);
         assert_eq!(u[1].epoch.dt, 0.0);
+    }
+
+    #[test]
+    fn readings_join_the_bearings_update_they_fall_in_and_open_their_own() {
+        let level = Level {
+            anchor: [0.0, 0.0],
+            dbm: -60.0,
+            sigma_db: 6.0,
+            law: foxhunt_core::model::rssi::PathLoss {
+                p0: -40.0,
+                d0: 1.0,
+                eta: 2.5,
+            },
+        };
+        let levels: Vec<(f32, Level)> = [0.05, 0.9, 0.95, 1.2].map(|t| (t, level)).to_vec();
+        let u = merge(&[at(0.0), at(0.1), at(1.0)], &levels);
+        let counts: Vec<(usize, usize)> = u
+            .iter()
+            .map(|u| (u.epoch.bearings().len(), u.epoch.levels().len()))
+            .collect();
+        // A reading's update takes no bearing: the bearing at 1.0 opens its own, and the
+        // reading at 1.2 joins it.
+        assert_eq!(counts, [(2, 1), (0, 2), (1, 1)]);
+        let times: Vec<(f32, f32)> = u.iter().map(|u| (u.t_s, u.epoch.dt)).collect();
+        assert_eq!(times, [(0.0, 0.0), (0.9, 0.9), (1.0, 1.0 - 0.9)]);
+        // Fed one by one, as a live line delivers them, the same updates.
+        let mut w = Window::default();
+        let mut live: Vec<Update> = Vec::new();
+        live.extend(w.push(at(0.0)));
+        live.extend(w.push_level(0.05, level));
+        live.extend(w.push(at(0.1)));
+        for t in [0.9, 0.95] {
+            live.extend(w.push_level(t, level));
+        }
+        live.extend(w.push(at(1.0)));
+        live.extend(w.push_level(1.2, level));
+        live.extend(w.close());
+        assert_eq!(live, u);
     }
 
     #[test]
