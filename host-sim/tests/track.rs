@@ -537,3 +537,172 @@ fn a_live_line_without_bearings_and_live_files_are_refused() {
         assert!(err.trim().lines().count() == 1, "{err}");
     }
 }
+
+/// One DF vehicle (a GGA each second, a PFOXB half a second later from halfway along, 3 deg
+/// of noise) driving a 400 m square at 8 m/s around a tag walking at 1.1 m/s, and three
+/// anchors' RSSI of the tag (MT frames after each fix; -30 dBm at 1 m, exponent 2, 4 dB of
+/// noise), in `dir`: the capture and its anchors file (the tag: [`walker`]).
+fn vehicle_and_anchors(dir: &std::path::Path) -> (PathBuf, PathBuf) {
+    use foxhunt_bridge::geo::LocalFrame;
+    use foxhunt_bridge::mt::{AfIncomingMsg, LinkQualityMap};
+    use foxhunt_bridge::nmea::{LatLon, Pfoxb, Reference, UtcTime};
+    use foxhunt_sim::runs::writer::CaptureWriter;
+    let origin = LatLon {
+        lat: 52.5,
+        lon: 13.4,
+    };
+    let frame = LocalFrame::new(origin, 0.0).expect("frame");
+    let anchors = [
+        (0x0201u16, [0.0, 200.0]),
+        (0x0202, [400.0, 0.0]),
+        (0x0203, [400.0, 400.0]),
+    ];
+    // A small generator of its own: the fixture is the same on every machine.
+    let mut state = 0x2545_F491_4F6C_DD1Du64;
+    let mut normal = move || {
+        let mut u = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            ((state >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+        };
+        let (a, b) = (u(), u());
+        (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
+    };
+    let vehicle = |t: f64| {
+        let s = (8.0 * t) % 1600.0;
+        match (s / 400.0) as u32 {
+            0 => [s, 0.0],
+            1 => [400.0, s - 400.0],
+            2 => [1200.0 - s, 400.0],
+            _ => [0.0, 1600.0 - s],
+        }
+    };
+    let geo = |p: [f64; 2]| frame.to_geodetic(p).expect("in range");
+    let mut w = CaptureWriter::new();
+    let map = LinkQualityMap::default();
+    for k in 0..240u32 {
+        let t = f64::from(k);
+        let time = |t: f64| UtcTime {
+            ms_of_day: 36_000_000 + (t * 1000.0) as u32,
+        };
+        w.gga(time(t), geo(vehicle(t))).expect("gga");
+        let (v, e) = (vehicle(t + 0.5), walker(t + 0.5));
+        let azimuth = (e[0] - v[0]).atan2(e[1] - v[1]).to_degrees() + 3.0 * normal();
+        w.pfoxb(&Pfoxb {
+            time: time(t + 0.5),
+            azimuth_deg: azimuth.rem_euclid(360.0),
+            reference: Reference::True,
+            quality: 80.0,
+            freq_mhz: 433.92,
+            position: None,
+        })
+        .expect("pfoxb");
+        let here = walker(t);
+        for (i, (addr, at)) in anchors.iter().enumerate() {
+            let d = (here[0] - at[0]).hypot(here[1] - at[1]).max(1.0);
+            let dbm = -30.0 - 20.0 * d.log10() + 4.0 * normal();
+            w.af_incoming_msg(&AfIncomingMsg {
+                group_id: 0,
+                cluster_id: 0x0402,
+                src_addr: *addr,
+                src_endpoint: 1,
+                dst_endpoint: 1,
+                was_broadcast: false,
+                link_quality: map.link_quality(dbm as f32),
+                security_use: false,
+                timestamp: k * 1000,
+                trans_seq: (k as usize * 3 + i) as u8,
+                data: &[0x18, 0, 0x0a],
+            })
+            .expect("frame");
+        }
+    }
+    let capture = dir.join("vehicle-anchors.nmea");
+    std::fs::write(&capture, w.into_bytes()).expect("write capture");
+    let mut file = format!(
+        "origin = [{}, {}]\nsigma_db = 4.0\n\n[path_loss]\np0_dbm = -30.0\nd0_m = 1.0\neta = 2.0\n",
+        origin.lat, origin.lon
+    );
+    for (addr, [x, y]) in anchors {
+        file.push_str(&format!("\n[[anchor]]\naddr = {addr}\nx = {x}\ny = {y}\n"));
+    }
+    let anchors_file = dir.join("vehicle-anchors.anchors.toml");
+    std::fs::write(&anchors_file, file).expect("write anchors");
+    (capture, anchors_file)
+}
+
+/// Where the tag of [`vehicle_and_anchors`] is `t` seconds into it (east, north), metres.
+fn walker(t: f64) -> [f64; 2] {
+    [100.0 + t, 120.0 + 0.5 * t]
+}
+
+#[test]
+fn bearings_and_anchors_rssi_on_one_live_line_are_tracked_as_the_recording_is() {
+    let dir = scratch("mixed");
+    let (capture, anchors) = vehicle_and_anchors(&dir);
+    let (capture, anchors) = (
+        capture.to_str().expect("path"),
+        anchors.to_str().expect("path"),
+    );
+    // What the user knows: the tag is carried by someone walking, the unit's noise is 3 deg.
+    let known = ["--motion", "indoor", "--sigma", "3", "--json"];
+    let args = |capture| [&["track", capture, "--anchors", anchors][..], &known].concat();
+    let recorded = json(&foxhunt(&args(capture)));
+    let tracks = recorded["tracks"].as_array().expect("tracks");
+    assert_eq!(tracks.len(), 1, "one emitter: {recorded}");
+    let points = tracks[0]["points"].as_array().expect("points");
+    let bytes = std::fs::read(capture).expect("capture");
+    let live = live_in_halves(&args("-"), &bytes);
+    let same = live
+        .iter()
+        .zip(points)
+        .take_while(|(a, b)| POINT_KEYS.iter().all(|k| a[k] == b[k]))
+        .count();
+    println!(
+        "live {} updates, recorded {}; the first {same} the same",
+        live.len(),
+        points.len()
+    );
+    // One update a second, each a bearing and the readings beside it (the readings of a fix
+    // come half a second before its bearing: their own update).
+    assert!(points.len() >= 2 * 239, "{} updates", points.len());
+    // The pause between the halves may close an open update early (the line went quiet): up
+    // to it the points are the recording's to the last digit.
+    assert!(same >= points.len() / 2 - 4, "only the first {same} agree");
+    // After a minute (the vehicle has seen the tag from two sides of the square), the points
+    // near where the tag was.
+    let (mut sq, mut held, mut n) = (0.0, 0usize, 0usize);
+    for p in &live {
+        let freq = p["freq_mhz"].as_f64().expect("the bearings' channel");
+        assert!((freq - 433.92).abs() < 1e-4, "{p}");
+        // The track's time counts from the first bearing, half a second into the fixture's.
+        let t = p["t_ms"].as_f64().expect("t") / 1000.0 + 0.5;
+        if t < 60.0 {
+            continue;
+        }
+        let x = walker(t);
+        let f = |k: &str| p[k].as_f64().expect(k);
+        let d = [x[0] - f("east_m"), x[1] - f("north_m")];
+        let e = &p["ellipse"];
+        let (a, b) = (
+            e["major_m"].as_f64().expect("a"),
+            e["minor_m"].as_f64().expect("b"),
+        );
+        let o = e["orientation_deg"].as_f64().expect("o").to_radians();
+        // The major axis clockwise from north: (east, north) = (sin, cos).
+        let along = d[0] * o.sin() + d[1] * o.cos();
+        let across = d[0] * o.cos() - d[1] * o.sin();
+        held += usize::from((along / a).powi(2) + (across / b).powi(2) <= 1.0);
+        sq += d[0] * d[0] + d[1] * d[1];
+        n += 1;
+    }
+    let (rmse, coverage) = ((sq / n as f64).sqrt(), held as f64 / n as f64);
+    println!("{n} points after a minute: rmse {rmse:.1} m, coverage {coverage:.3}");
+    // Measured 25.1 m and 85.3 %: the bar leaves this one fixture's luck a margin. The
+    // ellipses are short of 95 % (docs/src/tracking.md, "Live"): between the vehicle's
+    // passes the tracker's P(moving) falls toward "still" and the track lags the walker
+    // (30-45 m late in the last minute); the outdoor motion model lags more (39.9 m, 48 %).
+    assert!(rmse < 35.0, "rmse {rmse:.1} m");
+    assert!(coverage > 0.75, "coverage {coverage:.3}");
+}

@@ -11,6 +11,10 @@
 //! known when the tracker starts), and bearings of stations beyond it are dropped. An offset
 //! no bearing has reached is left out of the tracker's kernel (the core's `Mover`), so the
 //! heard stations are tracked to the bit as a state of those alone tracks them.
+//!
+//! With RSSI ([`LiveChannels::with_rssi`]) the line tracks one emitter: the anchors' readings
+//! and the bearings of the first channel heard join its updates in one time order, as a
+//! recorded capture's do, its state sized for the stations a state with RSSI terms holds.
 
 use crate::track::moving::{Settings, TrackPoint, Update, max_sources, track_each};
 use crate::track::tracks::observable;
@@ -18,7 +22,7 @@ use crate::track::updates::Window;
 use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::fix::channel::belongs;
 use foxhunt_core::fix::observation::Observation;
-use foxhunt_core::track::Layout;
+use foxhunt_core::track::{Layout, Level};
 use std::sync::mpsc;
 use std::thread::JoinHandle;
 
@@ -91,6 +95,10 @@ struct LiveChannel {
     freq_mhz: Option<f32>,
     /// The line's station index of each source, by source number.
     sources: Vec<u16>,
+    /// Whether a bearing set its band (an RSSI channel opened by a reading has none yet).
+    banded: bool,
+    /// Whether an RSSI reading has reached it (its range is then observable from one station).
+    levels: bool,
     window: Window,
     tracker: Option<LiveTracker>,
 }
@@ -100,7 +108,8 @@ struct LiveChannel {
 pub enum Dropped {
     /// The line already has [`LIVE_CHANNELS`] channels.
     Channels,
-    /// Its channel already tracks [`LIVE_SOURCES`] stations.
+    /// Its channel already tracks the stations its state holds
+    /// ([`LiveChannels::max_stations`]).
     Stations,
 }
 
@@ -121,6 +130,8 @@ pub struct LiveChannels {
     width_mhz: f32,
     settings: Settings,
     unheard: BiasPrior,
+    /// Whether RSSI readings join the one channel.
+    rssi: bool,
 }
 
 impl LiveChannels {
@@ -128,45 +139,93 @@ impl LiveChannels {
     /// [`LIVE_SOURCES`] stations' bearings, their offsets' priors set when a tracker starts);
     /// `unheard`: the offset prior of a station not yet heard when its channel's tracker
     /// started.
-    pub fn new(width_mhz: f32, mut settings: Settings, unheard: BiasPrior) -> Self {
+    pub fn new(width_mhz: f32, settings: Settings, unheard: BiasPrior) -> Self {
+        Self::sized(width_mhz, settings, unheard, false)
+    }
+
+    /// One channel whose updates hold RSSI readings ([`push_level`](Self::push_level)) and
+    /// the bearings of the first band heard, `width_mhz` wide (the bearings of other bands are
+    /// left out as [`Dropped::Channels`]); its state holds [`max_sources`]`(true)` stations.
+    /// `settings` give the RSSI terms' priors.
+    pub fn with_rssi(width_mhz: f32, settings: Settings, unheard: BiasPrior) -> Self {
+        Self::sized(width_mhz, settings, unheard, true)
+    }
+
+    fn sized(width_mhz: f32, mut settings: Settings, unheard: BiasPrior, rssi: bool) -> Self {
         settings.layout = Layout {
-            sources: LIVE_SOURCES,
-            rssi: false,
+            sources: max_sources(rssi) as u8,
+            rssi,
         };
         Self {
             channels: Vec::new(),
             width_mhz,
             settings,
             unheard,
+            rssi,
         }
+    }
+
+    /// Where a tracker started later starts when its first update holds readings alone: a
+    /// centre and a spread, metres.
+    pub fn start_region(&mut self, region: ([f32; 2], f32)) {
+        self.settings.region = Some(region);
+    }
+
+    /// Whether RSSI readings join the one channel ([`with_rssi`](Self::with_rssi)).
+    pub fn rssi(&self) -> bool {
+        self.rssi
+    }
+
+    /// Stations a channel tracks; the bearings of later ones are left out.
+    pub fn max_stations(&self) -> usize {
+        usize::from(self.settings.layout.sources)
+    }
+
+    /// Channels the line tracks.
+    fn max_channels(&self) -> usize {
+        if self.rssi { 1 } else { LIVE_CHANNELS }
+    }
+
+    /// The channel a reading (no frequency) or a bearing of `freq_mhz` opens.
+    fn open_channel(&mut self, freq_mhz: Option<f32>, banded: bool) -> usize {
+        self.channels.push(LiveChannel {
+            // The band centred on the first bearing's frequency.
+            lowest: freq_mhz.map(|f| f - self.width_mhz / 2.0),
+            freq_mhz,
+            sources: Vec::new(),
+            banded,
+            levels: false,
+            window: Window::default(),
+            tracker: None,
+        });
+        self.channels.len() - 1
     }
 
     /// Take bearing `o` (the line's station index in `o.station`): the update it closed, if
     /// any, or why it was left out.
     pub fn push(&mut self, mut o: Observation) -> Result<Option<Ready>, Dropped> {
+        // The RSSI channel a reading opened takes the first bearing's band.
+        if let Some(ch) = self.channels.first_mut().filter(|c| !c.banded) {
+            ch.banded = true;
+            ch.lowest = o.freq_mhz.map(|f| f - self.width_mhz / 2.0);
+            ch.freq_mhz = o.freq_mhz;
+        }
         let c = match self
             .channels
             .iter()
             .position(|c| belongs(o.freq_mhz, c.lowest, self.width_mhz))
         {
             Some(c) => c,
-            None if self.channels.len() < LIVE_CHANNELS => {
-                // The band centred on the first bearing's frequency.
-                self.channels.push(LiveChannel {
-                    lowest: o.freq_mhz.map(|f| f - self.width_mhz / 2.0),
-                    freq_mhz: o.freq_mhz,
-                    sources: Vec::new(),
-                    window: Window::default(),
-                    tracker: None,
-                });
-                self.channels.len() - 1
+            None if self.channels.len() < self.max_channels() => {
+                self.open_channel(o.freq_mhz, true)
             }
             None => return Err(Dropped::Channels),
         };
+        let max = self.max_stations();
         let ch = &mut self.channels[c];
         let source = match ch.sources.iter().position(|s| *s == o.station) {
             Some(s) => s,
-            None if ch.sources.len() < usize::from(LIVE_SOURCES) => {
+            None if ch.sources.len() < max => {
                 ch.sources.push(o.station);
                 ch.sources.len() - 1
             }
@@ -178,6 +237,24 @@ impl LiveChannels {
             freq_mhz: ch.freq_mhz,
             update,
         }))
+    }
+
+    /// Take RSSI reading `l` taken at `t_s` (the bearings' time base): the update it closed, if
+    /// any. Without RSSI ([`new`](Self::new)) readings are not this tracker's: none.
+    pub fn push_level(&mut self, t_s: f32, l: Level) -> Option<Ready> {
+        if !self.rssi {
+            return None;
+        }
+        if self.channels.is_empty() {
+            self.open_channel(None, false);
+        }
+        let ch = &mut self.channels[0];
+        ch.levels = true;
+        ch.window.push_level(t_s, l).map(|update| Ready {
+            channel: 0,
+            freq_mhz: ch.freq_mhz,
+            update,
+        })
     }
 
     /// Close every channel's open update (the line went quiet, or ended).
@@ -196,24 +273,24 @@ impl LiveChannels {
     }
 
     /// Step `r` with its channel's tracker (started on the channel's first update heard by two
-    /// stations, and again after one that stopped; `prior_of` gives the offset prior of a
-    /// station by its index on the line): its point, `None` while one station alone has been
-    /// heard on the channel (its range is not observable: [`one_station`](crate::track::tracks::one_station)), or why there is
-    /// none.
+    /// stations or holding an RSSI reading, and again after one that stopped; `prior_of` gives
+    /// the offset prior of a station by its index on the line): its point, `None` while one
+    /// station alone has been heard on the channel and no reading (its range is not
+    /// observable: [`one_station`](crate::track::tracks::one_station)), or why there is none.
     pub fn step(
         &mut self,
         r: Ready,
         prior_of: &dyn Fn(u16) -> BiasPrior,
     ) -> Result<Option<TrackPoint>, String> {
         let ch = self.channels.get_mut(r.channel).ok_or("no such channel")?;
-        if !observable(ch.sources.len(), false) {
+        if !observable(ch.sources.len(), ch.levels) {
             return Ok(None);
         }
         let tracker = match ch.tracker.as_mut() {
             Some(t) => t,
             None => {
                 let mut settings = self.settings.clone();
-                settings.offsets = (0..usize::from(LIVE_SOURCES))
+                settings.offsets = (0..usize::from(settings.layout.sources))
                     .map(|k| ch.sources.get(k).map_or(self.unheard, |s| prior_of(*s)))
                     .collect();
                 ch.tracker.insert(LiveTracker::start(settings)?)
@@ -241,7 +318,7 @@ mod tests {
     use super::*;
     use crate::track::moving::track;
     use foxhunt_core::model::bearing::Bearing;
-    use foxhunt_core::track::Motion;
+    use foxhunt_core::track::{Level, Motion};
 
     /// Three stations around an emitter at (1000, 2000) m, each bearing at second `k`.
     fn bearings(seconds: usize) -> Vec<Observation> {
@@ -333,6 +410,61 @@ mod tests {
         assert_eq!(none, 10, "no point while one station is heard");
         assert_eq!(points, 9, "a point for every later update but the open one");
         assert_eq!(live.lone_station(0), None);
+    }
+
+    #[test]
+    fn one_station_with_rssi_is_tracked_once_a_reading_comes_and_not_before() {
+        let mut settings = Settings::new(Layout::default(), Motion::OUTDOOR);
+        settings.particles = 200;
+        let prior = BiasPrior {
+            mean: 0.0,
+            sd: 2f32.to_radians(),
+        };
+        let mut live = LiveChannels::with_rssi(0.025, settings, prior);
+        assert_eq!(live.max_stations(), 4, "a state with RSSI terms holds four");
+        let obs: Vec<Observation> = bearings(10)
+            .into_iter()
+            .filter(|o| o.station == 7)
+            .collect();
+        let mut steps = Vec::new();
+        for o in &obs[..5] {
+            if let Some(r) = live.push(*o).unwrap() {
+                steps.push(live.step(r, &|_| prior).unwrap().is_some());
+            }
+        }
+        assert_eq!(steps, [false; 4], "one station's bearings alone: no point");
+        let level = Level {
+            anchor: [1000.0, 1500.0],
+            dbm: -80.0,
+            sigma_db: 4.0,
+            law: foxhunt_core::model::rssi::PathLoss {
+                p0: -30.0,
+                d0: 1.0,
+                eta: 2.0,
+            },
+        };
+        // A reading within the open update's window joins it; later, it opens its own.
+        assert!(live.push_level(4.1, level).is_none());
+        let r = live
+            .push_level(4.5, level)
+            .expect("closes the bearing's update");
+        assert_eq!(r.update.epoch.levels().len(), 1);
+        // The tracker starts from that update, its bearing and reading.
+        live.start_region(([1000.0, 1500.0], 500.0));
+        assert!(
+            live.step(r, &|_| prior).unwrap().is_some(),
+            "a reading measures range"
+        );
+        let r = live
+            .push(obs[5])
+            .unwrap()
+            .expect("closes the reading's update");
+        assert_eq!(r.update.epoch.bearings().len(), 0);
+        assert!(live.step(r, &|_| prior).unwrap().is_some());
+        // A bearing of another channel is not this line's.
+        let mut other = obs[6];
+        other.freq_mhz = Some(145.0);
+        assert_eq!(live.push(other), Err(Dropped::Channels));
     }
 
     #[test]

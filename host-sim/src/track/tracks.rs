@@ -138,8 +138,8 @@ pub(crate) fn settings(
         s.exponent_sd = f.exponent_sd;
         if indoor.is_some() {
             s.room = f.room;
-            s.region = Some(start_region(f));
         }
+        s.region = Some(start_region(s.room, &c.anchors));
     }
     s
 }
@@ -157,21 +157,21 @@ fn file_accel_sd(f: &AnchorsFile) -> f32 {
     q.sqrt()
 }
 
-/// Where an RSSI-only track starts: the room's middle, else the anchors' centre, spread over
-/// a third of the room or the anchors' reach.
-fn start_region(f: &AnchorsFile) -> ([f32; 2], f32) {
-    if let Some([w, d]) = f.room {
+/// Where a track whose first update holds readings alone starts: the room's middle, else the
+/// centre of the anchors `at` (in the track's frame), spread over a third of the room or the
+/// anchors' reach.
+pub(crate) fn start_region(room: Option<[f32; 2]>, at: &[[f32; 2]]) -> ([f32; 2], f32) {
+    if let Some([w, d]) = room {
         return ([w / 2.0, d / 2.0], w.max(d) / 3.0);
     }
-    let n = f.anchor.len().max(1) as f32;
+    let n = at.len().max(1) as f32;
     let c = [
-        f.anchor.iter().map(|a| a.x).sum::<f32>() / n,
-        f.anchor.iter().map(|a| a.y).sum::<f32>() / n,
+        at.iter().map(|a| a[0]).sum::<f32>() / n,
+        at.iter().map(|a| a[1]).sum::<f32>() / n,
     ];
-    let reach = f
-        .anchor
+    let reach = at
         .iter()
-        .map(|a| (a.x - c[0]).hypot(a.y - c[1]))
+        .map(|a| (a[0] - c[0]).hypot(a[1] - c[1]))
         .fold(1.0, f32::max);
     (c, reach)
 }

@@ -31,6 +31,9 @@ pub struct Channel {
     pub sources: Vec<u16>,
     /// Whether RSSI readings are in the updates.
     pub rssi: bool,
+    /// With RSSI: the anchors, in the track's frame (where a track that starts from readings
+    /// starts: about them).
+    pub anchors: Vec<[f32; 2]>,
     /// Stations left out (beyond [`max_sources`], the fewest bearings first) and their
     /// bearings.
     pub left_out: (usize, usize),
@@ -107,6 +110,7 @@ pub fn channels(
             updates: bearing_updates(&mine),
             sources,
             rssi: false,
+            anchors: Vec::new(),
             left_out,
         });
         kept.push(mine);
@@ -130,9 +134,10 @@ pub fn channels(
                 let c = &mut out[0];
                 c.updates = merge(&kept[0], &timed);
                 c.rssi = true;
+                c.anchors = at;
             }
             (true, _) | (false, 0) => {
-                let mut epochs = AnchorEpochs::new(file, at);
+                let mut epochs = AnchorEpochs::new(file, at.clone());
                 let mut updates: Vec<Update> =
                     m.readings.iter().filter_map(|r| epochs.push(*r)).collect();
                 updates.extend(epochs.close());
@@ -141,6 +146,7 @@ pub fn channels(
                     updates,
                     sources: Vec::new(),
                     rssi: true,
+                    anchors: at,
                     left_out: (0, 0),
                 });
             }
@@ -180,7 +186,7 @@ fn most_heard(mine: &mut Vec<Observation>, max: usize) -> (Vec<u16>, (usize, usi
 }
 
 /// Bearings (in time order) as updates: each update the bearings within [`WINDOW_S`] of its
-/// first, at most [`K`](crate::track::moving::K).
+/// first, at most [`K`].
 pub fn bearing_updates(obs: &[Observation]) -> Vec<Update> {
     let mut window = Window::default();
     let mut out: Vec<Update> = obs.iter().filter_map(|o| window.push(*o)).collect();
@@ -206,9 +212,16 @@ pub struct Window {
 impl Window {
     /// Add bearing `o`; the update it closed, if any.
     pub fn push(&mut self, o: Observation) -> Option<Update> {
-        let room = self.open.as_ref().is_some_and(|u| u.epoch.bearings().len() < K);
+        let room = self
+            .open
+            .as_ref()
+            .is_some_and(|u| u.epoch.bearings().len() < K);
         let joins = self.by_bearing && room && self.within(o.time_s);
-        let closed = if joins { None } else { self.open_at(o.time_s, true) };
+        let closed = if joins {
+            None
+        } else {
+            self.open_at(o.time_s, true)
+        };
         if let Some(u) = self.open.as_mut() {
             let _ = u.epoch.push_bearing(o);
         }
@@ -275,7 +288,7 @@ fn merge(bearings: &[Observation], levels: &[(f32, Level)]) -> Vec<Update> {
 }
 
 /// Reading `r` of an anchor at `at` (by anchor index) as the tracker's measurement.
-fn level(file: &AnchorsFile, at: &[[f32; 2]], r: &Reading) -> Level {
+pub fn level(file: &AnchorsFile, at: &[[f32; 2]], r: &Reading) -> Level {
     Level {
         anchor: at.get(r.anchor).copied().unwrap_or_default(),
         dbm: r.dbm,

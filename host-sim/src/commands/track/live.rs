@@ -10,20 +10,21 @@
 
 use super::Args;
 use crate::commands::locate::live::{LiveSource, reader};
-use crate::estimate::stations::station_setup;
-use crate::inputs::capture::{Decoder, LineFeed};
+use crate::estimate::stations::{StationSetup, station_setup};
+use crate::inputs::capture::{Decoder, LineFeed, StationInfo};
 use crate::outputs::cot::{self, CotSender};
 use crate::outputs::terminal::{Out, Outcome, Stop, note};
 use crate::outputs::tracks;
-use crate::track::capture::TrackDecoder;
+use crate::track::capture::{Reading, TrackDecoder};
 use crate::track::indoor::AnchorsFile;
-use crate::track::live::{Dropped, LIVE_CHANNELS, LIVE_SOURCES, LiveChannels, LiveTracker, Ready};
+use crate::track::live::{Dropped, LIVE_CHANNELS, LiveChannels, LiveTracker, Ready};
 use crate::track::moving::{Settings, TrackPoint, Update};
-use crate::track::tracks::{Options, Tracks, one_station, settings};
-use crate::track::updates::{AnchorEpochs, Channel, anchor_positions};
+use crate::track::tracks::{Options, Tracks, one_station, settings, start_region};
+use crate::track::updates::{AnchorEpochs, Channel, anchor_positions, level};
 use foxhunt_bridge::BridgeConfig;
 use foxhunt_core::fix::bias::BiasPrior;
-use foxhunt_core::track::{Layout, Motion};
+use foxhunt_core::fix::observation::Observation;
+use foxhunt_core::track::{Layout, Level, Motion};
 use std::time::Duration;
 
 /// Track what `source` delivers until it closes (or stays quiet for `quiet_exit`), printing a
@@ -79,34 +80,9 @@ pub fn run(
         // else the record's own.
         let ids = dec.decoded.stations.iter().map(|s| s.id.as_str());
         let setup = station_setup(ids, o.network.as_ref(), fallback, false);
-        let mut ready: Vec<Ready> = Vec::new();
-        for mut b in new.iter().copied() {
-            let station = usize::from(b.station);
-            if let Some(s) = o.sigma.or(setup.noise.get(station).copied().flatten()) {
-                b.bearing.sigma = s;
-            }
-            match live.push(b) {
-                Ok(r) => ready.extend(r),
-                Err(why) => {
-                    let k = why as usize;
-                    if !dropped[k] {
-                        dropped[k] = true;
-                        note(&match why {
-                            Dropped::Channels => format!(
-                                "foxhunt: more than {LIVE_CHANNELS} channels on the line: the \
-                                 bearings of later ones are left out"
-                            ),
-                            Dropped::Stations => format!(
-                                "foxhunt: more than {LIVE_SOURCES} stations on a channel: a live \
-                                 track follows the first {LIVE_SOURCES} heard, the others' \
-                                 bearings are left out"
-                            ),
-                        });
-                    }
-                }
-            }
-        }
-        if new.is_empty() || ended {
+        let quiet = new.is_empty();
+        let mut ready = push_bearings(&mut live, new, o.sigma, &setup, &mut dropped);
+        if quiet || ended {
             ready.extend(live.close());
         }
         let shell = Tracks {
@@ -114,34 +90,31 @@ pub fn run(
             frame: dec.decoded.frame,
             first_ms: dec.decoded.first_ms,
         };
-        let prior_of = |s: u16| setup.priors.of(usize::from(s));
-        for r in ready {
-            let point = match live.step(r, &prior_of) {
-                Ok(Some(p)) => Ok(p),
-                Ok(None) => {
-                    if !lone.contains(&r.channel) {
-                        lone.push(r.channel);
-                        let station = live
-                            .lone_station(r.channel)
-                            .and_then(|s| dec.decoded.stations.get(usize::from(s)))
-                            .map_or("no station", |s| s.id.as_str());
-                        points.untracked(r.freq_mhz, &one_station(station));
-                    }
-                    continue;
-                }
-                Err(e) => Err(e),
-            };
-            points.print(&shell, r.freq_mhz, point, out)?;
-        }
+        let stations = &dec.decoded.stations;
+        step_all(
+            &mut live,
+            ready,
+            &setup,
+            stations,
+            &mut lone,
+            &mut points,
+            &shell,
+            out,
+        )?;
     }
     points.end(heard, "no bearing on the line: nothing to track")
 }
 
 /// Track the RSSI of `file`'s anchors on a byte line (standard input or a serial device, as a
-/// ZigBee coordinator's MT frames arrive): the readings grouped into epochs as a recorded
-/// capture without GPS times groups them ([`AnchorEpochs`]: an epoch closes when an anchor is
-/// heard again, or when the line goes quiet), each epoch a step of one tracker, in the anchors
-/// file's metres (latitudes and longitudes with its `origin`).
+/// ZigBee coordinator's MT frames arrive), the way the line's first measurement says:
+/// - readings without a GPS time (a coordinator's line alone): grouped into epochs as a
+///   recorded capture without GPS times groups them ([`AnchorEpochs`]: an epoch closes when an
+///   anchor is heard again, or when the line goes quiet), each epoch a step of one tracker, in
+///   the anchors file's metres (latitudes and longitudes with its `origin`); bearings on such a
+///   line are left out (said once);
+/// - a line with GPS fixes (a DF unit's, the coordinator's frames beside): each reading timed
+///   by the fix before it and the bearings of the first channel heard join one tracker's
+///   updates in one time order, as a recorded capture's do ([`Timed`]).
 pub fn rssi(
     source: LiveSource,
     quiet_exit: Option<Duration>,
@@ -156,45 +129,27 @@ pub fn rssi(
              serial device, not --kraken or --mqtt",
         ));
     }
-    let shell = Tracks {
-        tracks: Vec::new(),
-        frame: file.frame(),
-        first_ms: None,
-    };
-    let channel = Channel {
-        freq_mhz: None,
-        updates: Vec::new(),
-        sources: Vec::new(),
-        rssi: true,
-        left_out: (0, 0),
-    };
     let fallback = BiasPrior {
         mean: 0.0,
         sd: o.offset_sd,
     };
-    let setup = station_setup(std::iter::empty(), None, fallback, false);
-    let mut tracker = None;
-    let settings = settings(&channel, Some(file), o, &setup);
-    let mut epochs = AnchorEpochs::new(file, anchor_positions(file, None)?);
     let mut dec = TrackDecoder::new(Some(file));
     let mut line = reader(&source, None, None)?;
     let mut points = Points::new(a);
-    let (mut heard, mut unknown, mut bearings) = (0usize, 0u32, false);
+    let mut mode: Option<Mode> = None;
+    let (mut heard, mut unknown) = (0usize, 0u32);
     let mut ended = false;
     while !ended {
         ended = line.take(&mut dec, quiet_exit, true)?;
-        let new = dec.take_readings();
-        heard += new.len();
-        // Bearings on the same line are not this track's: said once, and not kept.
+        let readings = dec.take_readings();
         let d = dec.bearings();
-        d.snapshot();
-        if !d.decoded.observations.is_empty() && !std::mem::replace(&mut bearings, true) {
-            note(
-                "foxhunt: a live line tracks bearings or an anchors file's RSSI, not both: \
-                 its bearings are left out (track both from a recorded capture)",
-            );
+        if ended {
+            d.end();
         }
-        d.decoded.observations.clear();
+        d.snapshot();
+        // Taken out of the decoder, so a line that never ends keeps none it tracked.
+        let bearings: Vec<Observation> = d.decoded.observations.drain(..).collect();
+        heard += readings.len() + bearings.len();
         let (skipped, addrs) = dec.unknown();
         if skipped > 0 && unknown == 0 {
             let addrs: Vec<String> = addrs.iter().map(|a| format!("0x{a:04x}")).collect();
@@ -204,27 +159,332 @@ pub fn rssi(
             ));
         }
         unknown = skipped;
-        let mut ready: Vec<Update> = new.iter().filter_map(|r| epochs.push(*r)).collect();
-        if new.is_empty() || ended {
-            ready.extend(epochs.close());
+        let timed = !bearings.is_empty() || readings.iter().any(|r| r.after_fix_ms.is_some());
+        if mode.is_none() && (timed || !readings.is_empty()) {
+            mode = Some(if timed {
+                Mode::Timed(Box::new(Timed::new(file, o, fallback)))
+            } else {
+                Mode::Epochs(Box::new(Epochs::new(file, o)?))
+            });
         }
-        for u in ready {
-            let t = match tracker.as_mut() {
-                Some(t) => t,
-                None => tracker.insert(LiveTracker::start(settings.clone())?),
-            };
-            let point = t.step(u);
-            if point.is_err() {
-                // The next epoch starts a new tracker.
-                tracker = None;
+        let quiet = readings.is_empty() && bearings.is_empty();
+        match mode.as_mut() {
+            Some(Mode::Epochs(e)) => e.take(
+                readings,
+                !bearings.is_empty(),
+                quiet || ended,
+                &mut points,
+                out,
+            )?,
+            Some(Mode::Timed(t)) => {
+                let d = dec.bearings();
+                t.take(d, readings, bearings, quiet || ended, &mut points, out)?
             }
-            points.print(&shell, None, point, out)?;
+            None => {}
         }
     }
     points.end(
         heard,
         "no RSSI reading of a listed anchor on the line: nothing to track",
     )
+}
+
+/// How a line with an anchors file is tracked, as its first measurement says.
+enum Mode<'a> {
+    /// Readings without GPS times, in epochs.
+    Epochs(Box<Epochs>),
+    /// Readings and bearings by their GPS times.
+    Timed(Box<Timed<'a>>),
+}
+
+/// RSSI without GPS times: one tracker stepped an epoch at a time.
+struct Epochs {
+    epochs: AnchorEpochs,
+    settings: Settings,
+    tracker: Option<LiveTracker>,
+    shell: Tracks,
+    /// Whether the line's bearings were said to be left out.
+    said: bool,
+}
+
+impl Epochs {
+    fn new(file: &AnchorsFile, o: &Options) -> Result<Self, Stop> {
+        let at = anchor_positions(file, None)?;
+        let channel = Channel {
+            freq_mhz: None,
+            updates: Vec::new(),
+            sources: Vec::new(),
+            rssi: true,
+            anchors: at.clone(),
+            left_out: (0, 0),
+        };
+        let fallback = BiasPrior {
+            mean: 0.0,
+            sd: o.offset_sd,
+        };
+        let setup = station_setup(std::iter::empty(), None, fallback, false);
+        Ok(Self {
+            epochs: AnchorEpochs::new(file, at),
+            settings: settings(&channel, Some(file), o, &setup),
+            tracker: None,
+            shell: Tracks {
+                tracks: Vec::new(),
+                frame: file.frame(),
+                first_ms: None,
+            },
+            said: false,
+        })
+    }
+
+    /// Step the epochs `readings` close (all when `close`); `bearings`: the chunk had some.
+    fn take(
+        &mut self,
+        readings: Vec<Reading>,
+        bearings: bool,
+        close: bool,
+        points: &mut Points,
+        out: &mut Out,
+    ) -> Outcome {
+        if bearings && !std::mem::replace(&mut self.said, true) {
+            note(
+                "foxhunt: the line's RSSI readings have no GPS time to put bearings beside: \
+                 its bearings are left out (a line with GPS fixes tracks both)",
+            );
+        }
+        let mut ready: Vec<Update> = readings
+            .iter()
+            .filter_map(|r| self.epochs.push(*r))
+            .collect();
+        if close {
+            ready.extend(self.epochs.close());
+        }
+        for u in ready {
+            let t = match self.tracker.as_mut() {
+                Some(t) => t,
+                None => self
+                    .tracker
+                    .insert(LiveTracker::start(self.settings.clone())?),
+            };
+            let point = t.step(u);
+            if point.is_err() {
+                // The next epoch starts a new tracker.
+                self.tracker = None;
+            }
+            points.print(&self.shell, None, point, out)?;
+        }
+        Ok(())
+    }
+}
+
+/// A line with GPS fixes: the anchors' readings, each timed by the fix before it, and the
+/// bearings of the first channel heard, in one tracker ([`LiveChannels::with_rssi`]), in the
+/// line's GPS frame (the anchors file's `origin` places its anchors there).
+struct Timed<'a> {
+    o: &'a Options,
+    live: LiveChannels,
+    file: AnchorsFile,
+    /// The anchors in the line's frame, once it has one.
+    at: Option<Vec<[f32; 2]>>,
+    /// Bridge time of the track's zero, ms: the first bearing's when the line's first timed
+    /// measurements hold one (as a recorded capture's), else the first reading's fix.
+    base_ms: Option<i64>,
+    dropped: [bool; 2],
+    lone: Vec<usize>,
+    /// Whether readings before the first fix were said to be left out.
+    untimed: bool,
+    fallback: BiasPrior,
+}
+
+impl<'a> Timed<'a> {
+    fn new(file: &AnchorsFile, o: &'a Options, fallback: BiasPrior) -> Self {
+        // A channel of bearings and RSSI, as a recording's: its settings are those of one.
+        let channel = Channel {
+            freq_mhz: None,
+            updates: Vec::new(),
+            sources: vec![0],
+            rssi: true,
+            anchors: Vec::new(),
+            left_out: (0, 0),
+        };
+        let setup = station_setup(std::iter::empty(), None, fallback, false);
+        let s = settings(&channel, Some(file), o, &setup);
+        Self {
+            o,
+            live: LiveChannels::with_rssi(o.width_mhz, s, unheard(o, fallback)),
+            file: file.clone(),
+            at: None,
+            base_ms: None,
+            dropped: [false; 2],
+            lone: Vec::new(),
+            untimed: false,
+            fallback,
+        }
+    }
+
+    /// Step what `readings` and `bearings` (of decoder `d`) close, all when `close`.
+    fn take(
+        &mut self,
+        d: &mut Decoder,
+        readings: Vec<Reading>,
+        bearings: Vec<Observation>,
+        close: bool,
+        points: &mut Points,
+        out: &mut Out,
+    ) -> Outcome {
+        let first_ms = d.decoded.first_ms;
+        if self.base_ms.is_none() {
+            self.base_ms = match bearings.is_empty() {
+                false => first_ms,
+                true => readings.iter().find_map(|r| r.after_fix_ms),
+            };
+        }
+        let Some(base) = self.base_ms else {
+            return Ok(());
+        };
+        if self.at.is_none() && !readings.is_empty() && d.decoded.frame.is_some() {
+            let at = anchor_positions(&self.file, d.decoded.frame.as_ref())?;
+            // A tracker whose first update holds readings alone starts about the anchors.
+            self.live.start_region(start_region(None, &at));
+            self.at = Some(at);
+        }
+        // Bearings in the track's time (theirs counts from the first bearing), and readings.
+        let shift = first_ms.map_or(0.0, |f| (f - base) as f32 / 1000.0);
+        let mut all: Vec<(f32, Result<Observation, Level>)> = bearings
+            .into_iter()
+            .map(|mut b| {
+                b.time_s += shift;
+                (b.time_s, Ok(b))
+            })
+            .collect();
+        for r in &readings {
+            match (r.after_fix_ms, self.at.as_deref()) {
+                (Some(ms), Some(at)) => {
+                    let t = (ms - base) as f32 / 1000.0;
+                    all.push((t, Err(level(&self.file, at, r))));
+                }
+                _ if !std::mem::replace(&mut self.untimed, true) => note(
+                    "foxhunt: RSSI readings before the line's first GPS fix have no time: \
+                     they are left out",
+                ),
+                _ => {}
+            }
+        }
+        // Stable: at equal times the bearings first, as a recorded capture merges them.
+        all.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let ids = d.decoded.stations.iter().map(|s| s.id.as_str());
+        let setup = station_setup(ids, self.o.network.as_ref(), self.fallback, false);
+        let mut ready = Vec::new();
+        for (t, m) in all {
+            match m {
+                Ok(b) => ready.extend(push_bearings(
+                    &mut self.live,
+                    vec![b],
+                    self.o.sigma,
+                    &setup,
+                    &mut self.dropped,
+                )),
+                Err(l) => ready.extend(self.live.push_level(t, l)),
+            }
+        }
+        if close {
+            ready.extend(self.live.close());
+        }
+        let shell = Tracks {
+            tracks: Vec::new(),
+            frame: d.decoded.frame,
+            first_ms: Some(base),
+        };
+        let stations = &d.decoded.stations;
+        step_all(
+            &mut self.live,
+            ready,
+            &setup,
+            stations,
+            &mut self.lone,
+            points,
+            &shell,
+            out,
+        )
+    }
+}
+
+/// Push `new` bearings (time order) to `live`, each with its station's noise (`sigma`, else
+/// the stations file's, else the record's own), saying once of each kind what was left out.
+fn push_bearings(
+    live: &mut LiveChannels,
+    new: Vec<Observation>,
+    sigma: Option<f32>,
+    setup: &StationSetup,
+    dropped: &mut [bool; 2],
+) -> Vec<Ready> {
+    let mut ready = Vec::new();
+    for mut b in new {
+        let station = usize::from(b.station);
+        if let Some(s) = sigma.or(setup.noise.get(station).copied().flatten()) {
+            b.bearing.sigma = s;
+        }
+        match live.push(b) {
+            Ok(r) => ready.extend(r),
+            Err(why) => {
+                let k = why as usize;
+                if !dropped[k] {
+                    dropped[k] = true;
+                    note(&match why {
+                        Dropped::Channels if live.rssi() => "foxhunt: a live line with an anchors \
+                             file tracks one emitter, its RSSI and the bearings of the first \
+                             channel heard: the bearings of other channels are left out"
+                            .to_string(),
+                        Dropped::Channels => format!(
+                            "foxhunt: more than {LIVE_CHANNELS} channels on the line: the \
+                             bearings of later ones are left out"
+                        ),
+                        Dropped::Stations => format!(
+                            "foxhunt: more than {} stations on a channel: a live track \
+                             follows the first {} heard, the others' bearings are left out",
+                            live.max_stations(),
+                            live.max_stations()
+                        ),
+                    });
+                }
+            }
+        }
+    }
+    ready
+}
+
+/// Step each of `ready` with its channel's tracker and print its point; a channel heard by
+/// one station alone is said once (`lone`) and has no point.
+#[allow(clippy::too_many_arguments)]
+fn step_all(
+    live: &mut LiveChannels,
+    ready: Vec<Ready>,
+    setup: &StationSetup,
+    stations: &[StationInfo],
+    lone: &mut Vec<usize>,
+    points: &mut Points,
+    shell: &Tracks,
+    out: &mut Out,
+) -> Outcome {
+    let prior_of = |s: u16| setup.priors.of(usize::from(s));
+    for r in ready {
+        let point = match live.step(r, &prior_of) {
+            Ok(Some(p)) => Ok(p),
+            Ok(None) => {
+                if !lone.contains(&r.channel) {
+                    lone.push(r.channel);
+                    let station = live
+                        .lone_station(r.channel)
+                        .and_then(|s| stations.get(usize::from(s)))
+                        .map_or("no station", |s| s.id.as_str());
+                    points.untracked(r.freq_mhz, &one_station(station));
+                }
+                continue;
+            }
+            Err(e) => Err(e),
+        };
+        points.print(shell, r.freq_mhz, point, out)?;
+    }
+    Ok(())
 }
 
 /// Where a live track's points go: standard output (the CSV's row, or with `--json` one

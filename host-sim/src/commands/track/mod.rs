@@ -59,7 +59,7 @@ pub struct Args {
           value_parser = values::f64_where(|s| s >= 0.0, "a number of seconds >= 0, or inf"))]
     pub quiet_exit: Option<f64>,
     /// The anchors file: where the anchors whose RSSI the captures hold stand (live: the
-    /// line's RSSI is tracked, its bearings left out).
+    /// line's RSSI is tracked, with the bearings of its first channel when it has GPS fixes).
     #[arg(long)]
     pub anchors: Option<PathBuf>,
     /// Print JSON (`{"tracks": [...]}`) instead of CSV.
