@@ -318,7 +318,7 @@ mod tests {
     use super::*;
     use crate::track::moving::track;
     use foxhunt_core::model::bearing::Bearing;
-    use foxhunt_core::track::{Level, Motion};
+    use foxhunt_core::track::Motion;
 
     /// Three stations around an emitter at (1000, 2000) m, each bearing at second `k`.
     fn bearings(seconds: usize) -> Vec<Observation> {
@@ -433,16 +433,7 @@ mod tests {
             }
         }
         assert_eq!(steps, [false; 4], "one station's bearings alone: no point");
-        let level = Level {
-            anchor: [1000.0, 1500.0],
-            dbm: -80.0,
-            sigma_db: 4.0,
-            law: foxhunt_core::model::rssi::PathLoss {
-                p0: -30.0,
-                d0: 1.0,
-                eta: 2.0,
-            },
-        };
+        let level = crate::track::updates::tests::reading([1000.0, 1500.0], -80.0);
         // A reading within the open update's window joins it; later, it opens its own.
         assert!(live.push_level(4.1, level).is_none());
         let r = live

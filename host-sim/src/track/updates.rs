@@ -354,7 +354,7 @@ impl AnchorEpochs {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use foxhunt_core::model::bearing::Bearing;
 
@@ -384,18 +384,23 @@ mod tests {
         assert_eq!(u[1].epoch.dt, 0.0);
     }
 
+    /// A reading of `dbm` at an anchor at `anchor` (-30 dBm at 1 m, exponent 2, 4 dB).
+    pub(crate) fn reading(anchor: [f32; 2], dbm: f32) -> Level {
+        Level {
+            anchor,
+            dbm,
+            sigma_db: 4.0,
+            law: foxhunt_core::model::rssi::PathLoss {
+                p0: -30.0,
+                d0: 1.0,
+                eta: 2.0,
+            },
+        }
+    }
+
     #[test]
     fn readings_join_the_bearings_update_they_fall_in_and_open_their_own() {
-        let level = Level {
-            anchor: [0.0, 0.0],
-            dbm: -60.0,
-            sigma_db: 6.0,
-            law: foxhunt_core::model::rssi::PathLoss {
-                p0: -40.0,
-                d0: 1.0,
-                eta: 2.5,
-            },
-        };
+        let level = reading([0.0, 0.0], -60.0);
         let levels: Vec<(f32, Level)> = [0.05, 0.9, 0.95, 1.2].map(|t| (t, level)).to_vec();
         let u = merge(&[at(0.0), at(0.1), at(1.0)], &levels);
         let counts: Vec<(usize, usize)> = u
