@@ -108,7 +108,8 @@ pub struct Args {
     /// fixed-lag smoother), so closer to the truth where the emitter turned or stopped.
     #[arg(long)]
     pub smooth: bool,
-    /// Every bearing's noise, degrees (default: the stations file's, else each record's own).
+    /// Every bearing's noise, degrees (default: the stations file's, else each record's own, a
+    /// PFOXB's 1; not estimated from the bearings: state a noisier unit's).
     #[arg(long)]
     pub sigma: Option<f32>,
     /// A stations file (TOML, as `locate --stations`): each station's noise and offset prior
