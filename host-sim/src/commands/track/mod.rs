@@ -276,6 +276,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
     }
     let t = crate::track::tracks::tracks(&m, file.as_ref(), &options)?;
     note_left_out(&t);
+    note_too_noisy(&t, &m);
     untracked(&t)?;
     write_files(a, &t, file.as_ref(), &outputs)?;
     if let Some(url) = &a.cot {
@@ -316,6 +317,28 @@ pub(crate) fn note_left_out(t: &Tracks) {
             max_sources(false),
             max_sources(true)
         ));
+    }
+}
+
+/// Say which stations' bearings scatter about their track by more than their stated noise
+/// allows: the track's ellipses are then too small.
+pub(crate) fn note_too_noisy(t: &Tracks, m: &Measured) {
+    for c in &t.tracks {
+        let what = c
+            .freq_mhz
+            .map_or(String::new(), |f| format!(" on {f:.3} MHz"));
+        for (station, z, sigma) in &c.too_noisy {
+            let id = m
+                .decoded
+                .stations
+                .get(usize::from(*station))
+                .map_or("a station", |s| s.id.as_str());
+            note(&format!(
+                "foxhunt: {id}'s bearings scatter {z:.1} times their stated noise \
+                 ({sigma:.1} deg) about the track{what}: its ellipses are too small; state \
+                 the unit's noise (--sigma, or the stations file's noise_deg)"
+            ));
+        }
     }
 }
 
