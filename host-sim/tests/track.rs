@@ -542,7 +542,7 @@ fn a_live_line_without_bearings_and_live_files_are_refused() {
 /// of noise) driving a 400 m square at 8 m/s around a tag walking at 1.1 m/s, and three
 /// anchors' RSSI of the tag (MT frames after each fix; -30 dBm at 1 m, exponent 2, 4 dB of
 /// noise), in `dir`: the capture and its anchors file (the tag: [`walker`]).
-fn vehicle_and_anchors(dir: &std::path::Path) -> (PathBuf, PathBuf) {
+fn vehicle_and_anchors(dir: &std::path::Path) -> (String, String) {
     use foxhunt_bridge::geo::LocalFrame;
     use foxhunt_bridge::mt::{AfIncomingMsg, LinkQualityMap};
     use foxhunt_bridge::nmea::{LatLon, Pfoxb, Reference, UtcTime};
@@ -629,7 +629,8 @@ fn vehicle_and_anchors(dir: &std::path::Path) -> (PathBuf, PathBuf) {
     }
     let anchors_file = dir.join("vehicle-anchors.anchors.toml");
     std::fs::write(&anchors_file, file).expect("write anchors");
-    (capture, anchors_file)
+    let path = |p: PathBuf| p.to_str().expect("a UTF-8 path").to_string();
+    (path(capture), path(anchors_file))
 }
 
 /// Where the tag of [`vehicle_and_anchors`] is `t` seconds into it (east, north), metres.
@@ -641,10 +642,7 @@ fn walker(t: f64) -> [f64; 2] {
 fn bearings_and_anchors_rssi_on_one_live_line_are_tracked_as_the_recording_is() {
     let dir = scratch("mixed");
     let (capture, anchors) = vehicle_and_anchors(&dir);
-    let (capture, anchors) = (
-        capture.to_str().expect("path"),
-        anchors.to_str().expect("path"),
-    );
+    let (capture, anchors) = (capture.as_str(), anchors.as_str());
     // What the user knows: the tag is carried by someone walking, the unit's noise is 3 deg.
     let known = ["--motion", "indoor", "--sigma", "3", "--json"];
     let args = |capture| [&["track", capture, "--anchors", anchors][..], &known].concat();
@@ -711,10 +709,7 @@ fn bearings_and_anchors_rssi_on_one_live_line_are_tracked_as_the_recording_is() 
 fn bearings_noisier_than_their_records_say_are_named() {
     let dir = scratch("noisy");
     let (capture, anchors) = vehicle_and_anchors(&dir);
-    let (capture, anchors) = (
-        capture.to_str().expect("path"),
-        anchors.to_str().expect("path"),
-    );
+    let (capture, anchors) = (capture.as_str(), anchors.as_str());
     // The unit's 3 deg of noise where its PFOXB records state the bridge's 1 deg: said, once,
     // with what to do; stated right (`--sigma 3`), nothing is said.
     let said = |extra: &[&str]| {
