@@ -164,7 +164,7 @@ pub fn rssi(
             mode = Some(if timed {
                 Mode::Timed(Box::new(Timed::new(file, o, fallback)))
             } else {
-                Mode::Epochs(Box::new(Epochs::new(file, o)?))
+                Mode::Epochs(Box::new(Epochs::new(file, o, fallback)?))
             });
         }
         let quiet = readings.is_empty() && bearings.is_empty();
@@ -208,7 +208,7 @@ struct Epochs {
 }
 
 impl Epochs {
-    fn new(file: &AnchorsFile, o: &Options) -> Result<Self, Stop> {
+    fn new(file: &AnchorsFile, o: &Options, fallback: BiasPrior) -> Result<Self, Stop> {
         let at = anchor_positions(file, None)?;
         let channel = Channel {
             freq_mhz: None,
@@ -217,10 +217,6 @@ impl Epochs {
             rssi: true,
             anchors: at.clone(),
             left_out: (0, 0),
-        };
-        let fallback = BiasPrior {
-            mean: 0.0,
-            sd: o.offset_sd,
         };
         let setup = station_setup(std::iter::empty(), None, fallback, false);
         Ok(Self {
@@ -376,9 +372,9 @@ impl<'a> Timed<'a> {
         let mut ready = Vec::new();
         for (t, m) in all {
             match m {
-                Ok(b) => ready.extend(push_bearings(
+                Ok(b) => ready.extend(push_bearing(
                     &mut self.live,
-                    vec![b],
+                    b,
                     self.o.sigma,
                     &setup,
                     &mut self.dropped,
@@ -408,8 +404,7 @@ impl<'a> Timed<'a> {
     }
 }
 
-/// Push `new` bearings (time order) to `live`, each with its station's noise (`sigma`, else
-/// the stations file's, else the record's own), saying once of each kind what was left out.
+/// Push `new` bearings (time order) to `live` ([`push_bearing`]): the updates they closed.
 fn push_bearings(
     live: &mut LiveChannels,
     new: Vec<Observation>,
@@ -417,39 +412,50 @@ fn push_bearings(
     setup: &StationSetup,
     dropped: &mut [bool; 2],
 ) -> Vec<Ready> {
-    let mut ready = Vec::new();
-    for mut b in new {
-        let station = usize::from(b.station);
-        if let Some(s) = sigma.or(setup.noise.get(station).copied().flatten()) {
-            b.bearing.sigma = s;
-        }
-        match live.push(b) {
-            Ok(r) => ready.extend(r),
-            Err(why) => {
-                let k = why as usize;
-                if !dropped[k] {
-                    dropped[k] = true;
-                    note(&match why {
-                        Dropped::Channels if live.rssi() => "foxhunt: a live line with an anchors \
+    new.into_iter()
+        .filter_map(|b| push_bearing(live, b, sigma, setup, dropped))
+        .collect()
+}
+
+/// Push bearing `b` to `live` with its station's noise (`sigma`, else the stations file's,
+/// else the record's own), saying once of each kind what was left out: the update it closed.
+fn push_bearing(
+    live: &mut LiveChannels,
+    mut b: Observation,
+    sigma: Option<f32>,
+    setup: &StationSetup,
+    dropped: &mut [bool; 2],
+) -> Option<Ready> {
+    let station = usize::from(b.station);
+    if let Some(s) = sigma.or(setup.noise.get(station).copied().flatten()) {
+        b.bearing.sigma = s;
+    }
+    match live.push(b) {
+        Ok(r) => r,
+        Err(why) => {
+            let k = why as usize;
+            if !dropped[k] {
+                dropped[k] = true;
+                note(&match why {
+                    Dropped::Channels if live.rssi() => "foxhunt: a live line with an anchors \
                              file tracks one emitter, its RSSI and the bearings of the first \
                              channel heard: the bearings of other channels are left out"
-                            .to_string(),
-                        Dropped::Channels => format!(
-                            "foxhunt: more than {LIVE_CHANNELS} channels on the line: the \
+                        .to_string(),
+                    Dropped::Channels => format!(
+                        "foxhunt: more than {LIVE_CHANNELS} channels on the line: the \
                              bearings of later ones are left out"
-                        ),
-                        Dropped::Stations => format!(
-                            "foxhunt: more than {} stations on a channel: a live track \
+                    ),
+                    Dropped::Stations => format!(
+                        "foxhunt: more than {} stations on a channel: a live track \
                              follows the first {} heard, the others' bearings are left out",
-                            live.max_stations(),
-                            live.max_stations()
-                        ),
-                    });
-                }
+                        live.max_stations(),
+                        live.max_stations()
+                    ),
+                });
             }
+            None
         }
     }
-    ready
 }
 
 /// Step each of `ready` with its channel's tracker and print its point; a channel heard by
