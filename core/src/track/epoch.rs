@@ -115,6 +115,11 @@ impl<const K: usize> Epoch<K> {
         &self.bearings[..self.bearing_count as usize]
     }
 
+    /// The bearings, to change in place (a source's noise scaled when it is estimated).
+    pub fn bearings_mut(&mut self) -> &mut [Observation] {
+        &mut self.bearings[..self.bearing_count as usize]
+    }
+
     /// The RSSI readings.
     pub fn levels(&self) -> &[Level] {
         &self.levels[..self.level_count as usize]

@@ -39,6 +39,11 @@ pub struct Args {
     /// outdoors), each update's bearings as noisy as at any rate.
     #[arg(long, value_name = "HZ", value_parser = super::values::f32_where(|hz| hz > 0.0 && hz <= 100.0, "a rate in Hz above 0 and at most 100"))]
     pub rate_hz: Option<f32>,
+    /// Moving scenarios: the trackers are told every bearing's noise is this many degrees (a
+    /// PFOXB's or KrakenSDR record's default is 1) and estimate each unit's own from its
+    /// bearings, as `track` does (the indoor arrays' scenario keeps its own).
+    #[arg(long, value_name = "DEG", value_parser = super::values::f32_where(|d| d > 0.0 && d <= 90.0, "degrees above 0 and at most 90"))]
+    pub told_sigma: Option<f32>,
     /// Print JSON (an array of rows with stable field names).
     #[arg(long, conflicts_with = "markdown")]
     pub json: bool,
@@ -204,6 +209,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
             a.runs,
             a.particles,
             a.rate_hz,
+            a.told_sigma.map(f32::to_radians),
             &only,
             !a.quiet,
         )?;

@@ -6,7 +6,7 @@ use crate::locate::report::EllipseReport;
 use crate::outputs::json::Short;
 use crate::outputs::maps::{ellipse_ring, polygon_geometry, split_antimeridian};
 use crate::track::moving::TrackPoint;
-use crate::track::tracks::Tracks;
+use crate::track::tracks::{StationNoise, Tracks};
 use foxhunt_bridge::nmea::LatLon;
 use serde_json::{Map, Value, json};
 use std::fmt::Write;
@@ -73,13 +73,32 @@ pub fn json(t: &Tracks) -> Value {
                 "freq_mhz": c.freq_mhz.short(),
                 "points": c.points.iter().map(|p| point(t, p)).collect::<Vec<_>>(),
             });
-            if let (Some(why), Some(m)) = (&c.untracked, v.as_object_mut()) {
-                m.insert("untracked".into(), why.as_str().into());
+            if let Some(m) = v.as_object_mut() {
+                if let Some(why) = &c.untracked {
+                    m.insert("untracked".into(), why.as_str().into());
+                }
+                if !c.noise.is_empty() {
+                    m.insert("stations".into(), c.noise.iter().map(station).collect());
+                }
             }
             v
         })
         .collect();
     json!({ "tracks": tracks })
+}
+
+/// A DF station's noise on a track: its id, the noise its bearings were given and the one
+/// tracked (degrees), their scatter about the track in given sds, and whether the noise was
+/// estimated.
+fn station(s: &StationNoise) -> Value {
+    let n = &s.noise;
+    json!({
+        "id": s.id,
+        "given_deg": n.given.to_degrees().short(),
+        "noise_deg": n.tracked().to_degrees().short(),
+        "scatter": n.scatter.short(),
+        "estimated": !s.stated,
+    })
 }
 
 /// The CSV header.

@@ -17,6 +17,7 @@
 //! recorded capture's do, its state sized for the stations a state with RSSI terms holds.
 
 use crate::track::moving::{Settings, TrackPoint, Update, max_sources, track_each};
+use crate::track::noise::LiveScatter;
 use crate::track::tracks::observable;
 use crate::track::updates::Window;
 use foxhunt_core::fix::bias::BiasPrior;
@@ -95,6 +96,10 @@ struct LiveChannel {
     freq_mhz: Option<f32>,
     /// The line's station index of each source, by source number.
     sources: Vec<u16>,
+    /// Whether each source's noise is estimated (no one stated it), by source number.
+    free: Vec<bool>,
+    /// Its sources' bearings about the track, and their noise where estimated.
+    scatter: LiveScatter,
     /// Whether a bearing set its band (an RSSI channel opened by a reading has none yet).
     banded: bool,
     /// Whether an RSSI reading has reached it (its range is then observable from one station).
@@ -193,6 +198,8 @@ impl LiveChannels {
             lowest: freq_mhz.map(|f| f - self.width_mhz / 2.0),
             freq_mhz,
             sources: Vec::new(),
+            free: Vec::new(),
+            scatter: LiveScatter::default(),
             banded,
             levels: false,
             window: Window::default(),
@@ -201,9 +208,10 @@ impl LiveChannels {
         self.channels.len() - 1
     }
 
-    /// Take bearing `o` (the line's station index in `o.station`): the update it closed, if
-    /// any, or why it was left out.
-    pub fn push(&mut self, mut o: Observation) -> Result<Option<Ready>, Dropped> {
+    /// Take bearing `o` (the line's station index in `o.station`; `stated`: whether its noise
+    /// is the user's, else it is estimated as it comes, [`LiveScatter`]): the update it closed,
+    /// if any, or why it was left out.
+    pub fn push(&mut self, mut o: Observation, stated: bool) -> Result<Option<Ready>, Dropped> {
         // The RSSI channel a reading opened takes the first bearing's band.
         if let Some(ch) = self.channels.first_mut().filter(|c| !c.banded) {
             ch.banded = true;
@@ -227,6 +235,7 @@ impl LiveChannels {
             Some(s) => s,
             None if ch.sources.len() < max => {
                 ch.sources.push(o.station);
+                ch.free.push(!stated);
                 ch.sources.len() - 1
             }
             None => return Err(Dropped::Stations),
@@ -296,12 +305,31 @@ impl LiveChannels {
                 ch.tracker.insert(LiveTracker::start(settings)?)
             }
         };
-        let point = tracker.step(r.update);
-        if point.is_err() {
+        let mut u = r.update;
+        ch.scatter.widen(&mut u);
+        let point = tracker.step(u);
+        match &point {
+            Ok(p) => {
+                let free = |k: u16| ch.free.get(usize::from(k)).copied().unwrap_or(false);
+                ch.scatter.learn(&r.update, p, &free);
+            }
             // The next update starts a new tracker from its bearings.
-            ch.tracker = None;
+            Err(_) => ch.tracker = None,
         }
         point.map(Some)
+    }
+
+    /// The stations of channel `c` whose noise is estimated and widened, by their index on
+    /// the line: how many times their records' noise their bearings now take.
+    pub fn widened(&self, c: usize) -> Vec<(u16, f32)> {
+        self.channels.get(c).map_or_else(Vec::new, |ch| {
+            ch.sources
+                .iter()
+                .enumerate()
+                .map(|(k, s)| (*s, ch.scatter.widened(k as u16)))
+                .filter(|(_, w)| *w > 1.0)
+                .collect()
+        })
     }
 
     /// The line's station index of the one station heard on channel `c` so far, if one alone is.
@@ -359,7 +387,7 @@ mod tests {
         let mut live = LiveChannels::new(0.025, settings.clone(), prior);
         let mut points = Vec::new();
         for o in &obs {
-            if let Some(r) = live.push(*o).unwrap() {
+            if let Some(r) = live.push(*o, true).unwrap() {
                 points.push(live.step(r, &|_| prior).unwrap().expect("a point"));
             }
         }
@@ -397,7 +425,7 @@ mod tests {
         let (mut none, mut points) = (0, 0);
         // Ten seconds of station 7 alone, then every station.
         for o in obs.iter().filter(|o| o.time_s >= 10.0 || o.station == 7) {
-            if let Some(r) = live.push(*o).unwrap() {
+            if let Some(r) = live.push(*o, true).unwrap() {
                 match live.step(r, &|_| prior).unwrap() {
                     None => {
                         assert_eq!(live.lone_station(r.channel), Some(7));
@@ -428,7 +456,7 @@ mod tests {
             .collect();
         let mut steps = Vec::new();
         for o in &obs[..5] {
-            if let Some(r) = live.push(*o).unwrap() {
+            if let Some(r) = live.push(*o, true).unwrap() {
                 steps.push(live.step(r, &|_| prior).unwrap().is_some());
             }
         }
@@ -447,7 +475,7 @@ mod tests {
             "a reading measures range"
         );
         let r = live
-            .push(obs[5])
+            .push(obs[5], true)
             .unwrap()
             .expect("closes the reading's update");
         assert_eq!(r.update.epoch.bearings().len(), 0);
@@ -455,7 +483,7 @@ mod tests {
         // A bearing of another channel is not this line's.
         let mut other = obs[6];
         other.freq_mhz = Some(145.0);
-        assert_eq!(live.push(other), Err(Dropped::Channels));
+        assert_eq!(live.push(other, true), Err(Dropped::Channels));
     }
 
     #[test]
@@ -465,20 +493,20 @@ mod tests {
         let mut o = bearings(1)[0];
         for s in 0..u16::from(LIVE_SOURCES) {
             o.station = s;
-            assert!(live.push(o).is_ok());
+            assert!(live.push(o, true).is_ok());
         }
         assert_eq!(LIVE_SOURCES, 6, "what a recording's state holds");
         o.station = 6;
-        assert_eq!(live.push(o), Err(Dropped::Stations));
+        assert_eq!(live.push(o, true), Err(Dropped::Stations));
         for c in 1..16 {
             o.station = 0;
             o.freq_mhz = Some(100.0 + c as f32);
-            assert!(live.push(o).is_ok());
+            assert!(live.push(o, true).is_ok());
         }
         o.freq_mhz = Some(300.0);
-        assert_eq!(live.push(o), Err(Dropped::Channels));
+        assert_eq!(live.push(o, true), Err(Dropped::Channels));
         // A bearing within the band of a known channel still lands.
         o.freq_mhz = Some(433.93);
-        assert!(live.push(o).is_ok());
+        assert!(live.push(o, true).is_ok());
     }
 }

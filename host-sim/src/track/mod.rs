@@ -6,5 +6,6 @@ pub mod capture;
 pub mod indoor;
 pub mod live;
 pub mod moving;
+pub mod noise;
 pub mod tracks;
 pub mod updates;

@@ -6,13 +6,13 @@ use crate::estimate::stations::{StationSetup, station_setup};
 use crate::inputs::stations::Network;
 use crate::track::capture::Measured;
 use crate::track::indoor::AnchorsFile;
-use crate::track::moving::{Settings, TrackPoint, Update, track};
+use crate::track::moving::{Settings, TrackPoint};
+use crate::track::noise::{SourceNoise, track_estimating};
 use crate::track::updates::{Channel, channels};
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;
 use foxhunt_core::Method;
 use foxhunt_core::fix::bias::BiasPrior;
-use foxhunt_core::model::bearing::wrap;
 use foxhunt_core::track::{Layout, Motion};
 
 /// What the user chose of the tracker.
@@ -57,48 +57,19 @@ pub struct ChannelTrack {
     pub left_out: (usize, usize),
     /// Why the channel has no track (its points are then empty): [`one_station`].
     pub untracked: Option<String>,
-    /// Stations whose bearings scatter about the track by more than their stated noise
-    /// allows ([`scatter`]): the capture's station index, the scatter in stated sds and that
-    /// noise, degrees.
-    pub too_noisy: Vec<(u16, f32, f32)>,
+    /// Each DF station's noise, for the stations with enough bearings.
+    pub noise: Vec<StationNoise>,
 }
 
-/// Bearings fewer than this from a station say nothing of its scatter.
-const SCATTER_MIN_BEARINGS: usize = 30;
-/// A station's bearings scatter about the track by more than this many of their stated sds:
-/// the noise it states is too small. The filtered track has seen each bearing, so its
-/// residuals are smaller than the noise (a stated noise that is right scatters at most 1);
-/// 1.5 leaves room for heavy tails and an error that changes with direction.
-const SCATTER_LIMIT: f32 = 1.5;
-
-/// Each DF source's bearings in `updates` about the track `points` (one point an update):
-/// the residuals over their stated sigma, centred on their median (the source's offset), and
-/// their robust scale (1.4826 x the median absolute deviation): by source number, the scale
-/// and the median stated noise (radians), for the sources with enough bearings.
-pub fn scatter(updates: &[Update], points: &[TrackPoint]) -> Vec<(u16, f32, f32)> {
-    let mut by: std::collections::BTreeMap<u16, (Vec<f32>, Vec<f32>)> = Default::default();
-    for (u, p) in updates.iter().zip(points).filter(|(u, p)| u.t_s == p.t_s) {
-        for o in u.epoch.bearings() {
-            let b = &o.bearing;
-            let seen = (p.position[1] - b.vehicle[1]).atan2(p.position[0] - b.vehicle[0]);
-            let r = wrap(b.theta - seen);
-            let e = by.entry(o.station).or_default();
-            e.0.push(r / b.sigma);
-            e.1.push(b.sigma);
-        }
-    }
-    let median = |v: &mut Vec<f32>| {
-        v.sort_by(f32::total_cmp);
-        v[v.len() / 2]
-    };
-    by.into_iter()
-        .filter(|(_, (z, _))| z.len() >= SCATTER_MIN_BEARINGS)
-        .map(|(s, (mut z, mut sigma))| {
-            let centre = median(&mut z);
-            let mut dev: Vec<f32> = z.iter().map(|x| (x - centre).abs()).collect();
-            (s, 1.4826 * median(&mut dev), median(&mut sigma))
-        })
-        .collect()
+/// A DF station's bearing noise on a track ([`crate::track::noise`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct StationNoise {
+    /// The station's id.
+    pub id: String,
+    /// Its bearings about the track (its source number the capture's station index).
+    pub noise: SourceNoise,
+    /// Whether the user stated its noise (else its records' was estimated).
+    pub stated: bool,
 }
 
 /// Why a channel heard by one DF station alone (bearings, no RSSI) is not tracked: from one
@@ -228,11 +199,11 @@ pub fn tracks(m: &Measured, anchors: Option<&AnchorsFile>, o: &Options) -> Resul
     let ids = m.decoded.stations.iter().map(|s| s.id.as_str());
     let setup = station_setup(ids, o.network.as_ref(), fallback, false);
     // `--sigma` over the stations file's noise over each record's own.
-    let noise: Vec<Option<f32>> = match o.sigma {
+    let given: Vec<Option<f32>> = match o.sigma {
         Some(s) => vec![Some(s); m.decoded.stations.len()],
         None => setup.noise.clone(),
     };
-    let found = channels(m, anchors, o.width_mhz, &noise)?;
+    let found = channels(m, anchors, o.width_mhz, &given)?;
     if found.is_empty() {
         return Err(if anchors.is_some() {
             "no bearing and no RSSI reading of a listed anchor in the capture: nothing to track"
@@ -254,22 +225,33 @@ pub fn tracks(m: &Measured, anchors: Option<&AnchorsFile>, o: &Options) -> Resul
                 points: Vec::new(),
                 left_out: c.left_out,
                 untracked: Some(one_station(station)),
-                too_noisy: Vec::new(),
+                noise: Vec::new(),
             });
             continue;
         }
-        let run = track(&c.updates, &settings(c, anchors, o, &setup)).map_err(|e| {
-            let what = c
-                .freq_mhz
-                .map_or(String::new(), |f| format!(" on {f:.3} MHz"));
-            format!("cannot track{what}: {e}")
-        })?;
-        let too_noisy = scatter(&c.updates, &run.points)
+        let stated: Vec<bool> = c
+            .sources
+            .iter()
+            .map(|k| given.get(usize::from(*k)).is_some_and(Option::is_some))
+            .collect();
+        let free: Vec<bool> = stated.iter().map(|s| !s).collect();
+        let (run, found) = track_estimating(&c.updates, &settings(c, anchors, o, &setup), &free)
+            .map_err(|e| {
+                let what = c
+                    .freq_mhz
+                    .map_or(String::new(), |f| format!(" on {f:.3} MHz"));
+                format!("cannot track{what}: {e}")
+            })?;
+        let noise = found
             .into_iter()
-            .filter(|(_, z, _)| *z > SCATTER_LIMIT)
-            .filter_map(|(k, z, sigma)| {
-                let station = *c.sources.get(usize::from(k))?;
-                Some((station, z, sigma.to_degrees()))
+            .filter_map(|mut n| {
+                let k = usize::from(n.source);
+                n.source = *c.sources.get(k)?;
+                Some(StationNoise {
+                    id: m.decoded.stations.get(usize::from(n.source))?.id.clone(),
+                    noise: n,
+                    stated: stated[k],
+                })
             })
             .collect();
         out.push(ChannelTrack {
@@ -277,7 +259,7 @@ pub fn tracks(m: &Measured, anchors: Option<&AnchorsFile>, o: &Options) -> Resul
             points: if o.smooth { run.smoothed } else { run.points },
             left_out: c.left_out,
             untracked: None,
-            too_noisy,
+            noise,
         });
     }
     let frame = m.decoded.frame.or(anchors.and_then(AnchorsFile::frame));

@@ -730,7 +730,7 @@ fn write_track_maps(
     };
     let t = crate::track::tracks::tracks(&measured, None, &o)?;
     crate::commands::track::note_left_out(&t);
-    crate::commands::track::note_too_noisy(&t, &measured);
+    crate::commands::track::note_noise(&t);
     if let Err(why) = crate::commands::track::untracked(&t) {
         note(&format!(
             "the emitter moves, and it has {why}: no map written"

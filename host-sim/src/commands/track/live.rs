@@ -62,8 +62,7 @@ pub fn run(
     let mut heard = 0usize;
     let mut points = Points::new(a);
     let mut dropped = [false; 2];
-    // Channels said to be heard by one station alone (each said once).
-    let mut lone: Vec<usize> = Vec::new();
+    let mut said = Said::default();
     let mut ended = false;
     while !ended {
         ended = line.take(&mut dec, quiet_exit, true)?;
@@ -96,7 +95,7 @@ pub fn run(
             ready,
             &setup,
             stations,
-            &mut lone,
+            &mut said,
             &mut points,
             &shell,
             out,
@@ -285,7 +284,7 @@ struct Timed<'a> {
     /// measurements hold one (as a recorded capture's), else the first reading's fix.
     base_ms: Option<i64>,
     dropped: [bool; 2],
-    lone: Vec<usize>,
+    said: Said,
     /// Whether readings before the first fix were said to be left out.
     untimed: bool,
     fallback: BiasPrior,
@@ -311,7 +310,7 @@ impl<'a> Timed<'a> {
             at: None,
             base_ms: None,
             dropped: [false; 2],
-            lone: Vec::new(),
+            said: Said::default(),
             untimed: false,
             fallback,
         }
@@ -396,7 +395,7 @@ impl<'a> Timed<'a> {
             ready,
             &setup,
             stations,
-            &mut self.lone,
+            &mut self.said,
             points,
             &shell,
             out,
@@ -418,7 +417,8 @@ fn push_bearings(
 }
 
 /// Push bearing `b` to `live` with its station's noise (`sigma`, else the stations file's,
-/// else the record's own), saying once of each kind what was left out: the update it closed.
+/// else the record's own, then estimated), saying once of each kind what was left out: the
+/// update it closed.
 fn push_bearing(
     live: &mut LiveChannels,
     mut b: Observation,
@@ -427,10 +427,11 @@ fn push_bearing(
     dropped: &mut [bool; 2],
 ) -> Option<Ready> {
     let station = usize::from(b.station);
-    if let Some(s) = sigma.or(setup.noise.get(station).copied().flatten()) {
+    let stated = sigma.or(setup.noise.get(station).copied().flatten());
+    if let Some(s) = stated {
         b.bearing.sigma = s;
     }
-    match live.push(b) {
+    match live.push(b, stated.is_some()) {
         Ok(r) => r,
         Err(why) => {
             let k = why as usize;
@@ -458,15 +459,25 @@ fn push_bearing(
     }
 }
 
+/// What a live line says once.
+#[derive(Debug, Default)]
+struct Said {
+    /// Channels heard by one station alone.
+    lone: Vec<usize>,
+    /// Stations (channel, line index) whose noise was estimated wider than their records'.
+    widened: Vec<(usize, u16)>,
+}
+
 /// Step each of `ready` with its channel's tracker and print its point; a channel heard by
-/// one station alone is said once (`lone`) and has no point.
+/// one station alone is said once and has no point, a station whose noise is estimated wider
+/// than its records' is said once.
 #[allow(clippy::too_many_arguments)]
 fn step_all(
     live: &mut LiveChannels,
     ready: Vec<Ready>,
     setup: &StationSetup,
     stations: &[StationInfo],
-    lone: &mut Vec<usize>,
+    said: &mut Said,
     points: &mut Points,
     shell: &Tracks,
     out: &mut Out,
@@ -476,8 +487,8 @@ fn step_all(
         let point = match live.step(r, &prior_of) {
             Ok(Some(p)) => Ok(p),
             Ok(None) => {
-                if !lone.contains(&r.channel) {
-                    lone.push(r.channel);
+                if !said.lone.contains(&r.channel) {
+                    said.lone.push(r.channel);
                     let station = live
                         .lone_station(r.channel)
                         .and_then(|s| stations.get(usize::from(s)))
@@ -488,6 +499,22 @@ fn step_all(
             }
             Err(e) => Err(e),
         };
+        for (station, w) in live.widened(r.channel) {
+            if !said.widened.contains(&(r.channel, station)) {
+                said.widened.push((r.channel, station));
+                let id = stations
+                    .get(usize::from(station))
+                    .map_or("a station", |s| s.id.as_str());
+                let on = r
+                    .freq_mhz
+                    .map_or(String::new(), |f| format!(" on {f:.3} MHz"));
+                note(&format!(
+                    "foxhunt: {id}'s bearings scatter {w:.1} times their records' noise about \
+                     the track{on}: from here they take the noise they show, estimated \
+                     (--sigma or the stations file's noise_deg states it)"
+                ));
+            }
+        }
         points.print(shell, r.freq_mhz, point, out)?;
     }
     Ok(())

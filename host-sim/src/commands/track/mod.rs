@@ -18,6 +18,7 @@ use crate::track::indoor::AnchorsFile;
 use crate::track::moving::{
     DEFAULT_METHOD, PARTICLES, TRACK_METHODS, TRACK_PARTICLES, max_sources,
 };
+use crate::track::noise::STATED_TOO_SMALL;
 use crate::track::tracks::{Options, Tracks};
 use foxhunt_core::Method;
 use foxhunt_core::track::Motion;
@@ -108,8 +109,9 @@ pub struct Args {
     /// fixed-lag smoother), so closer to the truth where the emitter turned or stopped.
     #[arg(long)]
     pub smooth: bool,
-    /// Every bearing's noise, degrees (default: the stations file's, else each record's own, a
-    /// PFOXB's 1; not estimated from the bearings: state a noisier unit's).
+    /// Every bearing's noise, degrees, stated (default: the stations file's, else each
+    /// record's own, a PFOXB's 1, widened to what a unit's bearings show where they scatter
+    /// more).
     #[arg(long)]
     pub sigma: Option<f32>,
     /// A stations file (TOML, as `locate --stations`): each station's noise and offset prior
@@ -276,7 +278,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
     }
     let t = crate::track::tracks::tracks(&m, file.as_ref(), &options)?;
     note_left_out(&t);
-    note_too_noisy(&t, &m);
+    note_noise(&t);
     untracked(&t)?;
     write_files(a, &t, file.as_ref(), &outputs)?;
     if let Some(url) = &a.cot {
@@ -320,24 +322,33 @@ pub(crate) fn note_left_out(t: &Tracks) {
     }
 }
 
-/// Say which stations' bearings scatter about their track by more than their stated noise
-/// allows: the track's ellipses are then too small.
-pub(crate) fn note_too_noisy(t: &Tracks, m: &Measured) {
+/// Say, per station, the noise its track estimated (its records' widened to its bearings'
+/// scatter: [`crate::track::noise`]), or that the noise stated for it is too small (its
+/// ellipses are then too small).
+pub(crate) fn note_noise(t: &Tracks) {
     for c in &t.tracks {
         let what = c
             .freq_mhz
             .map_or(String::new(), |f| format!(" on {f:.3} MHz"));
-        for (station, z, sigma) in &c.too_noisy {
-            let id = m
-                .decoded
-                .stations
-                .get(usize::from(*station))
-                .map_or("a station", |s| s.id.as_str());
-            note(&format!(
-                "foxhunt: {id}'s bearings scatter {z:.1} times their stated noise \
-                 ({sigma:.1} deg) about the track{what}: its ellipses are too small; state \
-                 the unit's noise (--sigma, or the stations file's noise_deg)"
-            ));
+        for s in &c.noise {
+            let (id, n) = (&s.id, &s.noise);
+            let given = n.given.to_degrees();
+            if s.stated && n.scatter > STATED_TOO_SMALL {
+                note(&format!(
+                    "foxhunt: {id}'s bearings scatter {:.1} times the noise stated for them \
+                     ({given:.1} deg) about the track{what}: its ellipses are too small; state \
+                     the unit's noise (--sigma, or the stations file's noise_deg)",
+                    n.scatter
+                ));
+            } else if !s.stated && n.widened > 1.0 {
+                note(&format!(
+                    "foxhunt: {id}'s bearings scatter {:.1} times their records' noise \
+                     ({given:.1} deg) about the track{what}: tracked with {:.1} deg, \
+                     estimated (--sigma or the stations file's noise_deg states it)",
+                    n.widened,
+                    n.tracked().to_degrees()
+                ));
+            }
         }
     }
 }

@@ -110,10 +110,10 @@ impl MapTracker {
         self.taken = d.observations.len();
         new.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
         // A channel or station beyond the live tracker's is left off the map's tracks (the
-        // field pipeline still has its bearings).
+        // field pipeline still has its bearings); each station's noise is estimated.
         let mut ready: Vec<Ready> = new
             .into_iter()
-            .filter_map(|o| self.live.push(o).ok().flatten())
+            .filter_map(|o| self.live.push(o, false).ok().flatten())
             .collect();
         if end {
             ready.extend(self.live.close());

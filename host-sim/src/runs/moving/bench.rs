@@ -18,6 +18,7 @@ use crate::track::moving::{
     DEFAULT_METHOD, K, PARTICLES, STATE_SIZES, Settings, TRACK_METHODS, TRACK_PARTICLES,
     TrackPoint, TrackRun, track,
 };
+use crate::track::noise::track_estimating;
 use foxhunt_core::track::MODE;
 use foxhunt_core::track::bound::{estimated, information, position_rmse, prior, step, transition};
 use foxhunt_core::{Error, Method};
@@ -86,7 +87,11 @@ pub fn one(
     settings.smooth = smooth;
     settings.seed = run as u64 + 1;
     let t0 = std::time::Instant::now();
-    let tracked = track(&sim.updates, &settings)?;
+    // Told a noise of the records', the tracker estimates each unit's, as `track` does.
+    let tracked = match s.told_sigma {
+        Some(_) => track_estimating(&sim.updates, &settings, &vec![true; s.stations.len()])?.0,
+        None => track(&sim.updates, &settings)?,
+    };
     let seconds = t0.elapsed().as_secs_f64();
     let mut f = judge(&sim, &tracked, s.warmup_s);
     f.seconds = seconds;
@@ -111,6 +116,12 @@ pub struct Bound {
 
 /// [`pcrb`] with the parameters' bounds.
 pub fn bound(s: &MovingScenario) -> Option<Bound> {
+    // The bound of the noise the bearings have, whatever the trackers are told.
+    let truth = MovingScenario {
+        told_sigma: None,
+        ..s.clone()
+    };
+    let s = &truth;
     let settings = s.settings();
     let used = settings.layout.dims();
     let size = *STATE_SIZES.iter().find(|d| **d >= used)?;
@@ -364,6 +375,7 @@ pub fn bench_named(
     runs: Option<usize>,
     particles: Option<usize>,
     rate_hz: Option<f32>,
+    told_sigma: Option<f32>,
     only: &[Method],
     show: bool,
 ) -> Result<Vec<Row>, String> {
@@ -391,6 +403,9 @@ pub fn bench_named(
         }
         if let Some(hz) = rate_hz {
             s.rate_hz = hz;
+        }
+        if told_sigma.is_some() && s.aoa.is_none() {
+            s.told_sigma = told_sigma;
         }
     }
     let progress = Progress::new(list.iter().map(|s| total_runs(s, only)).sum(), show);

@@ -271,6 +271,10 @@ pub struct MovingScenario {
     pub motion: Motion,
     /// Seconds at the start left out of every figure (the tracker finding the emitter).
     pub warmup_s: f32,
+    /// The noise the trackers are told every bearing has, radians (none: each station's
+    /// own); told one, they estimate each station's from its bearings
+    /// ([`crate::track::noise`]), as `track` does where the records' noise is a default.
+    pub told_sigma: Option<f32>,
     /// Monte Carlo runs.
     pub runs: usize,
     /// Base seed.
@@ -331,6 +335,7 @@ impl MovingScenario {
             rate_hz: 1.0,
             motion: Motion::OUTDOOR,
             warmup_s: 30.0,
+            told_sigma: None,
             runs: 100,
             seed: 1,
         };
@@ -474,7 +479,7 @@ impl MovingScenario {
                         Bearing {
                             vehicle: at,
                             theta,
-                            sigma: station.sigma,
+                            sigma: self.told_sigma.unwrap_or(station.sigma),
                         },
                         t,
                     );
