@@ -3,7 +3,7 @@
 
 use foxhunt_bridge::nmea::write_sentence;
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::Duration;
 
@@ -733,22 +733,8 @@ fn bearings_noisier_than_their_records_say_are_tracked_with_the_noise_they_show(
             extra,
         ]
         .concat();
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_foxhunt"))
-            .args(&args)
-            .stdin(std::fs::File::open(capture).expect("capture"))
-            .output()
-            .expect("run foxhunt");
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        let (lines, err) = common::json_lines_from(&args, Some(Path::new(capture)));
         println!("{args:?}: {err}");
-        let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
-            .lines()
-            .map(|l| serde_json::from_str(l).expect("JSON"))
-            .collect();
         (lines, err)
     };
     // Recorded, nothing stated: estimated, said once, and in the JSON.

@@ -95,19 +95,31 @@ pub fn lines(r: impl std::io::Read + Send + 'static) -> Receiver<String> {
 /// `foxhunt ARGS` run to its end, which must succeed: each line of its standard output as JSON
 /// (a live `locate --json` prints one object per update).
 pub fn json_lines(args: &[String]) -> Vec<serde_json::Value> {
+    json_lines_from(args, None).0
+}
+
+/// [`json_lines`] with standard input read from `stdin` (none: nothing), and what the run
+/// said on standard error.
+pub fn json_lines_from<S: AsRef<std::ffi::OsStr>>(
+    args: &[S],
+    stdin: Option<&Path>,
+) -> (Vec<serde_json::Value>, String) {
+    let input = match stdin {
+        Some(p) => std::process::Stdio::from(std::fs::File::open(p).expect("standard input")),
+        None => std::process::Stdio::null(),
+    };
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_foxhunt"))
         .args(args)
+        .stdin(input)
         .output()
         .expect("run foxhunt");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    BufReader::new(&out.stdout[..])
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "{err}");
+    let lines = BufReader::new(&out.stdout[..])
         .lines()
         .map(|l| serde_json::from_str(&l.expect("line")).expect("JSON"))
-        .collect()
+        .collect();
+    (lines, err)
 }
 
 /// `foxhunt simulate --condition CONDITION [--run RUN] --force --out OUT`, which must
