@@ -309,10 +309,7 @@ impl LiveChannels {
         ch.scatter.widen(&mut u);
         let point = tracker.step(u);
         match &point {
-            Ok(p) => {
-                let free = |k: u16| ch.free.get(usize::from(k)).copied().unwrap_or(false);
-                ch.scatter.learn(&r.update, p, &free);
-            }
+            Ok(p) => ch.scatter.learn(&r.update, p, &ch.free),
             // The next update starts a new tracker from its bearings.
             Err(_) => ch.tracker = None,
         }

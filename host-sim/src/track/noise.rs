@@ -186,9 +186,10 @@ impl LiveScatter {
     }
 
     /// Learn from update `u` (as given, before [`widen`](Self::widen)) and its point `p`:
-    /// each free source's (`free(source)`) scale, widened once it passes [`WIDEN_ABOVE`].
-    pub fn learn(&mut self, u: &Update, p: &TrackPoint, free: &dyn Fn(u16) -> bool) {
-        for o in u.epoch.bearings().iter().filter(|o| free(o.station)) {
+    /// each free source's (`free[source]`) scale, widened once it passes [`WIDEN_ABOVE`].
+    pub fn learn(&mut self, u: &Update, p: &TrackPoint, free: &[bool]) {
+        let is_free = |k: u16| free.get(usize::from(k)).copied().unwrap_or(false);
+        for o in u.epoch.bearings().iter().filter(|o| is_free(o.station)) {
             let k = usize::from(o.station);
             if self.residuals.len() <= k {
                 self.residuals.resize_with(k + 1, VecDeque::new);
@@ -289,7 +290,7 @@ mod tests {
         let updates = masts([3.0, 3.0, 3.0, 1.0]);
         let run = track(&updates, &settings()).unwrap();
         let mut live = LiveScatter::default();
-        let free = |k: u16| k != 3;
+        let free = [true, true, true, false];
         for (u, p) in updates.iter().zip(&run.points).take(MIN_BEARINGS - 1) {
             live.learn(u, p, &free);
         }
