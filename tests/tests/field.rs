@@ -196,6 +196,54 @@ fn a_direction_dependent_error_is_integrated_out_where_it_is_stated() {
 }
 
 #[test]
+fn a_direction_dependent_error_no_one_stated_is_found_and_nothing_else_is() {
+    // direction-dependent-unstated: the stated condition's drives with nothing stated. The
+    // pipeline tests each moving station's residuals for harmonics of the bearing relative
+    // to its course and, beyond chi-square's 0.01 % point, fixes again with them modelled.
+    // Measured over 100 runs: found in 90 (the rest too weak to tell: their wide fixes hold
+    // the truth), rmse 8.8 m against 8.5 m for the bound with the stated prior (18.2 m
+    // before: the estimated noise took the harmonics up), coverage 96 %; no call in any other
+    // condition. Bars over 400 runs: found in at least 80 % of the runs (100 runs know a share
+    // of 90 % to +-3 %), the rmse within the offset drives' 1.3x of the bound (coverage is held
+    // to 90-98 % with every condition's), and at most 1 % of any other condition's runs (4 of
+    // 400; the 0.01 % point expects none, and the 0.1 % point gave one in 2 200).
+    let s = summary(Condition::DirectionUnstated);
+    let e = &s.per_emitter[0];
+    println!(
+        "direction-dependent-unstated: found and modelled in {} of {RUNS}, fixes {}, coverage \
+         {:.1} %, rmse {:.1} m, bound {:.1} m",
+        s.direction_found,
+        e.found,
+        100.0 * e.coverage(),
+        e.rmse,
+        e.bound
+    );
+    assert!(
+        s.direction_found * 100 >= RUNS * 80,
+        "found in {} of {RUNS}{}",
+        s.direction_found,
+        shown()
+    );
+    assert!(
+        e.ratio() <= 1.3,
+        "rmse / bound {:.2} (rmse {:.1} m, bound {:.1} m){}",
+        e.ratio(),
+        e.rmse,
+        e.bound,
+        shown()
+    );
+    let elsewhere: Vec<(&str, usize)> = table()
+        .iter()
+        .filter(|s| s.condition != Condition::DirectionUnstated)
+        .map(|s| (s.condition.name(), s.direction_found))
+        .collect();
+    println!("found elsewhere: {elsewhere:?}");
+    for (name, n) in &elsewhere {
+        assert!(n * 100 <= RUNS, "{name}: found in {n} of {RUNS}");
+    }
+}
+
+#[test]
 fn correlated_reports_on_a_curved_track_are_honest() {
     // correlated-5hz-curved: the 5 Hz running-mean unit of `correlated-5hz` on a 258 degree
     // arc. Its answers (fixes and regions) are held to the common 90-98 % bar; here, that the

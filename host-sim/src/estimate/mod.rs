@@ -4,6 +4,7 @@
 //! filter comes from the core's registry ([`foxhunt_core::estimator`]); this module only
 //! drives it.
 
+pub mod direction;
 pub mod noise;
 pub mod options;
 pub mod stations;
@@ -95,6 +96,9 @@ pub struct PipelineRun {
     pub report: Pipeline,
     /// Every emitter's per-station offsets ([`Pipeline::offsets_of`]).
     pub offsets: Vec<StationOffset>,
+    /// The direction-dependent errors no one stated that the first fix's residuals showed:
+    /// the report is the fix done again with them modelled ([`direction`]).
+    pub found: Vec<direction::FoundDirection>,
 }
 
 impl std::ops::Deref for PipelineRun {
@@ -187,7 +191,31 @@ impl Priors {
 /// Run the core's field pipeline on `observations` with working storage from the heap: one
 /// station row per station the observations name, with its prior and unmodelled error from
 /// `priors`, and the stated device classes' noise ceiling ([`Priors::config`]).
+///
+/// Where a station's direction-dependent error is stated nowhere and the fix's residuals show
+/// one ([`direction::unstated`]), the fix is done again with it modelled (the same seed), and
+/// the run says so ([`PipelineRun::found`]).
 pub fn pipeline(
+    observations: &[Observation],
+    config: &LocateConfig,
+    priors: &Priors,
+    seed: u64,
+) -> Result<PipelineRun, Error> {
+    let first = pipeline_once(observations, config, priors, seed)?;
+    let found = direction::unstated(observations, &first, priors, config.channel_width_mhz);
+    if found.is_empty() {
+        return Ok(first);
+    }
+    let modelled = direction::modelled(priors, &found);
+    match pipeline_once(observations, config, &modelled, seed) {
+        Ok(again) => Ok(PipelineRun { found, ..again }),
+        // The first fix stands where the second found nothing to give.
+        Err(_) => Ok(first),
+    }
+}
+
+/// [`pipeline`] with the stations' priors as given.
+fn pipeline_once(
     observations: &[Observation],
     config: &LocateConfig,
     priors: &Priors,
@@ -217,7 +245,11 @@ pub fn pipeline(
     );
     let mut rng = XorShiftRng::seed_from_u64(seed);
     let report = locate::<16, 16, _>(observations, &priors.config(config), work, &mut rng)?;
-    Ok(PipelineRun { report, offsets })
+    Ok(PipelineRun {
+        report,
+        offsets,
+        found: Vec::new(),
+    })
 }
 
 /// The 95 % ellipse scale of a Gaussian fix in two dimensions, chi-square(2).

@@ -30,7 +30,7 @@ use report::{
     AcrossReport, ChannelSummary, Drawn, LatLonReport, LocateReport, Located, NoFix, RegionReport,
     SourceReport, geodetic, rejections,
 };
-use stations::station_reports;
+use stations::{Found, station_reports};
 
 /// Why there is no fix, and, when the field pipeline's channels hold regions (an open range),
 /// the report without a fix that the maps and the live page draw them from.
@@ -80,19 +80,20 @@ pub fn locate_answer(d: &Decoded, o: &LocateOptions) -> Result<Located, Unlocate
         return Err(no_bearing(d).into());
     }
     let mut rejected = rejections(d);
-    let ((emitters, other_sources, channels, drawn, cloud, sources), stations) =
-        if o.method == Method::MlRobust {
-            pipeline::located_by_pipeline(d, o, &frame, &mut rejected)?
-        } else {
-            let setup = station_setup(
-                d.stations.iter().map(|s| s.id.as_str()),
-                o.network.as_deref(),
-                o.offset.unwrap_or_default(),
-                o.offset.is_some(),
-            );
-            let stations = station_reports(d, o.network.as_deref(), &setup, &[], &[], &[]);
-            (method::located_by(d, o, &frame, &mut rejected)?, stations)
-        };
+    let ((emitters, other_sources, channels, drawn, cloud, sources), stations) = if o.method
+        == Method::MlRobust
+    {
+        pipeline::located_by_pipeline(d, o, &frame, &mut rejected)?
+    } else {
+        let setup = station_setup(
+            d.stations.iter().map(|s| s.id.as_str()),
+            o.network.as_deref(),
+            o.offset.unwrap_or_default(),
+            o.offset.is_some(),
+        );
+        let stations = station_reports(d, o.network.as_deref(), &setup, Found::default(), &[], &[]);
+        (method::located_by(d, o, &frame, &mut rejected)?, stations)
+    };
     let located = Located {
         report: LocateReport {
             method: o.method.name(),

@@ -14,7 +14,7 @@ use crate::locate::report::{
     ChannelSummary, Drawn, EllipseReport, MotionReport, OffsetCheckReport, RegionReport,
     SourceReport, geodetic,
 };
-use crate::locate::stations::{StationReport, station_reports};
+use crate::locate::stations::{Found, StationReport, station_reports};
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_core::fix::locate::Observation;
 use foxhunt_core::fix::locate::{ChannelOutcome, NoEmitter, Source};
@@ -124,7 +124,11 @@ pub(crate) fn located_by_pipeline(
     let r: PipelineRun = pool()
         .install(|| pipeline(&obs, &o.config(), &setup.priors, o.seed))
         .map_err(|e| explain(e, &bearings()))?;
-    let stations = station_reports(d, network, &setup, &r.offsets, &fixes, &references);
+    let found = Found {
+        offsets: &r.offsets,
+        directions: &r.found,
+    };
+    let stations = station_reports(d, network, &setup, found, &fixes, &references);
     let rj = &r.rejected;
     for (k, v) in [
         ("outlier", rj.outliers),

@@ -1,6 +1,7 @@
 //! The stations of a drive as `locate` reports them (the `--json` `stations` array; field
 //! names are stable): who each is, where it stood, and its offset with where that came from.
 
+use crate::estimate::direction::FoundDirection;
 use crate::estimate::stations::{PriorOrigin, ReferenceFix, StationSetup};
 use crate::inputs::capture::Decoded;
 use crate::inputs::stations::{Network, Reference};
@@ -29,6 +30,36 @@ pub struct ReferenceReport {
     /// How evenly its bearings spanned the directions (0.5 an even full turn; the harmonics
     /// are measured from 0.1).
     pub direction_span: Option<f32>,
+}
+
+/// A direction-dependent error no one stated, found in the station's residuals about a fix
+/// and modelled in the fix reported (docs/src/field.md, "Direction-dependent error").
+#[derive(Debug, Clone, Serialize)]
+pub struct FoundReport {
+    /// The coefficients a1, b1, a2, b2 the residuals showed, degrees (zero along the
+    /// combinations the drive did not determine).
+    pub direction_deg: [f32; 4],
+    /// The first and second harmonic's amplitudes, degrees.
+    pub amplitudes_deg: [f32; 2],
+    /// The test's statistic: chi-square with `tested` degrees of freedom where there is no
+    /// such error.
+    pub chi2: f32,
+    /// Combinations of the coefficients the drive determined, and so tested.
+    pub tested: usize,
+    /// The prior sd of each coefficient the fix then modelled them with, degrees.
+    pub modelled_sd_deg: f32,
+}
+
+impl From<&FoundDirection> for FoundReport {
+    fn from(f: &FoundDirection) -> Self {
+        Self {
+            direction_deg: f.coefficients.map(f32::to_degrees),
+            amplitudes_deg: f.amplitudes().map(f32::to_degrees),
+            chi2: f.chi2,
+            tested: f.rank,
+            modelled_sd_deg: f.prior_sd.to_degrees(),
+        }
+    }
 }
 
 /// One station (field names are stable).
@@ -72,6 +103,9 @@ pub struct StationReport {
     pub offset_from: &'static str,
     /// Its measurements on reference transmitters' channels.
     pub references: Vec<ReferenceReport>,
+    /// A direction-dependent error no one stated that its residuals showed (null: none
+    /// stated and none found, or one stated).
+    pub direction_found: Option<FoundReport>,
 }
 
 /// The word for where an offset came from.
@@ -85,14 +119,24 @@ fn origin_word(o: PriorOrigin) -> &'static str {
     }
 }
 
+/// What the fixes found of the stations: each one's offset among `offsets` (every
+/// emitter's), and the direction-dependent errors no one stated (`found`).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Found<'a> {
+    /// Every emitter's per-station offsets.
+    pub offsets: &'a [StationOffset],
+    /// The direction-dependent errors found.
+    pub directions: &'a [FoundDirection],
+}
+
 /// Every station of `d` with the priors of `setup`, each station's offset from the fix
-/// holding most of its bearings among `offsets` (every emitter's), and its reference
-/// measurements among `fixes`.
+/// holding most of its bearings among `found`'s offsets, the direction-dependent error found
+/// in its residuals, and its reference measurements among `fixes`.
 pub fn station_reports(
     d: &Decoded,
     network: Option<&Network>,
     setup: &StationSetup,
-    offsets: &[StationOffset],
+    found: Found<'_>,
     fixes: &[ReferenceFix],
     references: &[Reference],
 ) -> Vec<StationReport> {
@@ -108,7 +152,8 @@ pub fn station_reports(
                 .get(i)
                 .copied()
                 .unwrap_or(PriorOrigin::Default);
-            let best = offsets
+            let best = found
+                .offsets
                 .iter()
                 .filter(|o| usize::from(o.station) == i)
                 .max_by_key(|o| o.used);
@@ -157,6 +202,11 @@ pub fn station_reports(
                         direction_span: f.span,
                     })
                     .collect(),
+                direction_found: found
+                    .directions
+                    .iter()
+                    .find(|f| usize::from(f.station) == i)
+                    .map(FoundReport::from),
             }
         })
         .collect()
@@ -199,6 +249,15 @@ impl StationReport {
                 }
                 _ => out.push_str(", offset only"),
             }
+        }
+        if let Some(f) = &self.direction_found {
+            let _ = write!(
+                out,
+                "; its bearings follow their direction relative to it (harmonics of {:.1} and \
+                 {:.1} deg, chi-square {:.0} on {}): a direction-dependent error, modelled \
+                 at {:.1} deg a coefficient; calibrate it (`locate --calibrate`)",
+                f.amplitudes_deg[0], f.amplitudes_deg[1], f.chi2, f.tested, f.modelled_sd_deg
+            );
         }
         out.push('\n');
     }

@@ -171,6 +171,7 @@ impl LocateReport {
         let told = self.stations.iter().any(|s| {
             s.prior_from != crate::estimate::stations::PriorOrigin::Default
                 || !s.references.is_empty()
+                || s.direction_found.is_some()
         });
         if self.stations.len() > 1 || told {
             let _ = writeln!(out, "stations:");

@@ -12,7 +12,7 @@ use crate::inputs::capture::Decoded;
 use crate::inputs::unit::UnitReport;
 use crate::locate::explain::open_range;
 use crate::locate::report::{RegionReport, geodetic};
-use crate::locate::stations::station_reports;
+use crate::locate::stations::{Found, station_reports};
 use crate::outputs::maps::{ellipse_ring, wedge_ring};
 use crate::outputs::serve::moving::{MapTrack, MapTracker};
 use foxhunt_bridge::geo::LocalFrame;
@@ -238,8 +238,11 @@ fn map_stations(
         BiasPrior::default(),
         false,
     );
-    let offsets = run.map_or(&[][..], |r| &r.offsets[..]);
-    let reports = station_reports(d, None, &setup, offsets, &[], &[]);
+    let found = run.map_or_else(Found::default, |r| Found {
+        offsets: &r.offsets,
+        directions: &r.found,
+    });
+    let reports = station_reports(d, None, &setup, found, &[], &[]);
     let latest = crate::outputs::maps::latest_bearings(d);
     reports
         .into_iter()

@@ -52,6 +52,12 @@ fn pipeline_rows(c: Condition, runs: usize) -> Vec<Row> {
             s.ghost_reported
         ));
     }
+    if s.direction_found > 0 {
+        note.push(format!(
+            "a direction-dependent error found and modelled in {} of {runs}",
+            s.direction_found
+        ));
+    }
     if s.per_emitter.is_empty() {
         let mut r = row(&label, Method::MlRobust, runs);
         r.found = Some((runs - s.no_emitter) as f64 / runs.max(1) as f64);

@@ -452,6 +452,9 @@ fn correlated_curved(rng: &mut XorShiftRng) -> FieldDrive {
 
 /// The observations of run `run` of `condition`.
 pub fn simulate(condition: Condition, run: usize) -> FieldDrive {
+    if condition == Condition::DirectionUnstated {
+        return simulate(Condition::DirectionDependent, run);
+    }
     let mut rng = rng(condition, run);
     let rng = &mut rng;
     let two = 2.0 * DEG;
@@ -570,7 +573,7 @@ pub fn simulate(condition: Condition, run: usize) -> FieldDrive {
         Condition::OpenCorrelatedCurved => open_correlated_curved(rng),
         Condition::Systematic => systematic(run, rng),
         Condition::AoaArray15 => aoa_array(rng),
-        Condition::DirectionDependent => direction_dependent(rng),
+        Condition::DirectionDependent | Condition::DirectionUnstated => direction_dependent(rng),
         Condition::CorrelatedCurved => correlated_curved(rng),
         Condition::AoaAfsaWild | Condition::AoaAfsa | Condition::AoaDrive => {
             let name = match condition {

@@ -224,6 +224,8 @@ pub struct Summary {
     pub no_emitter: usize,
     /// Runs in which the ghost was reported as another source.
     pub ghost_reported: usize,
+    /// Runs in which a direction-dependent error no one stated was found and modelled.
+    pub direction_found: usize,
 }
 
 /// Figures for one truth emitter over the runs.
@@ -272,14 +274,20 @@ pub fn measure(
     config: &LocateConfig,
     prior: BiasPrior,
 ) -> Summary {
-    let outcomes: Vec<(Vec<RunOutcome>, bool)> = (0..runs)
+    let outcomes: Vec<(Vec<RunOutcome>, bool, bool)> = (0..runs)
         .into_par_iter()
         .map(|run| {
             let d = simulate(condition, run);
             let priors = condition.priors(&d, prior);
             let r = run_with(&d, config, &priors, run as u64).ok();
             let none = r.as_ref().is_none_or(|r| r.emitters().is_empty());
-            (judge_with(&d, r.as_ref().map(|r| &r.report), &priors), none)
+            let found = r.as_ref().is_some_and(|r| !r.found.is_empty());
+            let bound = condition.bound_priors(&d, prior);
+            (
+                judge_with(&d, r.as_ref().map(|r| &r.report), &bound),
+                none,
+                found,
+            )
         })
         .collect();
     let emitters = outcomes.first().map(|o| o.0.len()).unwrap_or(0);
@@ -298,7 +306,7 @@ pub fn measure(
             };
             let mut sq = 0.0f64;
             let mut bound_sq = 0.0f64;
-            for (o, _) in &outcomes {
+            for (o, ..) in &outcomes {
                 let Some(o) = o.get(e) else { continue };
                 bound_sq += (o.bound as f64).powi(2);
                 if o.found {
@@ -325,6 +333,7 @@ pub fn measure(
         runs,
         per_emitter,
         no_emitter: outcomes.iter().filter(|o| o.1).count(),
+        direction_found: outcomes.iter().filter(|o| o.2).count(),
         ghost_reported: outcomes
             .iter()
             .filter(|o| o.0.first().is_some_and(|r| r.ghost_reported))

@@ -114,6 +114,10 @@ pub enum Condition {
     /// degrees), 5 running-mean reports a second (the last 10 raw bearings of 6 degrees; the
     /// unit states 2), the emitter 500 m off the arc's centre.
     CorrelatedCurved,
+    /// `direction-dependent-2-5deg`'s drives (the same runs) with nothing stated of the
+    /// harmonics: the pipeline finds them in its residuals or gives the wider fix that ignores
+    /// them (judged against the bound with the stated prior).
+    DirectionUnstated,
 }
 
 /// The sd of each harmonic coefficient the `direction-dependent-2-5deg` condition's stations
@@ -123,7 +127,7 @@ pub const DIRECTION_ERROR_DEG: f32 = 3.0;
 
 impl Condition {
     /// Every condition, in report order.
-    pub const ALL: [Condition; 22] = [
+    pub const ALL: [Condition; 23] = [
         Condition::Bias2,
         Condition::Bias4,
         Condition::Bias4Short,
@@ -146,6 +150,7 @@ impl Condition {
         Condition::AoaArray15,
         Condition::DirectionDependent,
         Condition::CorrelatedCurved,
+        Condition::DirectionUnstated,
     ];
 
     /// The conditions made to leave the range open: judged by their regions too (a region
@@ -188,6 +193,7 @@ impl Condition {
             Condition::AoaArray15 => "aoa-array-15deg",
             Condition::DirectionDependent => "direction-dependent-2-5deg",
             Condition::CorrelatedCurved => "correlated-5hz-curved",
+            Condition::DirectionUnstated => "direction-dependent-unstated",
         }
     }
 
@@ -204,6 +210,16 @@ impl Condition {
             p.direction = vec![Some((stated, std::f32::consts::FRAC_PI_2))];
         }
         p
+    }
+
+    /// What the bound knows of each station: [`Condition::priors`], and for
+    /// `direction-dependent-unstated` the stated condition's (the error is there, stated or
+    /// not).
+    pub fn bound_priors(&self, d: &FieldDrive, default: BiasPrior) -> Priors {
+        match self {
+            Condition::DirectionUnstated => Condition::DirectionDependent.priors(d, default),
+            c => c.priors(d, default),
+        }
     }
 }
 
