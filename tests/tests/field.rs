@@ -25,7 +25,7 @@ use foxhunt_core::{
     SirConfig, StaticEmitter, random,
 };
 use foxhunt_sim::runs::field::{
-    Condition, FieldDrive, Summary, judge, measure, run_locate, simulate,
+    Condition, EmitterSummary, FieldDrive, Summary, judge, measure, run_locate, simulate,
 };
 use rand_core::SeedableRng;
 use rand_xorshift::XorShiftRng;
@@ -160,6 +160,18 @@ fn a_mounting_offset_is_estimated_to_the_bias_aware_bound() {
     }
 }
 
+/// The offset drives' bar: the rmse within 1.3x the bias-aware bound.
+fn within_the_offset_drives_bar(e: &EmitterSummary) {
+    assert!(
+        e.ratio() <= 1.3,
+        "rmse / bound {:.2} (rmse {:.1} m, bound {:.1} m){}",
+        e.ratio(),
+        e.rmse,
+        e.bound,
+        shown()
+    );
+}
+
 #[test]
 fn a_direction_dependent_error_is_integrated_out_where_it_is_stated() {
     // direction-dependent-2-5deg: first and second harmonics of 2-5 degrees each on the U
@@ -178,14 +190,7 @@ fn a_direction_dependent_error_is_integrated_out_where_it_is_stated() {
         e.found,
         shown()
     );
-    assert!(
-        e.ratio() <= 1.3,
-        "rmse / bound {:.2} (rmse {:.1} m, bound {:.1} m){}",
-        e.ratio(),
-        e.rmse,
-        e.bound,
-        shown()
-    );
+    within_the_offset_drives_bar(e);
     println!(
         "direction-dependent-2-5deg: found {} of {RUNS}, coverage {:.1} %, rmse {:.1} m, bound {:.1} m",
         e.found,
@@ -199,14 +204,17 @@ fn a_direction_dependent_error_is_integrated_out_where_it_is_stated() {
 fn a_direction_dependent_error_no_one_stated_is_found_and_nothing_else_is() {
     // direction-dependent-unstated: the stated condition's drives with nothing stated. The
     // pipeline tests each moving station's residuals for harmonics of the bearing relative
-    // to its course and, beyond chi-square's 0.01 % point, fixes again with them modelled.
-    // Measured over 100 runs: found in 90 (the rest too weak to tell: their wide fixes hold
-    // the truth), rmse 8.8 m against 8.5 m for the bound with the stated prior (18.2 m
-    // before: the estimated noise took the harmonics up), coverage 96 %; no call in any other
-    // condition. Bars over 400 runs: found in at least 80 % of the runs (100 runs know a share
-    // of 90 % to +-3 %), the rmse within the offset drives' 1.3x of the bound (coverage is held
-    // to 90-98 % with every condition's), and at most 1 % of any other condition's runs (4 of
-    // 400; the 0.01 % point expects none, and the 0.1 % point gave one in 2 200).
+    // to its course (about the fix, or where a still emitter would stand when the channel
+    // was called moving) and, beyond chi-square's 0.01 % point, fixes again with them
+    // modelled. Measured over 100 runs: found in 94 (the rest too weak to tell: their wide
+    // fixes hold the truth), a fix in all 100 (96 before: 4 called moving), rmse 9.0 m
+    // against 8.5 m for the bound with the stated prior (18.2 m before: the estimated noise
+    // took the harmonics up), coverage 95 %; no call in any other condition. Bars over 400
+    // runs: a fix in 97 % (the stated condition's bar), found in at least 80 % (100 runs know
+    // a share of 94 % to +-2.4 %), the rmse within the offset drives' 1.3x of the bound
+    // (coverage is held to 90-98 % with every condition's), and at most 1 % of any other
+    // condition's runs (4 of 400; the 0.01 % point expects none, the 0.1 % point gave one in
+    // 2 200).
     let s = summary(Condition::DirectionUnstated);
     let e = &s.per_emitter[0];
     println!(
@@ -219,19 +227,18 @@ fn a_direction_dependent_error_no_one_stated_is_found_and_nothing_else_is() {
         e.bound
     );
     assert!(
+        e.found as f64 >= 0.97 * RUNS as f64,
+        "fixes in {} of {RUNS}{}",
+        e.found,
+        shown()
+    );
+    assert!(
         s.direction_found * 100 >= RUNS * 80,
         "found in {} of {RUNS}{}",
         s.direction_found,
         shown()
     );
-    assert!(
-        e.ratio() <= 1.3,
-        "rmse / bound {:.2} (rmse {:.1} m, bound {:.1} m){}",
-        e.ratio(),
-        e.rmse,
-        e.bound,
-        shown()
-    );
+    within_the_offset_drives_bar(e);
     let elsewhere: Vec<(&str, usize)> = table()
         .iter()
         .filter(|s| s.condition != Condition::DirectionUnstated)

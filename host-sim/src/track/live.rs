@@ -16,6 +16,7 @@
 //! and the bearings of the first channel heard join its updates in one time order, as a
 //! recorded capture's do, its state sized for the stations a state with RSSI terms holds.
 
+use crate::track::direction::Directions;
 use crate::track::moving::{Settings, TrackPoint, Update, max_sources, track_each};
 use crate::track::noise::LiveScatter;
 use crate::track::tracks::observable;
@@ -137,6 +138,9 @@ pub struct LiveChannels {
     unheard: BiasPrior,
     /// Whether RSSI readings join the one channel.
     rssi: bool,
+    /// Each station's stated direction-dependent error and its course so far: what the
+    /// line's bearings are corrected by before they are pushed ([`Directions`]).
+    pub directions: Directions,
 }
 
 impl LiveChannels {
@@ -167,6 +171,7 @@ impl LiveChannels {
             settings,
             unheard,
             rssi,
+            directions: Directions::default(),
         }
     }
 

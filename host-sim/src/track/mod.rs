@@ -3,6 +3,7 @@
 //! ([`indoor`]).
 
 pub mod capture;
+pub mod direction;
 pub mod indoor;
 pub mod live;
 pub mod moving;

@@ -4,7 +4,9 @@
 //! their time (after the GPS fix before them) or, in a capture without GPS, one reading per
 //! anchor per epoch as the indoor tracker has always taken them.
 
+use crate::estimate::stations::StationSetup;
 use crate::track::capture::{Measured, Reading};
+use crate::track::direction::Directions;
 use crate::track::indoor::AnchorsFile;
 use crate::track::moving::{K, Update, max_sources};
 use foxhunt_bridge::geo::LocalFrame;
@@ -73,14 +75,26 @@ pub fn anchor_positions(
 }
 
 /// The measurements of `m` as updates, one list per channel. `noise`: by station index, the
-/// noise (radians) of that station's bearings instead of their own.
+/// noise (radians) of that station's bearings instead of their own; then each station's
+/// direction-dependent error as `setup` states it taken out ([`Directions`]), in time order
+/// as a live line takes them.
 pub fn channels(
     m: &Measured,
     anchors: Option<&AnchorsFile>,
     width_mhz: f32,
     noise: &[Option<f32>],
+    setup: &StationSetup,
 ) -> Result<Vec<Channel>, String> {
-    let obs = &m.decoded.observations;
+    let mut obs = m.decoded.observations.clone();
+    obs.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+    let mut directions = Directions::default();
+    for o in obs.iter_mut() {
+        if let Some(Some(s)) = noise.get(usize::from(o.station)) {
+            o.bearing.sigma = *s;
+        }
+        directions.correct(o, setup);
+    }
+    let obs = &obs;
     let n = obs.len();
     // Readings may join a channel's bearings, and their terms then take room in the state.
     let rssi_may_join = anchors.is_some() && !m.readings.is_empty();
@@ -98,11 +112,6 @@ pub fn channels(
             .filter(|(_, k)| usize::from(**k) == c)
             .map(|(o, _)| *o)
             .collect();
-        for o in mine.iter_mut() {
-            if let Some(Some(s)) = noise.get(usize::from(o.station)) {
-                o.bearing.sigma = *s;
-            }
-        }
         mine.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
         let (sources, left_out) = most_heard(&mut mine, max_sources(rssi_may_join));
         out.push(Channel {

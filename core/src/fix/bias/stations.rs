@@ -242,6 +242,13 @@ impl StationSlot {
         self.first_course.unwrap_or(self.front)
     }
 
+    /// The antenna's front for a bearing read at `position`, from what came before alone (read
+    /// in time order): the station's course once it has moved [`FRONT_STEP_M`], its stated
+    /// front before. A live line's bearing gets the same front as the recording's.
+    pub fn front_so_far(&mut self, position: [f32; 2]) -> f32 {
+        self.course_at(position).unwrap_or(self.front)
+    }
+
     /// The same row with an unmodelled systematic error of sd `sd` (radians) on its bearings:
     /// an error common to the station's bearings (geodesy, mounting, a calibration's residue)
     /// that no number of them averages away. Its variance is added to the offset prior's (the

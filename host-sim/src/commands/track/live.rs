@@ -12,6 +12,7 @@ use super::Args;
 use crate::commands::locate::live::{LiveSource, reader};
 use crate::estimate::stations::{StationSetup, station_setup};
 use crate::inputs::capture::{Decoder, LineFeed, StationInfo};
+use crate::inputs::stations::PriorFrom;
 use crate::outputs::cot::{self, CotSender};
 use crate::outputs::terminal::{Out, Outcome, Stop, note};
 use crate::outputs::tracks;
@@ -417,7 +418,8 @@ fn push_bearings(
 }
 
 /// Push bearing `b` to `live` with its station's noise (`sigma`, else the stations file's,
-/// else the record's own, then estimated), saying once of each kind what was left out: the
+/// else the record's own, then estimated) and its stated direction-dependent error taken out,
+/// saying once of each kind what was left out: the
 /// update it closed.
 fn push_bearing(
     live: &mut LiveChannels,
@@ -431,6 +433,7 @@ fn push_bearing(
     if let Some(s) = stated {
         b.bearing.sigma = s;
     }
+    live.directions.correct(&mut b, setup);
     match live.push(b, stated.is_some()) {
         Ok(r) => r,
         Err(why) => {
@@ -609,7 +612,8 @@ impl Points {
 }
 
 /// The offset prior of a station not yet heard when its channel's tracker starts: the widest
-/// of the stations file's and `--offset-sd`'s, centred on zero.
+/// of the priors the stations file states and `--offset-sd`'s, centred on zero (a station the
+/// file names without a prior has `--offset-sd`'s, as a recording gives it).
 fn unheard(o: &Options, fallback: BiasPrior) -> BiasPrior {
     let widest = o
         .network
@@ -617,6 +621,7 @@ fn unheard(o: &Options, fallback: BiasPrior) -> BiasPrior {
         .flat_map(|n| {
             n.stations
                 .iter()
+                .filter(|s| s.from != PriorFrom::Default)
                 .map(|s| s.prior.sd)
                 .chain(n.default_prior.map(|p| p.sd))
         })
