@@ -12,8 +12,10 @@
 use super::triangulate::triangulate;
 use super::{MovingRun, MovingScenario};
 use crate::estimate::pool;
+use crate::estimate::stations::StationSetup;
 use crate::outputs::tables::Row;
 use crate::runs::montecarlo::Progress;
+use crate::track::direction::Directions;
 use crate::track::moving::{
     DEFAULT_METHOD, K, PARTICLES, STATE_SIZES, Settings, TRACK_METHODS, TRACK_PARTICLES,
     TrackPoint, TrackRun, track,
@@ -80,7 +82,8 @@ pub fn one(
     smooth: bool,
     run: usize,
 ) -> Result<RunFigures, Error> {
-    let sim = s.simulate(run);
+    let mut sim = s.simulate(run);
+    told_directions(&mut sim);
     let mut settings = s.settings();
     settings.method = method;
     settings.particles = particles;
@@ -96,6 +99,26 @@ pub fn one(
     let mut f = judge(&sim, &tracked, s.warmup_s);
     f.seconds = seconds;
     Ok(f)
+}
+
+/// Take each station's told direction-dependent error out of the run's bearings, as `track`
+/// does with a stations file's table ([`Directions`]).
+fn told_directions(sim: &mut MovingRun) {
+    if sim.tables.iter().all(Option::is_none) {
+        return;
+    }
+    let mut setup = StationSetup::default();
+    setup.priors.direction = sim
+        .tables
+        .iter()
+        .map(|t| t.map(|p| (p, std::f32::consts::FRAC_PI_2)))
+        .collect();
+    let mut directions = Directions::default();
+    for u in sim.updates.iter_mut() {
+        for o in u.epoch.bearings_mut() {
+            directions.correct(o, &setup);
+        }
+    }
 }
 
 /// The PCRB of scenario `s` given its true motion: sqrt(mean over the updates after the

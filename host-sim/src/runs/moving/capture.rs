@@ -1,8 +1,8 @@
 //! A moving-emitter scenario's run written as its stations would log it: KrakenSDR XML records,
 //! each with its STATION_ID (`mast-N` for a fixed station, `anchor-N` indoors, `car-N` for a
-//! vehicle), position,
-//! heading and epoch, on 433.920 MHz; the stations file that goes with them (each station's
-//! noise and offset prior); and the truth, the emitter's position every second, as CSV.
+//! vehicle), position, heading and epoch, on 433.920 MHz; the stations file that goes with
+//! them (each station's noise and offset prior, and a calibrated direction-dependent error's
+//! table); and the truth, the emitter's position every second, as CSV.
 
 use super::{MovingScenario, Route};
 use crate::runs::network::START_MS;
@@ -81,7 +81,7 @@ pub fn capture(
     }
     let mut stations = String::new();
     for (s, st) in scenario.stations.iter().enumerate() {
-        let _ = writeln!(
+        let _ = write!(
             stations,
             "[[station]]\nid = {:?}\noffset_deg = {}\noffset_sd_deg = {}\nnoise_deg = {:.3}\nantenna = \"uca\"\nunmodelled_deg = 0\n",
             id(scenario, s, &st.route),
@@ -89,6 +89,16 @@ pub fn capture(
             scenario.offset_sd.to_degrees(),
             st.sigma.to_degrees()
         );
+        // A calibrated direction-dependent error: its table and sd.
+        if let Some(t) = r.tables.get(s).copied().flatten() {
+            let [a1, b1, a2, b2] = t.mean.map(f32::to_degrees);
+            let _ = writeln!(
+                stations,
+                "direction_deg = [{a1:.4}, {b1:.4}, {a2:.4}, {b2:.4}]\ndirection_error_deg = {:.4}",
+                t.sd.to_degrees()
+            );
+        }
+        stations.push('\n');
     }
     let mut truth = String::from("t_s,lat,lon,east_m,north_m,moving\n");
     for (u, (p, _, moving)) in r.updates.iter().zip(&r.truth) {

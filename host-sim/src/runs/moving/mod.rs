@@ -27,8 +27,9 @@ pub mod triangulate;
 
 pub use capture::{FREQ_MHZ, MovingCapture, capture};
 
+use crate::runs::field::DirectionUnit;
 use crate::track::moving::{K, Settings, Update};
-use foxhunt_core::fix::bias::BiasPrior;
+use foxhunt_core::fix::bias::{BiasPrior, DirectionPrior};
 use foxhunt_core::fix::observation::Observation;
 use foxhunt_core::model::bearing::{Bearing, predicted, wrap};
 use foxhunt_core::model::rssi::PathLoss;
@@ -41,7 +42,7 @@ use std::f32::consts::{FRAC_PI_2, PI, TAU};
 const DEG: f32 = PI / 180.0;
 
 /// The names of the moving scenarios, in table order.
-pub const NAMES: [&str; 11] = [
+pub const NAMES: [&str; 13] = [
     "move-fixed-straight",
     "move-fixed-turning",
     "move-fixed-stop-and-go",
@@ -53,6 +54,8 @@ pub const NAMES: [&str; 11] = [
     "move-fixed-rssi",
     "move-mixed-both",
     "move-indoor-aoa",
+    "move-vehicles-direction",
+    "move-vehicles-direction-ignored",
 ];
 
 /// How the emitter moves.
@@ -255,6 +258,9 @@ pub struct MovingScenario {
     /// Indoor arrays' error traits (none: Gaussian noise of each station's sd and a
     /// Gaussian offset).
     pub aoa: Option<indoor::AoaErrors>,
+    /// The vehicles' units' direction-dependent error and what the trackers are told of it
+    /// (none: no such error).
+    pub direction: Option<DirectionErrors>,
     /// The stations' path loss (RSSI).
     pub law: PathLoss,
     /// RSSI noise, dB.
@@ -281,6 +287,22 @@ pub struct MovingScenario {
     pub seed: u64,
 }
 
+/// Each vehicle's unit with a direction-dependent error: first and second harmonics of the
+/// bearing relative to its course, each of an amplitude drawn from 2-5 degrees with a random
+/// phase (the `direction-dependent-2-5deg` field condition's units,
+/// [`DirectionUnit`](crate::runs::field::DirectionUnit)).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DirectionErrors {
+    /// The sd of a calibration the trackers are told, radians: each coefficient the truth's
+    /// plus an error of that sd, stated with it (as a stations file's `direction_deg` and
+    /// `direction_error_deg`). `None`: the trackers are told nothing of it.
+    pub calibration_sd: Option<f32>,
+}
+
+/// The calibration sd of `move-vehicles-direction`, radians: a lap past a known transmitter
+/// measures each coefficient to about 0.15 degrees (docs/src/field.md, "Calibration"); 0.2.
+const CALIBRATION_SD: f32 = 0.2 * DEG;
+
 /// One simulated run.
 #[derive(Debug, Clone)]
 pub struct MovingRun {
@@ -292,6 +314,9 @@ pub struct MovingRun {
     pub offsets: Vec<f32>,
     /// True power offset (dB) and exponent correction.
     pub rssi: (f32, f32),
+    /// Each station's direction-dependent error as the trackers are told it (none: nothing
+    /// told, or no such error).
+    pub tables: Vec<Option<DirectionPrior>>,
 }
 
 fn fixed4() -> Vec<Station> {
@@ -323,6 +348,7 @@ impl MovingScenario {
             offset_sd: 2.0 * DEG,
             offset_mean: 0.0,
             aoa: None,
+            direction: None,
             law: PathLoss {
                 p0: -40.0,
                 d0: 1.0,
@@ -353,6 +379,12 @@ impl MovingScenario {
             "move-mixed-stop-and-go" => base(Path::StopAndGo, mixed(), true, false),
             "move-fixed-rssi" => base(Path::Straight, fixed4(), false, true),
             "move-mixed-both" => base(Path::Turning, mixed(), true, true),
+            "move-vehicles-direction" | "move-vehicles-direction-ignored" => MovingScenario {
+                direction: Some(DirectionErrors {
+                    calibration_sd: (name == "move-vehicles-direction").then_some(CALIBRATION_SD),
+                }),
+                ..base(Path::Turning, vec![vehicle(0), vehicle(2)], true, false)
+            },
             "move-indoor-aoa" => {
                 let anchors = indoor::ANCHORS
                     .iter()
@@ -460,6 +492,8 @@ impl MovingScenario {
             self.power_sd * random::normal(&mut rng),
             self.exponent_sd * random::normal(&mut rng),
         );
+        // The vehicles' units' harmonics, and the calibrations the trackers are told.
+        let (units, tables) = self.direction_units(&mut rng);
         let dt = 1.0 / self.rate_hz;
         let mut updates = Vec::with_capacity(self.steps());
         let mut truth = Vec::with_capacity(self.steps());
@@ -473,7 +507,16 @@ impl MovingScenario {
                     let truth = predicted(&p, &at);
                     let theta = match &self.aoa {
                         Some(errors) => indoor::report(&mut rng, s, truth, &draws[s], errors),
-                        None => wrap(truth + offsets[s] + station.sigma * random::normal(&mut rng)),
+                        None => {
+                            // A unit's error is a property of the true relative bearing.
+                            let ahead = station.route.at(t + 0.1);
+                            let course = (ahead[1] - at[1]).atan2(ahead[0] - at[0]);
+                            let unit = units[s].map_or(0.0, |mean| {
+                                DirectionPrior { mean, sd: 0.0 }.error_at(wrap(truth - course))
+                            });
+                            let noise = station.sigma * random::normal(&mut rng);
+                            wrap(truth + offsets[s] + unit + noise)
+                        }
                     };
                     let mut o = Observation::new(
                         Bearing {
@@ -510,7 +553,35 @@ impl MovingScenario {
             truth,
             offsets,
             rssi,
+            tables,
         }
+    }
+
+    /// Each station's unit's harmonic coefficients (vehicles', where the scenario gives them
+    /// a direction-dependent error) and the table the trackers are told, drawn from `rng` (no
+    /// draw where the scenario has none, so the other scenarios' runs are as they were).
+    fn direction_units(
+        &self,
+        rng: &mut XorShiftRng,
+    ) -> (Vec<Option<[f32; 4]>>, Vec<Option<DirectionPrior>>) {
+        let n = self.stations.len();
+        let Some(d) = self.direction else {
+            return (vec![None; n], vec![None; n]);
+        };
+        self.stations
+            .iter()
+            .map(|st| {
+                if matches!(st.route, Route::Fixed(_)) {
+                    return (None, None);
+                }
+                let c = DirectionUnit::draw(rng).coefficients;
+                let told = d.calibration_sd.map(|sd| DirectionPrior {
+                    mean: c.map(|v| v + sd * random::normal(rng)),
+                    sd,
+                });
+                (Some(c), told)
+            })
+            .unzip()
     }
 }
 
