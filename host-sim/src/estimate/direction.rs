@@ -63,18 +63,6 @@ impl FoundDirection {
     }
 }
 
-/// Whether station `s`'s direction-dependent error is stated (a prior or a table, from a
-/// stations file, a calibration or a reference transmitter).
-fn stated(priors: &Priors, s: usize) -> bool {
-    priors
-        .direction
-        .get(s)
-        .copied()
-        .flatten()
-        .or(priors.default_direction)
-        .is_some()
-}
-
 /// Where each channel's emitter would stand if it stands still: its fix, or for a channel
 /// whose early and late bearings met in different places (called moving) the two places
 /// weighted by their precision (the test takes the position out to first order, so a point
@@ -127,7 +115,7 @@ pub fn unstated(
         let mut by_station: BTreeMap<u16, Vec<&Observation>> = BTreeMap::new();
         for o in observations.iter().filter(|o| {
             channel::belongs(o.freq_mhz, lowest, width_mhz)
-                && !stated(priors, usize::from(o.station))
+                && priors.direction_of(usize::from(o.station)).is_none()
         }) {
             by_station.entry(o.station).or_default().push(o);
         }

@@ -163,16 +163,20 @@ impl Priors {
             .unwrap_or(self.default_unmodelled)
     }
 
-    /// Station `s`'s row of the station table: its prior and its unmodelled error.
-    pub fn row(&self, s: usize) -> StationSlot {
-        let row = StationSlot::new(self.of(s)).with_unmodelled(self.unmodelled_of(s));
-        match self
-            .direction
+    /// Station `s`'s direction-dependent error as stated (its own, else the default) and its
+    /// antenna's front, radians; `None` where nothing states one.
+    pub fn direction_of(&self, s: usize) -> Option<(DirectionPrior, f32)> {
+        self.direction
             .get(s)
             .copied()
             .flatten()
             .or(self.default_direction)
-        {
+    }
+
+    /// Station `s`'s row of the station table: its prior and its unmodelled error.
+    pub fn row(&self, s: usize) -> StationSlot {
+        let row = StationSlot::new(self.of(s)).with_unmodelled(self.unmodelled_of(s));
+        match self.direction_of(s) {
             Some((prior, front)) => row.with_direction(prior, front),
             None => row,
         }

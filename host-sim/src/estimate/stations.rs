@@ -313,11 +313,7 @@ fn relative_bearings(
     for (s, indices) in by_station.iter().enumerate() {
         let front = setup
             .priors
-            .direction
-            .get(s)
-            .copied()
-            .flatten()
-            .or(setup.priors.default_direction)
+            .direction_of(s)
             .map_or(FRAC_PI_2, |(_, front)| front);
         let bearings: Vec<Bearing> = indices.iter().map(|&k| observations[k].bearing).collect();
         let mut phis = vec![0.0f32; bearings.len()];

@@ -36,11 +36,7 @@ impl Directions {
         let row = self.rows[s].get_or_insert_with(|| {
             let (prior, front) = setup
                 .priors
-                .direction
-                .get(s)
-                .copied()
-                .flatten()
-                .or(setup.priors.default_direction)
+                .direction_of(s)
                 .unwrap_or((DirectionPrior::NONE, std::f32::consts::FRAC_PI_2));
             StationSlot::new(BiasPrior::default()).with_direction(prior, front)
         });
