@@ -290,7 +290,7 @@ pub struct MovingScenario {
 /// Each vehicle's unit with a direction-dependent error: first and second harmonics of the
 /// bearing relative to its course, each of an amplitude drawn from 2-5 degrees with a random
 /// phase (the `direction-dependent-2-5deg` field condition's units,
-/// [`DirectionUnit`](crate::runs::field::DirectionUnit)).
+/// [`DirectionUnit`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DirectionErrors {
     /// The sd of a calibration the trackers are told, radians: each coefficient the truth's
