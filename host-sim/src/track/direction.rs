@@ -14,7 +14,7 @@
 //! every bearing by it, which holds an error that changes with the direction only where the
 //! track forgets faster than the direction changes.
 
-use crate::estimate::stations::StationSetup;
+use crate::estimate::Priors;
 use foxhunt_core::fix::bias::{BiasPrior, DirectionPrior, StationSlot};
 use foxhunt_core::fix::observation::Observation;
 use foxhunt_core::model::bearing::wrap;
@@ -27,15 +27,14 @@ pub struct Directions {
 
 impl Directions {
     /// Correct bearing `o` (its station the capture's index) by its station's stated table in
-    /// `setup`, if it states one; stations with none are left as they are. Call in time order.
-    pub fn correct(&mut self, o: &mut Observation, setup: &StationSetup) {
+    /// `priors`, if it states one; stations with none are left as they are. Call in time order.
+    pub fn correct(&mut self, o: &mut Observation, priors: &Priors) {
         let s = usize::from(o.station);
         if self.rows.len() <= s {
             self.rows.resize(s + 1, None);
         }
         let row = self.rows[s].get_or_insert_with(|| {
-            let (prior, front) = setup
-                .priors
+            let (prior, front) = priors
                 .direction_of(s)
                 .unwrap_or((DirectionPrior::NONE, std::f32::consts::FRAC_PI_2));
             StationSlot::new(BiasPrior::default()).with_direction(prior, front)
@@ -86,9 +85,9 @@ mod tests {
             stamped: true,
         };
         let mut first = at(0.0, 0);
-        d.correct(&mut first, &setup);
+        d.correct(&mut first, &setup.priors);
         let mut moved = at(10.0, 0);
-        d.correct(&mut moved, &setup);
+        d.correct(&mut moved, &setup.priors);
         // phi = -90 degrees: a1 cos phi = 0, b2 sin 2 phi = 0: nothing; before it moved the
         // front is the stated one (east, phi = 0): a1 = 2 degrees taken out.
         assert!(
@@ -100,7 +99,7 @@ mod tests {
         assert!((moved.bearing.sigma.to_degrees() - widened).abs() < 1e-4);
         // A station with no table is untouched.
         let mut other = at(10.0, 1);
-        d.correct(&mut other, &setup);
+        d.correct(&mut other, &setup.priors);
         assert_eq!(other, at(10.0, 1));
     }
 }

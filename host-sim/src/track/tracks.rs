@@ -203,7 +203,7 @@ pub fn tracks(m: &Measured, anchors: Option<&AnchorsFile>, o: &Options) -> Resul
         Some(s) => vec![Some(s); m.decoded.stations.len()],
         None => setup.noise.clone(),
     };
-    let found = channels(m, anchors, o.width_mhz, &given, &setup)?;
+    let found = channels(m, anchors, o.width_mhz, &given, &setup.priors)?;
     if found.is_empty() {
         return Err(if anchors.is_some() {
             "no bearing and no RSSI reading of a listed anchor in the capture: nothing to track"

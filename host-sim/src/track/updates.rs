@@ -4,7 +4,7 @@
 //! their time (after the GPS fix before them) or, in a capture without GPS, one reading per
 //! anchor per epoch as the indoor tracker has always taken them.
 
-use crate::estimate::stations::StationSetup;
+use crate::estimate::Priors;
 use crate::track::capture::{Measured, Reading};
 use crate::track::direction::Directions;
 use crate::track::indoor::AnchorsFile;
@@ -76,14 +76,14 @@ pub fn anchor_positions(
 
 /// The measurements of `m` as updates, one list per channel. `noise`: by station index, the
 /// noise (radians) of that station's bearings instead of their own; then each station's
-/// direction-dependent error as `setup` states it taken out ([`Directions`]), in time order
+/// direction-dependent error as `priors` state it taken out ([`Directions`]), in time order
 /// as a live line takes them.
 pub fn channels(
     m: &Measured,
     anchors: Option<&AnchorsFile>,
     width_mhz: f32,
     noise: &[Option<f32>],
-    setup: &StationSetup,
+    priors: &Priors,
 ) -> Result<Vec<Channel>, String> {
     let mut obs = m.decoded.observations.clone();
     obs.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
@@ -92,7 +92,7 @@ pub fn channels(
         if let Some(Some(s)) = noise.get(usize::from(o.station)) {
             o.bearing.sigma = *s;
         }
-        directions.correct(o, setup);
+        directions.correct(o, priors);
     }
     let obs = &obs;
     let n = obs.len();

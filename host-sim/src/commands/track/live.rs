@@ -433,7 +433,7 @@ fn push_bearing(
     if let Some(s) = stated {
         b.bearing.sigma = s;
     }
-    live.directions.correct(&mut b, setup);
+    live.directions.correct(&mut b, &setup.priors);
     match live.push(b, stated.is_some()) {
         Ok(r) => r,
         Err(why) => {

@@ -11,8 +11,8 @@
 
 use super::triangulate::triangulate;
 use super::{MovingRun, MovingScenario};
+use crate::estimate::Priors;
 use crate::estimate::pool;
-use crate::estimate::stations::StationSetup;
 use crate::outputs::tables::Row;
 use crate::runs::montecarlo::Progress;
 use crate::track::direction::Directions;
@@ -107,16 +107,18 @@ fn told_directions(sim: &mut MovingRun) {
     if sim.tables.iter().all(Option::is_none) {
         return;
     }
-    let mut setup = StationSetup::default();
-    setup.priors.direction = sim
-        .tables
-        .iter()
-        .map(|t| t.map(|p| (p, std::f32::consts::FRAC_PI_2)))
-        .collect();
+    let priors = Priors {
+        direction: sim
+            .tables
+            .iter()
+            .map(|t| t.map(|p| (p, std::f32::consts::FRAC_PI_2)))
+            .collect(),
+        ..Priors::default()
+    };
     let mut directions = Directions::default();
     for u in sim.updates.iter_mut() {
         for o in u.epoch.bearings_mut() {
-            directions.correct(o, &setup);
+            directions.correct(o, &priors);
         }
     }
 }
