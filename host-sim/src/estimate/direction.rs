@@ -190,7 +190,7 @@ pub fn modelled(priors: &Priors, found: &[FoundDirection]) -> Priors {
             mean: [0.0; HARMONICS],
             sd: f.prior_sd,
         };
-        p.direction[s] = Some((prior, FRAC_PI_2));
+        p.direction[s] = Some((prior, None));
     }
     p
 }

@@ -129,11 +129,12 @@ pub struct Priors {
     /// [`LocateConfig::noise_stated`].
     pub noise_stated: bool,
     /// Station index to its direction-dependent error's prior and its antenna's front where
-    /// it stands still (theta, radians); `None`: not modelled.
-    pub direction: Vec<Option<(DirectionPrior, f32)>>,
+    /// it stands still (theta, radians; `None` where no one stated it: [`Priors::front`]);
+    /// `None`: not modelled.
+    pub direction: Vec<Option<(DirectionPrior, Option<f32>)>>,
     /// The direction-dependent error of every station without its own (a `--calibration`
     /// file's) and the front of one that stands still; `None`: not modelled.
-    pub default_direction: Option<(DirectionPrior, f32)>,
+    pub default_direction: Option<(DirectionPrior, Option<f32>)>,
 }
 
 impl Priors {
@@ -165,7 +166,7 @@ impl Priors {
 
     /// Station `s`'s direction-dependent error as stated (its own, else the default) and its
     /// antenna's front, radians; `None` where nothing states one.
-    pub fn direction_of(&self, s: usize) -> Option<(DirectionPrior, f32)> {
+    pub fn direction_of(&self, s: usize) -> Option<(DirectionPrior, Option<f32>)> {
         self.direction
             .get(s)
             .copied()
@@ -177,9 +178,17 @@ impl Priors {
     pub fn row(&self, s: usize) -> StationSlot {
         let row = StationSlot::new(self.of(s)).with_unmodelled(self.unmodelled_of(s));
         match self.direction_of(s) {
-            Some((prior, front)) => row.with_direction(prior, front),
+            Some((prior, front)) => row.with_direction(prior, Self::front(front)),
             None => row,
         }
+    }
+
+    /// A still antenna's front as a fix takes it: the one stated, else north (the stations
+    /// file's `boresight_deg` convention). A batch fix gives a vehicle that stands still its
+    /// first course; a track, which cannot look ahead, waits for the course instead
+    /// ([`crate::track::direction`]).
+    pub fn front(stated: Option<f32>) -> f32 {
+        stated.unwrap_or(std::f32::consts::FRAC_PI_2)
     }
 
     /// `config` with the stated classes' ceiling, if any, and whether the noise is stated.

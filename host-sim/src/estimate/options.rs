@@ -104,7 +104,7 @@ impl LocateOptions {
     /// whose stations file states none takes it (a vehicle's front is its course).
     pub fn calibrated_direction(&self, priors: &mut Priors) {
         if let Some(d) = self.direction {
-            priors.default_direction = Some((d, std::f32::consts::FRAC_PI_2));
+            priors.default_direction = Some((d, None));
         }
     }
 

@@ -27,7 +27,6 @@ use foxhunt_core::fix::device::class_noise;
 use foxhunt_core::fix::locate::Observation;
 use foxhunt_core::model::bearing::{Bearing, wrap};
 use serde::Serialize;
-use std::f32::consts::FRAC_PI_2;
 
 /// Where a station's offset prior came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -169,8 +168,7 @@ pub fn station_setup<'a>(
             .or(network.and_then(|n| n.default_direction));
         let front = spec
             .and_then(|s| s.front)
-            .or(network.and_then(|n| n.default_front))
-            .unwrap_or(std::f32::consts::FRAC_PI_2);
+            .or(network.and_then(|n| n.default_front));
         setup.priors.direction.push(direction.map(|d| (d, front)));
         if class.is_some() {
             let widest = setup.priors.ceiling.unwrap_or(0.0).max(of_class.ceiling);
@@ -289,7 +287,7 @@ pub fn calibrate_on_references(
                 setup.priors.direction.resize(s + 1, None);
             }
             let stated = setup.priors.direction[s].or(setup.priors.default_direction);
-            let front = stated.map_or(FRAC_PI_2, |(_, front)| front);
+            let front = stated.and_then(|(_, front)| front);
             let table = combine_direction(stated.map(|(p, _)| p), measured);
             setup.priors.direction[s] = Some((table, front));
         }
@@ -311,10 +309,7 @@ fn relative_bearings(
     }
     let mut relative = vec![0.0f32; observations.len()];
     for (s, indices) in by_station.iter().enumerate() {
-        let front = setup
-            .priors
-            .direction_of(s)
-            .map_or(FRAC_PI_2, |(_, front)| front);
+        let front = Priors::front(setup.priors.direction_of(s).and_then(|(_, front)| front));
         let bearings: Vec<Bearing> = indices.iter().map(|&k| observations[k].bearing).collect();
         let mut phis = vec![0.0f32; bearings.len()];
         relative_to_course(&bearings, front, &mut phis);

@@ -19,35 +19,47 @@ use foxhunt_core::fix::bias::{BiasPrior, DirectionPrior, StationSlot};
 use foxhunt_core::fix::observation::Observation;
 use foxhunt_core::model::bearing::wrap;
 
-/// Each station's stated table and where its antenna faces so far, by station index.
+/// Each station's stated table, its stated front and its course so far, by station index.
 #[derive(Debug, Clone, Default)]
 pub struct Directions {
-    rows: Vec<Option<StationSlot>>,
+    rows: Vec<Option<(StationSlot, Option<f32>)>>,
 }
 
 impl Directions {
     /// Correct bearing `o` (its station the capture's index) by its station's stated table in
     /// `priors`, if it states one; stations with none are left as they are. Call in time order.
+    ///
+    /// Until a station has moved its front is the one stated (`boresight_deg`); where none
+    /// is, the front is not known (a vehicle's first bearings, before its course): the
+    /// bearing is left as it is and the table's error at an unknown direction joins its
+    /// noise (its mean square over the directions, half the coefficients' squares).
     pub fn correct(&mut self, o: &mut Observation, priors: &Priors) {
         let s = usize::from(o.station);
         if self.rows.len() <= s {
             self.rows.resize(s + 1, None);
         }
-        let row = self.rows[s].get_or_insert_with(|| {
+        let (row, stated) = self.rows[s].get_or_insert_with(|| {
             let (prior, front) = priors
                 .direction_of(s)
-                .unwrap_or((DirectionPrior::NONE, std::f32::consts::FRAC_PI_2));
-            StationSlot::new(BiasPrior::default()).with_direction(prior, front)
+                .unwrap_or((DirectionPrior::NONE, None));
+            let slot =
+                StationSlot::new(BiasPrior::default()).with_direction(prior, Priors::front(front));
+            (slot, front)
         });
         let table = row.direction();
         if table == DirectionPrior::NONE {
             return;
         }
-        let front = row.front_so_far(o.bearing.vehicle);
-        let phi = wrap(o.bearing.theta - front);
-        o.bearing.theta = wrap(o.bearing.theta - table.error_at(phi));
+        let unknown = match row.course_at(o.bearing.vehicle).or(*stated) {
+            Some(front) => {
+                let phi = wrap(o.bearing.theta - front);
+                o.bearing.theta = wrap(o.bearing.theta - table.error_at(phi));
+                0.0
+            }
+            None => 0.5 * table.mean.iter().map(|c| c * c).sum::<f32>(),
+        };
         let b = &mut o.bearing;
-        b.sigma = (b.sigma * b.sigma + 2.0 * table.sd * table.sd).sqrt();
+        b.sigma = (b.sigma * b.sigma + unknown + 2.0 * table.sd * table.sd).sqrt();
     }
 }
 
@@ -69,7 +81,7 @@ mod tests {
             mean: [2.0f32, 0.0, 0.0, 1.0].map(f32::to_radians),
             sd: 0.3f32.to_radians(),
         };
-        setup.priors.direction = vec![Some((table, 0.0)), None];
+        setup.priors.direction = vec![Some((table, Some(0.0))), None];
         let mut d = Directions::default();
         // The car drives north (course 90 degrees counter-clockwise from east): a bearing
         // due east is 90 degrees right of its front.
@@ -101,5 +113,46 @@ mod tests {
         let mut other = at(10.0, 1);
         d.correct(&mut other, &setup.priors);
         assert_eq!(other, at(10.0, 1));
+    }
+
+    #[test]
+    fn before_a_vehicle_moves_an_unstated_front_widens_the_bearing_instead() {
+        let mut setup = station_setup(["car"].into_iter(), None, BiasPrior::default(), false);
+        let table = DirectionPrior {
+            mean: [3.0f32, 0.0, 0.0, 4.0].map(f32::to_radians),
+            sd: 0.0,
+        };
+        setup.priors.direction = vec![Some((table, None))];
+        let mut d = Directions::default();
+        let at = |y: f32, theta_deg: f32| {
+            Observation::new(
+                Bearing {
+                    vehicle: [0.0, y],
+                    theta: theta_deg.to_radians(),
+                    sigma: 1f32.to_radians(),
+                },
+                y,
+            )
+        };
+        let mut first = at(0.0, 0.0);
+        d.correct(&mut first, &setup.priors);
+        // Not corrected: north would have taken a1 cos(-90) + b2 sin(-180) = 0 and east 3
+        // degrees out; the mean square over the directions, (9 + 16) / 2, joins the noise.
+        assert_eq!(first.bearing.theta, 0.0);
+        let widened = (1.0f32 + 12.5).sqrt();
+        assert!(
+            (first.bearing.sigma.to_degrees() - widened).abs() < 1e-3,
+            "{first:?}"
+        );
+        // Once it has moved north a bearing 45 degrees left of it is corrected there:
+        // 3 cos 45 + 4 sin 90 degrees.
+        let mut moved = at(10.0, 135.0);
+        d.correct(&mut moved, &setup.priors);
+        let taken = 135.0 - moved.bearing.theta.to_degrees();
+        assert!(
+            (taken - (3.0 * 0.5f32.sqrt() + 4.0)).abs() < 1e-3,
+            "{moved:?}"
+        );
+        assert!((moved.bearing.sigma.to_degrees() - 1.0).abs() < 1e-5);
     }
 }

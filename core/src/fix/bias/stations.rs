@@ -221,7 +221,7 @@ impl StationSlot {
 
     /// The antenna's front as the station stands at `position` (read in time order): its
     /// course once it has moved [`FRONT_STEP_M`] (`None` before).
-    pub(crate) fn course_at(&mut self, position: [f32; 2]) -> Option<f32> {
+    pub fn course_at(&mut self, position: [f32; 2]) -> Option<f32> {
         let Some(from) = self.track else {
             self.track = Some(position);
             return None;

@@ -207,7 +207,7 @@ impl Condition {
                 mean: [0.0; 4],
                 sd: DIRECTION_ERROR_DEG * DEG,
             };
-            p.direction = vec![Some((stated, std::f32::consts::FRAC_PI_2))];
+            p.direction = vec![Some((stated, None))];
         }
         p
     }

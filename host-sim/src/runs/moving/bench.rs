@@ -108,11 +108,7 @@ fn told_directions(sim: &mut MovingRun) {
         return;
     }
     let priors = Priors {
-        direction: sim
-            .tables
-            .iter()
-            .map(|t| t.map(|p| (p, std::f32::consts::FRAC_PI_2)))
-            .collect(),
+        direction: sim.tables.iter().map(|t| t.map(|p| (p, None))).collect(),
         ..Priors::default()
     };
     let mut directions = Directions::default();
