@@ -300,42 +300,29 @@ fn locate_from_one_vehicle_on_a_moving_drone_says_its_bearings_follow_something(
 }
 
 /// The walker of `move-indoor-aoa` from its anchors' records: `foxhunt track` with the
-/// indoor motion and the 10 s offset memory the bench's tracker uses follows the walker as
-/// well as the bench does on the same runs' measurements in memory (docs/src/tracking.md,
-/// "Indoors from angles of arrival").
+/// indoor motion and the stations file (each anchor's noise and offset prior, its class
+/// `indoor-aoa`: its reports at twice their noise, the offsets forgetting in 10 s, as the
+/// bench's tracker takes them) follows the walker as well as the bench does on the same
+/// runs' measurements in memory; a file that states the anchors' class alone gives ellipses
+/// as honest (docs/src/tracking.md, "Indoors from angles of arrival").
 #[test]
 fn an_indoor_walker_s_records_track_as_well_as_its_measurements() {
     let dir = std::env::temp_dir().join(format!("foxhunt-walk-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("scratch");
+    let class_only = dir.join("class.toml");
+    std::fs::write(&class_only, "[default]\nantenna = \"indoor-aoa\"\n").expect("write");
     let name = "move-indoor-aoa";
     let s = MovingScenario::named(name).expect("scenario");
-    let (mut from_file, mut in_memory) = (Vec::new(), Vec::new());
+    // From the records with the simulated stations file and with the class alone (with
+    // nothing stated the estimated noise takes four tracks a run: measured in the docs).
+    let mut from_file: [Vec<(f64, bool)>; 2] = Default::default();
+    let mut in_memory = Vec::new();
     for run in 1..=3usize {
         let out = dir.join(format!("{name}-{run}.xml"));
         let path = out.to_str().expect("path");
         common::simulate(name, Some(run), &out);
         // (t_s, [lat, lon]) every report.
         let truth: Vec<(f64, [f64; 2])> = truth_columns(&out, [1, 2]);
-        let stations = out.with_extension("stations.toml");
-        let t = foxhunt(&[
-            "track",
-            path,
-            "--stations",
-            stations.to_str().expect("path"),
-            "--motion",
-            "indoor",
-            "--memory-s",
-            "10",
-            "--json",
-            "--seed",
-            &(run + 1).to_string(),
-        ]);
-        assert!(t.status.success(), "{}", String::from_utf8_lossy(&t.stderr));
-        let v: Value = serde_json::from_slice(&t.stdout).expect("JSON");
-        let points = v["tracks"][0]["points"].as_array().expect("points");
-        // The records' frame is the first record's; the truth's is the room's: compare in
-        // latitude and longitude, each point against the truth at its time (reports come
-        // every 27 ms), in the local east and north metres of a 16 m room.
         let metres = |lat: f64| [111_319.5 * lat.to_radians().cos(), 111_132.9];
         let placed: Vec<(f64, [f64; 2])> = truth
             .iter()
@@ -344,28 +331,52 @@ fn an_indoor_walker_s_records_track_as_well_as_its_measurements() {
                 (*t, [lon * m[0], lat * m[1]])
             })
             .collect();
-        let moved: Vec<Value> = points
+        let stations = out.with_extension("stations.toml");
+        for (k, file) in [stations.as_path(), class_only.as_path()]
             .iter()
-            .map(|p| {
-                let t = p["t_ms"].as_f64().expect("t_ms") / 1000.0;
-                let (lat, lon) = (
-                    p["lat"].as_f64().expect("lat"),
-                    p["lon"].as_f64().expect("lon"),
-                );
-                let m = metres(lat);
-                // The truth nearest in time, its clock the records' own (both start at 0).
-                let (tt, _) = placed
-                    .iter()
-                    .min_by(|a, b| (a.0 - t).abs().total_cmp(&(b.0 - t).abs()))
-                    .expect("truth");
-                let mut q = p.clone();
-                q["t_ms"] = serde_json::json!(tt * 1000.0);
-                q["east_m"] = serde_json::json!(lon * m[0]);
-                q["north_m"] = serde_json::json!(lat * m[1]);
-                q
-            })
-            .collect();
-        from_file.extend(judge(&moved, &placed, f64::from(s.warmup_s)));
+            .enumerate()
+        {
+            let seed = (run + 1).to_string();
+            let t = foxhunt(&[
+                "track",
+                path,
+                "--stations",
+                file.to_str().expect("path"),
+                "--motion",
+                "indoor",
+                "--json",
+                "--seed",
+                &seed,
+            ]);
+            assert!(t.status.success(), "{}", String::from_utf8_lossy(&t.stderr));
+            let v: Value = serde_json::from_slice(&t.stdout).expect("JSON");
+            let points = v["tracks"][0]["points"].as_array().expect("points");
+            // The records' frame is the first record's; the truth's is the room's: compare
+            // in latitude and longitude, each point against the truth at its time (reports
+            // come every 27 ms), in the local east and north metres of a 16 m room.
+            let moved: Vec<Value> = points
+                .iter()
+                .map(|p| {
+                    let t = p["t_ms"].as_f64().expect("t_ms") / 1000.0;
+                    let (lat, lon) = (
+                        p["lat"].as_f64().expect("lat"),
+                        p["lon"].as_f64().expect("lon"),
+                    );
+                    let m = metres(lat);
+                    // The truth nearest in time, its clock the records' own (both start at 0).
+                    let (tt, _) = placed
+                        .iter()
+                        .min_by(|a, b| (a.0 - t).abs().total_cmp(&(b.0 - t).abs()))
+                        .expect("truth");
+                    let mut q = p.clone();
+                    q["t_ms"] = serde_json::json!(tt * 1000.0);
+                    q["east_m"] = serde_json::json!(lon * m[0]);
+                    q["north_m"] = serde_json::json!(lat * m[1]);
+                    q
+                })
+                .collect();
+            from_file[k].extend(judge(&moved, &placed, f64::from(s.warmup_s)));
+        }
         let m = one(&s, Method::SirRobust, 1000, false, run).expect("in memory");
         in_memory.extend(
             m.errors
@@ -379,28 +390,34 @@ fn an_indoor_walker_s_records_track_as_well_as_its_measurements() {
         e.sort_by(f64::total_cmp);
         e[e.len() / 2]
     };
-    let (_, file_cov) = rmse_and_coverage(&from_file);
-    let (_, mem_cov) = rmse_and_coverage(&in_memory);
-    let (file_median, mem_median) = (median(&from_file), median(&in_memory));
+    let figures = |f: &[(f64, bool)]| (median(f), 100.0 * rmse_and_coverage(f).1);
+    let (mem_median, mem_cov) = figures(&in_memory);
+    let [(file_median, file_cov), (class_median, class_cov)] =
+        [0, 1].map(|k| figures(&from_file[k]));
     println!(
-        "{name}, runs 1-3: from the records median {file_median:.2} m, coverage {:.1} % \
-         ({} points); in memory median {mem_median:.2} m, coverage {:.1} %",
-        100.0 * file_cov,
-        from_file.len(),
-        100.0 * mem_cov
+        "{name}, runs 1-3 ({} points each): the stations file median {file_median:.2} m, \
+         coverage {file_cov:.1} %; the class alone {class_median:.2} m, {class_cov:.1} %; in \
+         memory {mem_median:.2} m, {mem_cov:.1} %",
+        from_file[0].len()
     );
     // The records round the angles to 0.01 degree and carry the stations file's noise and
     // prior; the command groups the reports into updates of up to 16 bearings within 0.25 s
-    // (four epochs) where the bench steps each epoch, so its points are fewer: the median within 1.3x (+ 0.1 m, a tenth of the
-    // per-epoch triangulation's error) of the bench's, the coverage within 10 points of it and
-    // never below 85 %.
+    // (four epochs) where the bench steps each epoch, so its points are fewer: the median
+    // within 1.3x (+ 0.1 m, a tenth of the per-epoch triangulation's error) of the bench's,
+    // the coverage within 10 points of it and never below 85 %.
     assert!(
         file_median <= 1.3 * mem_median + 0.1,
         "{file_median} against {mem_median}"
     );
     assert!(
-        file_cov >= (mem_cov - 0.10).max(0.85),
+        file_cov >= (mem_cov - 10.0).max(85.0),
         "{file_cov} against {mem_cov}"
     );
+    // The class alone (its noise, 13 degrees, for every anchor of 10-16): 93-97 % a run
+    // when measured, so at least 90 % over the three (0.95 less two standard errors of
+    // three runs' spread), and a median better than the per-epoch triangulation's 1.37 m
+    // by the issue's 25 % (1.03 m).
+    assert!(class_cov >= 90.0, "{class_cov}");
+    assert!(class_median <= 1.03, "{class_median}");
     std::fs::remove_dir_all(&dir).ok();
 }

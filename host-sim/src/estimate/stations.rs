@@ -23,7 +23,7 @@ use foxhunt_core::fix::bias::{
     relative_to_course,
 };
 use foxhunt_core::fix::channel;
-use foxhunt_core::fix::device::class_noise;
+use foxhunt_core::fix::device::{AS_REPORTED, DeviceClass, TrackTraits, class_noise};
 use foxhunt_core::fix::locate::Observation;
 use foxhunt_core::model::bearing::{Bearing, wrap};
 use serde::Serialize;
@@ -111,6 +111,19 @@ pub struct StationSetup {
     pub origins: Vec<PriorOrigin>,
     /// Each station's noise, by station index.
     pub noise: Vec<Option<f32>>,
+    /// Each station's device class, by station index (`None`: not stated).
+    pub classes: Vec<Option<DeviceClass>>,
+}
+
+impl StationSetup {
+    /// How a track takes station `s`'s reports: its class's ([`DeviceClass::track`]).
+    pub fn track_traits(&self, s: usize) -> TrackTraits {
+        self.classes
+            .get(s)
+            .copied()
+            .flatten()
+            .map_or(AS_REPORTED, DeviceClass::track)
+    }
 }
 
 /// The priors and noise of stations `ids` (by station index) from `network`, else the
@@ -153,6 +166,7 @@ pub fn station_setup<'a>(
             .and_then(|s| s.antenna)
             .or(network.and_then(|n| n.default_antenna));
         let of_class = class_noise(class);
+        setup.classes.push(class);
         setup.noise.push(
             spec.and_then(|s| s.noise)
                 .or(network.and_then(|n| n.default_noise))

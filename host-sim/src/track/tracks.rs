@@ -2,7 +2,7 @@
 //! with the moving-emitter tracker ([`crate::track::moving`]), every update's point placed in
 //! latitude and longitude when the capture (or the anchors file's origin) gives a frame.
 
-use crate::estimate::stations::{StationSetup, station_setup};
+use crate::estimate::stations::{PriorOrigin, StationSetup, station_setup};
 use crate::inputs::stations::Network;
 use crate::track::capture::Measured;
 use crate::track::indoor::AnchorsFile;
@@ -140,12 +140,12 @@ pub(crate) fn settings(
     s.method = o.method;
     s.particles = o.particles;
     s.seed = o.seed;
-    s.memory_s = o.memory_s;
+    s.memory_s = memory_s(o);
     s.smooth = o.smooth;
     s.offsets = c
         .sources
         .iter()
-        .map(|k| setup.priors.of(usize::from(*k)))
+        .map(|k| offset_prior(setup, usize::from(*k)))
         .collect();
     if let Some(f) = anchors.filter(|_| c.rssi) {
         s.power_sd = f.power_sd_db;
@@ -156,6 +156,47 @@ pub(crate) fn settings(
         s.region = Some(start_region(s.room, &c.anchors));
     }
     s
+}
+
+/// Seconds in which a track's offsets forget: the user's, else the shortest of the stations
+/// file's device classes' ([`DeviceClass::track`](foxhunt_core::fix::device::DeviceClass::track)),
+/// else the tracker's own. The file's, not a channel's sources': a live line starts its
+/// trackers before it has heard every station.
+pub(crate) fn memory_s(o: &Options) -> Option<f32> {
+    let n = o.network.as_ref();
+    let classes = n
+        .into_iter()
+        .flat_map(|n| n.stations.iter().map(|s| s.antenna))
+        .chain(n.map(|n| n.default_antenna));
+    o.memory_s.or(classes
+        .flatten()
+        .filter_map(|c| c.track().memory_s)
+        .reduce(f32::min))
+}
+
+/// Station `s`'s offset prior on a track: its own where stated, else the default widened to
+/// its class's ([`DeviceClass::track`](foxhunt_core::fix::device::DeviceClass::track)).
+pub(crate) fn offset_prior(setup: &StationSetup, s: usize) -> BiasPrior {
+    let prior = setup.priors.of(s);
+    let own = setup
+        .origins
+        .get(s)
+        .is_some_and(|o| *o != PriorOrigin::Default);
+    match setup.track_traits(s).offset_sd {
+        Some(sd) if !own => BiasPrior {
+            sd: prior.sd.max(sd),
+            ..prior
+        },
+        _ => prior,
+    }
+}
+
+/// Station `s`'s noise on a track: `sigma` (every station's, stated), else its stations
+/// file's or class's, times its class's factor ([`DeviceClass::track`](
+/// foxhunt_core::fix::device::DeviceClass::track)); `None`: the records' own, estimated.
+pub(crate) fn track_noise(setup: &StationSetup, sigma: Option<f32>, s: usize) -> Option<f32> {
+    let stated = sigma.or(setup.noise.get(s).copied().flatten())?;
+    Some(stated * setup.track_traits(s).report_sd_factor)
 }
 
 /// The acceleration sd of the nearly-constant-velocity model that moves at least as the
@@ -199,10 +240,9 @@ pub fn tracks(m: &Measured, anchors: Option<&AnchorsFile>, o: &Options) -> Resul
     let ids = m.decoded.stations.iter().map(|s| s.id.as_str());
     let setup = station_setup(ids, o.network.as_ref(), fallback, false);
     // `--sigma` over the stations file's noise over each record's own.
-    let given: Vec<Option<f32>> = match o.sigma {
-        Some(s) => vec![Some(s); m.decoded.stations.len()],
-        None => setup.noise.clone(),
-    };
+    let given: Vec<Option<f32>> = (0..m.decoded.stations.len())
+        .map(|s| track_noise(&setup, o.sigma, s))
+        .collect();
     let found = channels(m, anchors, o.width_mhz, &given, &setup.priors)?;
     if found.is_empty() {
         return Err(if anchors.is_some() {
@@ -268,4 +308,69 @@ pub fn tracks(m: &Measured, anchors: Option<&AnchorsFile>, o: &Options) -> Resul
         frame,
         first_ms: m.decoded.first_ms,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_indoor_array_class_widens_its_reports_and_its_offset_and_shortens_the_memory() {
+        let dir = std::env::temp_dir().join(format!("foxhunt-class-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("scratch");
+        let path = dir.join("stations.toml");
+        std::fs::write(
+            &path,
+            "[[station]]\nid = \"a\"\nantenna = \"indoor-aoa\"\n\n\
+             [[station]]\nid = \"b\"\nantenna = \"indoor-aoa\"\noffset_deg = 1\n\
+             offset_sd_deg = 2\nnoise_deg = 10\n\n\
+             [[station]]\nid = \"c\"\nantenna = \"uca\"\n",
+        )
+        .expect("write");
+        let network = Network::load(&path).expect("a stations file");
+        std::fs::remove_dir_all(&dir).ok();
+        let deg = |x: f32| x.to_radians();
+        let fallback = BiasPrior {
+            mean: 0.0,
+            sd: deg(2.0),
+        };
+        let setup = station_setup(
+            ["a", "b", "c", "d"].into_iter(),
+            Some(&network),
+            fallback,
+            false,
+        );
+        let close = |x: Option<f32>, want: f32| x.is_some_and(|x| (x - deg(want)).abs() < 1e-5);
+        // Twice the class's 13 degrees, twice the stated 10; a UCA as its class says; an
+        // unlisted station its records' own.
+        assert!(close(track_noise(&setup, None, 0), 26.0));
+        assert!(close(track_noise(&setup, None, 1), 20.0));
+        assert!(close(track_noise(&setup, None, 2), 2.0));
+        assert_eq!(track_noise(&setup, None, 3), None);
+        assert!(close(track_noise(&setup, Some(deg(5.0)), 0), 10.0));
+        // The class's offset prior where none is stated; a stated one kept.
+        assert!(close(Some(offset_prior(&setup, 0).sd), 7.2));
+        assert!(close(Some(offset_prior(&setup, 1).sd), 2.0));
+        assert!(close(Some(offset_prior(&setup, 1).mean), 1.0));
+        assert!(close(Some(offset_prior(&setup, 2).sd), 2.0));
+        let mut o = Options {
+            method: Method::SirRobust,
+            particles: 1000,
+            offset_sd: fallback.sd,
+            motion: None,
+            accel_sd: None,
+            memory_s: None,
+            sigma: None,
+            width_mhz: 0.025,
+            seed: 1,
+            network: Some(network),
+            smooth: false,
+        };
+        assert_eq!(memory_s(&o), Some(10.0));
+        o.memory_s = Some(30.0);
+        assert_eq!(memory_s(&o), Some(30.0));
+        o.memory_s = None;
+        o.network = None;
+        assert_eq!(memory_s(&o), None);
+    }
 }

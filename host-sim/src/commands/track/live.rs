@@ -20,7 +20,9 @@ use crate::track::capture::{Reading, TrackDecoder};
 use crate::track::indoor::AnchorsFile;
 use crate::track::live::{Dropped, LIVE_CHANNELS, LiveChannels, LiveTracker, Ready};
 use crate::track::moving::{Settings, TrackPoint, Update};
-use crate::track::tracks::{Options, Tracks, one_station, settings, start_region};
+use crate::track::tracks::{
+    Options, Tracks, memory_s, offset_prior, one_station, settings, start_region, track_noise,
+};
 use crate::track::updates::{AnchorEpochs, Channel, anchor_positions, level};
 use foxhunt_bridge::BridgeConfig;
 use foxhunt_core::fix::bias::BiasPrior;
@@ -54,7 +56,7 @@ pub fn run(
     settings.method = o.method;
     settings.particles = o.particles;
     settings.seed = o.seed;
-    settings.memory_s = o.memory_s;
+    settings.memory_s = memory_s(o);
     if let Some(a) = o.accel_sd {
         settings.motion.accel_sd = a;
     }
@@ -428,8 +430,7 @@ fn push_bearing(
     setup: &StationSetup,
     dropped: &mut [bool; 2],
 ) -> Option<Ready> {
-    let station = usize::from(b.station);
-    let stated = sigma.or(setup.noise.get(station).copied().flatten());
+    let stated = track_noise(setup, sigma, usize::from(b.station));
     if let Some(s) = stated {
         b.bearing.sigma = s;
     }
@@ -485,7 +486,7 @@ fn step_all(
     shell: &Tracks,
     out: &mut Out,
 ) -> Outcome {
-    let prior_of = |s: u16| setup.priors.of(usize::from(s));
+    let prior_of = |s: u16| offset_prior(setup, usize::from(s));
     for r in ready {
         let point = match live.step(r, &prior_of) {
             Ok(Some(p)) => Ok(p),

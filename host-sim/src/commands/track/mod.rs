@@ -99,10 +99,10 @@ pub struct Args {
     /// Acceleration sd of the moving emitter, m/s^2 (default: the motion's).
     #[arg(long)]
     pub accel_sd: Option<f32>,
-    /// Seconds in which each station's offset forgets what it learned (default 0.15 s a
-    /// particle, at least 250: 1500 at the default 10000; 1500 for `ekf`; an error that
-    /// changes with where the emitter is, as an indoor array's toward its boresight, wants
-    /// about 10).
+    /// Seconds in which each station's offset forgets what it learned (default: 10 where the
+    /// stations file states an `indoor-aoa` class, whose error changes with where the
+    /// emitter is; else 0.15 s a particle, at least 250: 1500 at the default 10000; 1500 for
+    /// `ekf`).
     #[arg(long)]
     pub memory_s: Option<f32>,
     /// A recording's track smoothed: each point also from the 15 updates after it (a

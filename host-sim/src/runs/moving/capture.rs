@@ -9,6 +9,7 @@ use crate::runs::network::START_MS;
 use crate::runs::writer::{CaptureWriter, StationBearing, course_deg};
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;
+use foxhunt_core::fix::device::DeviceClass;
 use foxhunt_core::model::bearing::theta_to_azimuth;
 use std::fmt::Write;
 
@@ -81,13 +82,21 @@ pub fn capture(
     }
     let mut stations = String::new();
     for (s, st) in scenario.stations.iter().enumerate() {
+        // An indoor array's noise is its reports' own: its class widens them on a track.
+        let (antenna, noise) = match scenario.aoa {
+            Some(_) => {
+                let class = DeviceClass::IndoorAoa;
+                (class.name(), st.sigma / class.track().report_sd_factor)
+            }
+            None => (DeviceClass::Uca.name(), st.sigma),
+        };
         let _ = write!(
             stations,
-            "[[station]]\nid = {:?}\noffset_deg = {}\noffset_sd_deg = {}\nnoise_deg = {:.3}\nantenna = \"uca\"\nunmodelled_deg = 0\n",
+            "[[station]]\nid = {:?}\noffset_deg = {}\noffset_sd_deg = {}\nnoise_deg = {:.3}\nantenna = {antenna:?}\nunmodelled_deg = 0\n",
             id(scenario, s, &st.route),
             scenario.offset_mean.to_degrees(),
             scenario.offset_sd.to_degrees(),
-            st.sigma.to_degrees()
+            noise.to_degrees()
         );
         // A calibrated direction-dependent error: its table and sd.
         if let Some(t) = r.tables.get(s).copied().flatten() {

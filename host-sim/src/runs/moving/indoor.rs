@@ -14,6 +14,7 @@
 //!
 //! Each trait can be turned off ([`AoaErrors`]) to find which one costs what.
 
+use foxhunt_core::fix::device::{DeviceClass, TrackTraits};
 use foxhunt_core::model::bearing::wrap;
 use foxhunt_core::random;
 use rand_core::Rng;
@@ -33,18 +34,20 @@ pub const NOISE_DEG: [f32; 4] = [10.0, 12.0, 14.0, 16.0];
 pub const BIAS_DEG: [f32; 2] = [-5.0, 7.5];
 /// The interval each anchor's compression knee is drawn from, degrees off boresight.
 pub const KNEE_DEG: [f32; 2] = [40.0, 60.0];
-/// How many times its noise sd the trackers give each report. The compression is an error
-/// that stays while the walker stays near one place, so reports 27 ms apart are not
-/// independent; trusting each as if it were gave ellipses that held the walker 68 % of the
-/// time (docs/src/tracking.md). Chosen on this scenario with [`OFFSET_SD_FACTOR`] and
-/// [`MEMORY_S`].
-pub const REPORT_SD_FACTOR: f32 = 2.0;
+/// How many times its noise sd the trackers give each report: the indoor array class's
+/// ([`DeviceClass::track`]). The compression is an error that stays while the walker stays
+/// near one place, so reports 27 ms apart are not independent; trusting each as if it were
+/// gave ellipses that held the walker 68 % of the time (docs/src/tracking.md). Chosen on
+/// this scenario with [`OFFSET_SD_FACTOR`] and [`MEMORY_S`].
+pub const REPORT_SD_FACTOR: f32 = CLASS.report_sd_factor;
+/// What the class of indoor arrays tells a track.
+const CLASS: TrackTraits = DeviceClass::IndoorAoa.track();
 /// How many times the bias interval's sd the trackers' offset prior is: the offsets also
 /// take up the compression, which depends on where the walker is.
 pub const OFFSET_SD_FACTOR: f32 = 2.0;
-/// Seconds in which the trackers' offsets forget (the outdoor 120 s would hold on to a
-/// compression the walker has since left: ~12 m of walking).
-pub const MEMORY_S: f32 = 10.0;
+/// Seconds in which the trackers' offsets forget, the class's (the outdoor 1 500 s would
+/// hold on to a compression the walker has since left).
+pub const MEMORY_S: Option<f32> = CLASS.memory_s;
 
 /// The sd the trackers give a report of anchor `a`, radians.
 pub fn tracked_sd(a: usize) -> f32 {

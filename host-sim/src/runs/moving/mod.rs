@@ -444,7 +444,7 @@ impl MovingScenario {
             self.stations.len()
         ];
         if self.aoa.is_some() {
-            s.memory_s = Some(indoor::MEMORY_S);
+            s.memory_s = indoor::MEMORY_S;
         }
         s.power_sd = if self.rssi { self.power_sd } else { 0.0 };
         s.exponent_sd = if self.rssi { self.exponent_sd } else { 0.0 };

@@ -46,6 +46,7 @@ fn setup_of(d: &FieldDrive) -> StationSetup {
         priors: d.priors(BiasPrior::default()),
         origins: vec![PriorOrigin::StationsFile; d.stations.len()],
         noise: vec![None; d.stations.len()],
+        classes: vec![None; d.stations.len()],
     }
 }
 
