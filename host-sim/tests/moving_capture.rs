@@ -377,6 +377,18 @@ fn an_indoor_walker_s_records_track_as_well_as_its_measurements() {
                 .collect();
             from_file[k].extend(judge(&moved, &placed, f64::from(s.warmup_s)));
         }
+        if run == 1 {
+            // Nothing stated: the anchors' noise estimated, 10-13 degrees, and the class
+            // named for the three beyond an outdoor array's 10.
+            let t = foxhunt(&["track", path, "--motion", "indoor", "--particles", "1000"]);
+            let err = String::from_utf8_lossy(&t.stderr);
+            println!("{err}");
+            let named = err
+                .lines()
+                .filter(|l| l.contains("estimated") && l.contains("antenna = \"indoor-aoa\""))
+                .count();
+            assert!(t.status.success() && named >= 2, "{err}");
+        }
         let m = one(&s, Method::SirRobust, 1000, false, run).expect("in memory");
         in_memory.extend(
             m.errors

@@ -165,7 +165,11 @@ mod tests {
             assert!(n.noise.is_none_or(|s| 1.5 * s <= n.ceiling), "{c:?}");
             assert!(n.unmodelled > 0.0 && n.unmodelled < n.ceiling, "{c:?}");
             // A track takes every class's reports as they come but an indoor array's.
-            assert_eq!(c.track() == AS_REPORTED, c != DeviceClass::IndoorAoa, "{c:?}");
+            assert_eq!(
+                c.track() == AS_REPORTED,
+                c != DeviceClass::IndoorAoa,
+                "{c:?}"
+            );
         }
         assert_eq!(DeviceClass::from_name("nonsense"), None);
         assert_eq!(class_noise(None), UNSTATED);

@@ -20,6 +20,7 @@ use crate::track::capture::{Reading, TrackDecoder};
 use crate::track::indoor::AnchorsFile;
 use crate::track::live::{Dropped, LIVE_CHANNELS, LiveChannels, LiveTracker, Ready};
 use crate::track::moving::{Settings, TrackPoint, Update};
+use crate::track::noise::array_hint;
 use crate::track::tracks::{
     Options, Tracks, memory_s, offset_prior, one_station, settings, start_region, track_noise,
 };
@@ -488,6 +489,14 @@ fn step_all(
 ) -> Outcome {
     let prior_of = |s: u16| offset_prior(setup, usize::from(s));
     for r in ready {
+        // Each station's records' noise, for the note on a noise estimated wider.
+        let given: Vec<(u16, f32)> = r
+            .update
+            .epoch
+            .bearings()
+            .iter()
+            .map(|o| (o.station, o.bearing.sigma))
+            .collect();
         let point = match live.step(r, &prior_of) {
             Ok(Some(p)) => Ok(p),
             Ok(None) => {
@@ -512,10 +521,15 @@ fn step_all(
                 let on = r
                     .freq_mhz
                     .map_or(String::new(), |f| format!(" on {f:.3} MHz"));
+                let tracked = given
+                    .iter()
+                    .find(|(s, _)| *s == station)
+                    .map_or(0.0, |(_, sigma)| w * sigma);
                 note(&format!(
                     "foxhunt: {id}'s bearings scatter {w:.1} times their records' noise about \
                      the track{on}: from here they take the noise they show, estimated \
-                     (--sigma or the stations file's noise_deg states it)"
+                     (--sigma or the stations file's noise_deg states it){}",
+                    array_hint(tracked)
                 ));
             }
         }
