@@ -6,8 +6,8 @@
 //!
 //! Bars, and why: the host's tracker on the same geometry at 1 Hz is 270-300 m rmse (N = 1000
 //! and 200, docs/src/tracking.md), about twice the PCRB of 124 m, the offsets' doubt
-//! dominating (2 degrees at 4 km is 140 m). Measured here over 8 seeds: 107-583 m per run,
-//! 304 m pooled. A tracker that stopped following would be off by the drone's travel, 2 km on
+//! dominating (2 degrees at 4 km is 140 m). Measured here over 8 seeds: 227 m pooled (304 m,
+//! 107-583 m per run, with the first cloud at its bearings' own doubt). A tracker that stopped following would be off by the drone's travel, 2 km on
 //! average over the counted 270 s. The pooled bar, 500 m, is the host's N = 200 figure (306 m)
 //! with room for the smaller cloud and the eight runs' spread (per-run sd about 130 m: a
 //! standard error near 50 m, so the measured figure sits nearly four of them below); each run's bar,

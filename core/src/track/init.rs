@@ -77,8 +77,18 @@ const D_POS: usize = 2;
 /// Tries per particle at a crossing before the cloud gives up on crossings.
 const TRIES: usize = 8;
 
+/// How many times a first bearing's doubt (its noise and its offset's) the first cloud draws
+/// it at. The first bearings are one epoch, and a unit's first ones may be wild: drawn at
+/// their own doubt, the crossings lay at a wild crossing, the offsets took up the difference
+/// and kept it for their memory (two vehicles, the first epoch's bearings 8 degrees apart:
+/// coverage 77 %, 1.37x the bound over 100 runs, against 93.6 % and 1.09x clean). At 1.5:
+/// 90 % and 1.25x, clean 95 % and 1.11x; at 2, 94 % and 1.19x, but four fixed stations on a
+/// straight flight then held the truth 99.5 % of the time (wide).
+pub const START_DOUBT: f32 = 1.5;
+
 /// A bearing's angle as the prior expects the truth: its source's offset mean taken off, and
-/// a draw of its noise and of the offset's doubt (an infinite doubt counts as 30 degrees).
+/// a draw of its noise and of the offset's doubt (an infinite doubt counts as 30 degrees),
+/// widened [`START_DOUBT`] times.
 fn jittered<R: Rng + ?Sized>(o: &Observation, prior: &Prior<'_>, rng: &mut R) -> Bearing {
     let p = prior
         .offsets
@@ -90,7 +100,7 @@ fn jittered<R: Rng + ?Sized>(o: &Observation, prior: &Prior<'_>, rng: &mut R) ->
     } else {
         30f32.to_radians()
     };
-    let spread = libm::sqrtf(o.bearing.sigma * o.bearing.sigma + sd * sd);
+    let spread = START_DOUBT * libm::sqrtf(o.bearing.sigma * o.bearing.sigma + sd * sd);
     Bearing {
         theta: o.bearing.theta - p.mean + spread * random::normal(rng),
         ..o.bearing
