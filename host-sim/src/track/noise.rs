@@ -299,8 +299,10 @@ mod tests {
             assert!((2.4..3.6).contains(&n.tracked().to_degrees()), "{n:?}");
         }
         assert_eq!(noise[3].widened, 1.0, "stated right: kept");
+        // A noise given right scatters 0.86-1.23 times ([`WIDEN_ABOVE`]); these four are
+        // widened up to 1.24 (measured): 1.3 leaves room, and a 3 degree unit's 3x fails it.
         let (_, right) = track_estimating(&masts([1.0; 4]), &settings(), &[true; 4]).unwrap();
-        assert!(right.iter().all(|n| n.widened < 1.2), "{right:?}");
+        assert!(right.iter().all(|n| n.widened < 1.3), "{right:?}");
     }
 
     #[test]
