@@ -322,14 +322,21 @@ impl LiveChannels {
     }
 
     /// The stations of channel `c` whose noise is estimated and widened, by their index on
-    /// the line: how many times their records' noise their bearings now take.
-    pub fn widened(&self, c: usize) -> Vec<(u16, f32)> {
+    /// the line: how many times their records' noise their bearings now take, and that
+    /// noise (radians).
+    pub fn widened(&self, c: usize) -> Vec<(u16, f32, f32)> {
         self.channels.get(c).map_or_else(Vec::new, |ch| {
             ch.sources
                 .iter()
                 .enumerate()
-                .map(|(k, s)| (*s, ch.scatter.widened(k as u16)))
-                .filter(|(_, w)| *w > 1.0)
+                .map(|(k, s)| {
+                    (
+                        *s,
+                        ch.scatter.widened(k as u16),
+                        ch.scatter.tracked(k as u16),
+                    )
+                })
+                .filter(|(_, w, _)| *w > 1.0)
                 .collect()
         })
     }

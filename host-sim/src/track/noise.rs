@@ -188,6 +188,8 @@ pub fn track_estimating(
 pub struct LiveScatter {
     residuals: Vec<VecDeque<f32>>,
     widened: Vec<f32>,
+    /// Each source's records' noise, its last bearing's, radians.
+    given: Vec<f32>,
 }
 
 impl LiveScatter {
@@ -203,6 +205,11 @@ impl LiveScatter {
         self.widened.get(usize::from(k)).copied().unwrap_or(1.0)
     }
 
+    /// The noise source `k`'s bearings now take, radians (0 before it was heard).
+    pub fn tracked(&self, k: u16) -> f32 {
+        self.given.get(usize::from(k)).copied().unwrap_or(0.0) * self.widened(k)
+    }
+
     /// Learn from update `u` (as given, before [`widen`](Self::widen)) and its point `p`:
     /// each free source's (`free[source]`) scale, widened once it passes [`WIDEN_ABOVE`].
     pub fn learn(&mut self, u: &Update, p: &TrackPoint, free: &[bool]) {
@@ -212,7 +219,9 @@ impl LiveScatter {
             if self.residuals.len() <= k {
                 self.residuals.resize_with(k + 1, VecDeque::new);
                 self.widened.resize(k + 1, 1.0);
+                self.given.resize(k + 1, 0.0);
             }
+            self.given[k] = o.bearing.sigma;
             let r = &mut self.residuals[k];
             if r.len() == LIVE_WINDOW {
                 r.pop_front();

@@ -489,14 +489,6 @@ fn step_all(
 ) -> Outcome {
     let prior_of = |s: u16| offset_prior(setup, usize::from(s));
     for r in ready {
-        // Each station's records' noise, for the note on a noise estimated wider.
-        let given: Vec<(u16, f32)> = r
-            .update
-            .epoch
-            .bearings()
-            .iter()
-            .map(|o| (o.station, o.bearing.sigma))
-            .collect();
         let point = match live.step(r, &prior_of) {
             Ok(Some(p)) => Ok(p),
             Ok(None) => {
@@ -512,7 +504,7 @@ fn step_all(
             }
             Err(e) => Err(e),
         };
-        for (station, w) in live.widened(r.channel) {
+        for (station, w, tracked) in live.widened(r.channel) {
             if !said.widened.contains(&(r.channel, station)) {
                 said.widened.push((r.channel, station));
                 let id = stations
@@ -521,10 +513,6 @@ fn step_all(
                 let on = r
                     .freq_mhz
                     .map_or(String::new(), |f| format!(" on {f:.3} MHz"));
-                let tracked = given
-                    .iter()
-                    .find(|(s, _)| *s == station)
-                    .map_or(0.0, |(_, sigma)| w * sigma);
                 note(&format!(
                     "foxhunt: {id}'s bearings scatter {w:.1} times their records' noise about \
                      the track{on}: from here they take the noise they show, estimated \
