@@ -118,6 +118,92 @@ fn a_simulated_network_reads_back_with_its_stations_and_offsets() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `foxhunt serve --stations` on a network's records, the input ended: the map's `/state`.
+fn served_state(capture: &str, stations: &str) -> serde_json::Value {
+    use std::io::{BufRead, BufReader, Read, Write};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .args([
+            "serve",
+            "--addr",
+            "127.0.0.1:0",
+            "--pace",
+            "0",
+            "--linger",
+            "60",
+        ])
+        .args(["--stations", stations, capture])
+        .stderr(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .expect("start foxhunt serve");
+    let mut addr = None;
+    for l in BufReader::new(child.stderr.take().expect("its stderr")).lines() {
+        let l = l.expect("a line of its stderr");
+        if let Some(a) = l.strip_prefix("foxhunt serve: http://") {
+            addr = Some(a.trim_end_matches('/').to_string());
+        }
+        if l.contains("input ended") {
+            break;
+        }
+    }
+    let addr = addr.expect("serve printed its address");
+    let mut conn = std::net::TcpStream::connect(&addr).expect("connect to serve");
+    write!(conn, "GET /state HTTP/1.0\r\nHost: {addr}\r\n\r\n").expect("request");
+    let mut reply = String::new();
+    conn.read_to_string(&mut reply).expect("reply");
+    let _ = child.kill();
+    let _ = child.wait();
+    let body = reply.split("\r\n\r\n").nth(1).expect("a body");
+    serde_json::from_str(body).expect("the state as JSON")
+}
+
+#[test]
+fn the_live_map_fixes_with_the_stations_file_as_locate_does() {
+    let dir = std::env::temp_dir().join(format!("foxhunt-network-map-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("scratch");
+    let out = dir.join("net.xml");
+    let out = out.to_str().expect("path");
+    let s = foxhunt(&[
+        "simulate",
+        "--condition",
+        "network-reference",
+        "--run",
+        "3",
+        "--out",
+        out,
+    ]);
+    assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
+    let stations = dir.join("net.stations.toml");
+    let stations = stations.to_str().expect("path");
+    let l = foxhunt(&["locate", out, "--stations", stations, "--json"]);
+    assert_eq!(l.status.code(), Some(0));
+    let v: serde_json::Value = serde_json::from_slice(&l.stdout).expect("JSON");
+    let st = served_state(out, stations);
+    // The map's one emitter is `locate --stations`'s (the beacon's channel calibrates, it is
+    // no emitter of its own), to the digit.
+    let (e, m) = (&v["emitters"][0], &st["emitters"]);
+    println!("locate {}, {}; map {}", e["lat"], e["lon"], m[0]["at"]);
+    assert_eq!(m.as_array().map(Vec::len), Some(1), "{m}");
+    assert_eq!(m[0]["at"][0], e["lat"]);
+    assert_eq!(m[0]["at"][1], e["lon"]);
+    // Every mast with `locate`'s offset and where it came from.
+    let (mine, theirs) = (
+        st["stations"].as_array().expect("stations"),
+        v["stations"].as_array().expect("stations"),
+    );
+    assert_eq!(mine.len(), theirs.len());
+    for r in theirs {
+        let s = mine
+            .iter()
+            .find(|s| s["id"] == r["id"])
+            .expect("every station on the map");
+        assert_eq!(s["offset_deg"][0], r["offset_deg"], "{s}");
+        assert_eq!(s["offset_from"], r["offset_from"], "{s}");
+        assert_eq!(r["prior_from"], "reference");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// The advice guides a vehicle: in a network of fixed masts there is none, and `locate` says
 /// so instead of telling a mast where to drive; with a car among the masts the advice is the
 /// car's (its heading and place, not the last mast heard).

@@ -14,6 +14,7 @@ pub mod values;
 
 use crate::guidance::guide::Guide;
 use crate::inputs::roads::RoadGraph;
+use crate::inputs::stations::{Network, parse_reference};
 use crate::runs::field::Condition;
 use crate::runs::guidance::bench::Set;
 use crate::runs::scenario::NAMES;
@@ -77,6 +78,37 @@ pub struct GuidanceArgs {
     #[arg(long, value_name = "M", default_value_t = StopRule::default().target_cep50_m,
           value_parser = values::f32_where(|m| m > 0.0 && m.is_finite(), "a number of metres > 0"))]
     pub target_cep50_m: f32,
+}
+
+/// A network's description, shared by `locate` and `serve` (flattened into both): the map
+/// and the fix take the same stations and references.
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct NetworkArgs {
+    /// A stations file (TOML): each DF station's id, surveyed position, offset prior or
+    /// calibration, noise and antenna, and reference transmitters (docs/src/networks.md).
+    #[arg(long, value_name = "FILE")]
+    pub stations: Option<std::path::PathBuf>,
+    /// A reference transmitter at LAT,LON on MHZ (repeatable): its channel's bearings
+    /// calibrate every station that hears it.
+    #[arg(long, value_name = "LAT,LON@MHZ", allow_hyphen_values = true)]
+    pub reference: Vec<String>,
+}
+
+impl NetworkArgs {
+    /// The network these options describe, if any (the file read and checked whole).
+    pub fn network(&self) -> Result<Option<std::sync::Arc<Network>>, String> {
+        if self.stations.is_none() && self.reference.is_empty() {
+            return Ok(None);
+        }
+        let mut n = match &self.stations {
+            Some(path) => Network::load(path)?,
+            None => Network::default(),
+        };
+        for r in &self.reference {
+            n.add_reference(parse_reference(r)?)?;
+        }
+        Ok(Some(std::sync::Arc::new(n)))
+    }
 }
 
 impl GuidanceArgs {

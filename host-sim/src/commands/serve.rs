@@ -1,9 +1,10 @@
 //! `foxhunt serve`: the live map of a replayed capture, of standard input, or of a live line
 //! (KrakenSDRs' web pages, an MQTT broker).
 
-use super::{GuidanceArgs, values};
+use super::{GuidanceArgs, NetworkArgs, values};
 use crate::commands::locate::live::{LiveSource, reader};
 use crate::commands::locate::network_line;
+use crate::estimate::options::LocateOptions;
 use crate::inputs::files::{InputKind, Source};
 use crate::outputs::serve::{Input, ServeOptions, serve};
 use crate::outputs::terminal::{Outcome, Stop};
@@ -41,6 +42,10 @@ pub struct Args {
     /// The roads and the stop rule's target.
     #[command(flatten)]
     pub guidance: GuidanceArgs,
+    /// The stations file and the reference transmitters, as `locate` takes them: the map's
+    /// fix, stations and tracks are `locate`'s and `track`'s with them.
+    #[command(flatten)]
+    pub network: NetworkArgs,
     /// Online map tiles, a URL template such as `https://tile.example/{z}/{x}/{y}.png`.
     #[arg(long)]
     pub tiles: Option<String>,
@@ -89,6 +94,11 @@ fn line(a: &Args) -> Result<Option<Input>, Stop> {
 
 /// Run `foxhunt serve`.
 pub fn run(a: &Args) -> Outcome {
+    // The stations file read and checked before a line is polled or the server starts.
+    let locate = LocateOptions {
+        network: a.network.network()?,
+        ..LocateOptions::default()
+    };
     let input = match (line(a)?, a.captures.as_slice()) {
         (Some(live), _) => live,
         (None, []) => {
@@ -98,7 +108,7 @@ pub fn run(a: &Args) -> Outcome {
         }
         (None, captures) => replayed(a, captures)?,
     };
-    serve_input(a, input)
+    serve_input(a, input, locate)
 }
 
 /// Capture files to replay, or standard input.
@@ -133,8 +143,8 @@ fn replayed(a: &Args, captures: &[PathBuf]) -> Result<Input, Stop> {
     })
 }
 
-/// Serve `input`.
-fn serve_input(a: &Args, input: Input) -> Outcome {
+/// Serve `input`, located as `locate` says.
+fn serve_input(a: &Args, input: Input, locate: LocateOptions) -> Outcome {
     let linger = a.linger.map(Duration::from_secs_f64);
     serve(ServeOptions {
         addr: a.addr.clone(),
@@ -142,6 +152,7 @@ fn serve_input(a: &Args, input: Input) -> Outcome {
         guide: a.guidance.guide()?,
         tiles: a.tiles.clone(),
         linger,
+        locate,
     })
     .map_err(Into::into)
 }

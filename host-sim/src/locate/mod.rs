@@ -13,7 +13,7 @@
 pub mod advice;
 pub mod explain;
 mod method;
-mod pipeline;
+pub(crate) mod pipeline;
 pub mod report;
 pub mod stations;
 

@@ -1,7 +1,9 @@
 //! `locate` by the field pipeline (`ml-robust`): every channel's emitter and other sources.
 
 use crate::estimate::options::LocateOptions;
-use crate::estimate::stations::{LocalReference, calibrate_on_references, station_setup};
+use crate::estimate::stations::{
+    LocalReference, ReferenceFix, StationSetup, calibrate_on_references, station_setup,
+};
 use crate::estimate::{PipelineRun, pipeline, pool};
 use crate::inputs::capture::Decoded;
 use crate::inputs::stations::Reference;
@@ -53,17 +55,31 @@ fn source_report(s: &Source, frame: &LocalFrame, why: Option<&'static str>) -> S
     }
 }
 
-/// Every channel of the field pipeline's `locate` (emitters, regions and others): a channel
-/// whose range is open has its region; an emitter of `located_by_pipeline` is absent when
-/// only regions came out (the caller then reports no fix, with them).
-pub(crate) fn located_by_pipeline(
-    d: &Decoded,
+/// The field pipeline's run of a capture as `locate` makes it, and what it was made of.
+pub(crate) struct Solved<'a> {
+    /// The run.
+    pub run: PipelineRun,
+    /// Each station's prior and noise, calibrated on the reference transmitters.
+    pub setup: StationSetup,
+    /// The bearings solved: each with its stated noise, the references' channels out.
+    pub obs: Cow<'a, [Observation]>,
+    /// Every station's report.
+    pub stations: Vec<StationReport>,
+    /// The reference transmitters.
+    pub references: Vec<Reference>,
+    /// Their channels' measurements of the stations that heard them.
+    pub fixes: Vec<ReferenceFix>,
+}
+
+/// Solve `d` as `locate` does: each station's prior and noise from the stations file (else
+/// the defaults), the reference transmitters' channels calibrating the stations that hear
+/// them, then every channel by the field pipeline. The one place `locate` and the live map
+/// turn a network's options into a fix.
+pub(crate) fn solve<'a>(
+    d: &'a Decoded,
     o: &LocateOptions,
     frame: &LocalFrame,
-    rejected: &mut BTreeMap<&'static str, u32>,
-) -> Result<(Parts, Vec<StationReport>), Unlocated> {
-    // Each station's prior and noise (the stations file's, else the defaults), then the
-    // reference transmitters' channels calibrate the stations that hear them.
+) -> Result<Solved<'a>, Unlocated> {
     let network = o.network.as_deref();
     let mut setup = station_setup(
         d.stations.iter().map(|s| s.id.as_str()),
@@ -129,6 +145,34 @@ pub(crate) fn located_by_pipeline(
         directions: &r.found,
     };
     let stations = station_reports(d, network, &setup, found, &fixes, &references);
+    Ok(Solved {
+        run: r,
+        setup,
+        obs,
+        stations,
+        references,
+        fixes,
+    })
+}
+
+/// Every channel of the field pipeline's `locate` (emitters, regions and others): a channel
+/// whose range is open has its region; an emitter of `located_by_pipeline` is absent when
+/// only regions came out (the caller then reports no fix, with them).
+pub(crate) fn located_by_pipeline(
+    d: &Decoded,
+    o: &LocateOptions,
+    frame: &LocalFrame,
+    rejected: &mut BTreeMap<&'static str, u32>,
+) -> Result<(Parts, Vec<StationReport>), Unlocated> {
+    let Solved {
+        run: r,
+        setup,
+        obs,
+        stations,
+        references,
+        fixes,
+    } = solve(d, o, frame)?;
+    let bearings = || -> Vec<Bearing> { obs.iter().map(|x| x.bearing).collect() };
     let rj = &r.rejected;
     for (k, v) in [
         ("outlier", rj.outliers),

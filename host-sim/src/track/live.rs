@@ -16,15 +16,17 @@
 //! and the bearings of the first channel heard join its updates in one time order, as a
 //! recorded capture's do, its state sized for the stations a state with RSSI terms holds.
 
+use crate::estimate::stations::StationSetup;
+use crate::inputs::stations::PriorFrom;
 use crate::track::direction::Directions;
 use crate::track::moving::{Settings, TrackPoint, Update, max_sources, track_each};
 use crate::track::noise::LiveScatter;
-use crate::track::tracks::observable;
+use crate::track::tracks::{Options, memory_s, observable, track_noise};
 use crate::track::updates::Window;
 use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::fix::channel::belongs;
 use foxhunt_core::fix::observation::Observation;
-use foxhunt_core::track::{Layout, Level};
+use foxhunt_core::track::{Layout, Level, Motion};
 use std::sync::mpsc;
 use std::thread::JoinHandle;
 
@@ -160,6 +162,21 @@ impl LiveChannels {
         Self::sized(width_mhz, settings, unheard, true)
     }
 
+    /// Channels of bearings tracked as `o` says: its tracker, motion, seed, the stations
+    /// file's memory ([`memory_s`]) and, for a station not yet heard, the widest prior it may
+    /// have ([`unheard`]). `track -` and the live map start theirs here.
+    pub fn for_options(o: &Options) -> Self {
+        let mut settings = Settings::new(Layout::default(), o.motion.unwrap_or(Motion::OUTDOOR));
+        settings.method = o.method;
+        settings.particles = o.particles;
+        settings.seed = o.seed;
+        settings.memory_s = memory_s(o);
+        if let Some(a) = o.accel_sd {
+            settings.motion.accel_sd = a;
+        }
+        Self::new(o.width_mhz, settings, unheard(o))
+    }
+
     fn sized(width_mhz: f32, mut settings: Settings, unheard: BiasPrior, rssi: bool) -> Self {
         settings.layout = Layout {
             sources: max_sources(rssi) as u8,
@@ -251,6 +268,24 @@ impl LiveChannels {
             freq_mhz: ch.freq_mhz,
             update,
         }))
+    }
+
+    /// Take bearing `b` as its station is stated: its noise `sigma` (every station's), else
+    /// the stations file's or its class's ([`track_noise`]; else the record's own, estimated),
+    /// and the stated direction-dependent error taken out ([`Directions`]). As
+    /// [`push`](Self::push).
+    pub fn push_stated(
+        &mut self,
+        mut b: Observation,
+        sigma: Option<f32>,
+        setup: &StationSetup,
+    ) -> Result<Option<Ready>, Dropped> {
+        let stated = track_noise(setup, sigma, usize::from(b.station));
+        if let Some(s) = stated {
+            b.bearing.sigma = s;
+        }
+        self.directions.correct(&mut b, &setup.priors);
+        self.push(b, stated.is_some())
     }
 
     /// Take RSSI reading `l` taken at `t_s` (the bearings' time base): the update it closed, if
@@ -347,6 +382,34 @@ impl LiveChannels {
             [one] => Some(*one),
             _ => None,
         }
+    }
+}
+
+/// The offset prior of a station not yet heard when its channel's tracker starts: the widest
+/// of the priors the stations file states, its device classes' ([`offset_prior`](
+/// crate::track::tracks::offset_prior)) and `--offset-sd`'s, centred on zero (a station the
+/// file names without a prior has `--offset-sd`'s, or its class's, as a recording gives it).
+pub fn unheard(o: &Options) -> BiasPrior {
+    let widest = o
+        .network
+        .iter()
+        .flat_map(|n| {
+            let classes = n
+                .stations
+                .iter()
+                .map(|s| s.antenna)
+                .chain([n.default_antenna]);
+            n.stations
+                .iter()
+                .filter(|s| s.from != PriorFrom::Default)
+                .map(|s| s.prior.sd)
+                .chain(n.default_prior.map(|p| p.sd))
+                .chain(classes.flatten().filter_map(|c| c.track().offset_sd))
+        })
+        .fold(o.offset_sd, f32::max);
+    BiasPrior {
+        mean: 0.0,
+        sd: widest,
     }
 }
 

@@ -45,6 +45,31 @@ pub struct Options {
     pub smooth: bool,
 }
 
+/// Prior sd of a station's offset where nothing states it, degrees.
+pub const OFFSET_SD_DEG: f32 = 2.0;
+/// Channel width for grouping bearings by frequency, MHz (as `locate`'s default).
+pub const WIDTH_MHZ: f32 = 0.025;
+
+impl Default for Options {
+    /// `foxhunt track`'s defaults: the default tracker, each record's own noise (estimated),
+    /// no stations file.
+    fn default() -> Self {
+        Self {
+            method: crate::track::moving::DEFAULT_METHOD,
+            particles: crate::track::moving::PARTICLES,
+            offset_sd: OFFSET_SD_DEG.to_radians(),
+            motion: None,
+            accel_sd: None,
+            memory_s: None,
+            sigma: None,
+            width_mhz: WIDTH_MHZ,
+            seed: 1,
+            network: None,
+            smooth: false,
+        }
+    }
+}
+
 /// One channel's track.
 #[derive(Debug, Clone)]
 pub struct ChannelTrack {
@@ -162,7 +187,7 @@ pub(crate) fn settings(
 /// file's device classes' ([`DeviceClass::track`](foxhunt_core::fix::device::DeviceClass::track)),
 /// else the tracker's own. The file's, not a channel's sources': a live line starts its
 /// trackers before it has heard every station.
-pub(crate) fn memory_s(o: &Options) -> Option<f32> {
+pub fn memory_s(o: &Options) -> Option<f32> {
     let n = o.network.as_ref();
     let classes = n
         .into_iter()
@@ -176,7 +201,7 @@ pub(crate) fn memory_s(o: &Options) -> Option<f32> {
 
 /// Station `s`'s offset prior on a track: its own where stated, else the default widened to
 /// its class's ([`DeviceClass::track`](foxhunt_core::fix::device::DeviceClass::track)).
-pub(crate) fn offset_prior(setup: &StationSetup, s: usize) -> BiasPrior {
+pub fn offset_prior(setup: &StationSetup, s: usize) -> BiasPrior {
     let prior = setup.priors.of(s);
     let own = setup
         .origins
@@ -194,7 +219,7 @@ pub(crate) fn offset_prior(setup: &StationSetup, s: usize) -> BiasPrior {
 /// Station `s`'s noise on a track: `sigma` (every station's, stated), else its stations
 /// file's or class's, times its class's factor ([`DeviceClass::track`](
 /// foxhunt_core::fix::device::DeviceClass::track)); `None`: the records' own, estimated.
-pub(crate) fn track_noise(setup: &StationSetup, sigma: Option<f32>, s: usize) -> Option<f32> {
+pub fn track_noise(setup: &StationSetup, sigma: Option<f32>, s: usize) -> Option<f32> {
     let stated = sigma.or(setup.noise.get(s).copied().flatten())?;
     Some(stated * setup.track_traits(s).report_sd_factor)
 }

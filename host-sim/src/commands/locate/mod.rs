@@ -4,7 +4,7 @@
 pub mod live;
 pub mod window;
 
-use super::{GuidanceArgs, method, values};
+use super::{GuidanceArgs, NetworkArgs, method, values};
 use crate::estimate::options::{LocateOptions, PARTICLES};
 use crate::inputs::calibration::{Calibration, CalibrationCheck};
 use crate::inputs::capture::{Decoded, Decoder};
@@ -12,7 +12,6 @@ use crate::inputs::files::{InputKind, Source, stream};
 use crate::inputs::gpsd::GpsdAddress;
 use crate::inputs::kraken_http::KrakenUrl;
 use crate::inputs::mqtt::MqttUrl;
-use crate::inputs::stations::{Network, parse_reference};
 use crate::locate::report::Located;
 use crate::locate::{locate, locate_guided};
 use crate::outputs::cot::{self, CotSender, CotUrl};
@@ -125,14 +124,9 @@ pub struct Args {
     /// URL).
     #[arg(long, value_name = "URL")]
     pub kraken: Vec<String>,
-    /// A stations file (TOML): each DF station's id, surveyed position, offset prior or
-    /// calibration, noise and antenna, and reference transmitters (docs/src/networks.md).
-    #[arg(long, value_name = "FILE")]
-    pub stations: Option<PathBuf>,
-    /// A reference transmitter at LAT,LON on MHZ (repeatable): its channel's bearings
-    /// calibrate every station that hears it.
-    #[arg(long, value_name = "LAT,LON@MHZ", allow_hyphen_values = true)]
-    pub reference: Vec<String>,
+    /// The stations file and the reference transmitters.
+    #[command(flatten)]
+    pub network: NetworkArgs,
     /// Live: every station's bearings from an MQTT broker, `mqtt://HOST[:PORT]/PREFIX`
     /// (`foxhunt publish` sends them to PREFIX/bearings/CHANNEL/STATION); no CAPTURE. Each
     /// update is one channel's, the longest-waiting first (as many side by side as there are
@@ -186,21 +180,6 @@ pub struct Args {
     /// Replay only the bearings taken before T (RFC 3339 or ms since 1970 UTC).
     #[arg(long, value_name = "T", requires = "db", value_parser = parse_time)]
     pub until: Option<i64>,
-}
-
-/// The network `--stations` and `--reference` describe, if any.
-fn network(a: &Args) -> Result<Option<std::sync::Arc<Network>>, String> {
-    if a.stations.is_none() && a.reference.is_empty() {
-        return Ok(None);
-    }
-    let mut n = match &a.stations {
-        Some(path) => Network::load(path)?,
-        None => Network::default(),
-    };
-    for r in &a.reference {
-        n.add_reference(parse_reference(r)?)?;
-    }
-    Ok(Some(std::sync::Arc::new(n)))
 }
 
 /// Where the maps go: (path, named on the command line).
@@ -481,7 +460,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
         offset: calibration.as_ref().map(Calibration::prior),
         direction: calibration.as_ref().and_then(Calibration::direction),
         channel_width_mhz: a.channel_width_mhz,
-        network: network(a)?,
+        network: a.network.network()?,
     };
     options.check().map_err(Stop::Usage)?;
     // `inf` (the default): until the line closes.
@@ -509,7 +488,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
     if !calibrating {
         inputs.extend(a.calibration.as_deref());
     }
-    inputs.extend(a.stations.as_deref());
+    inputs.extend(a.network.stations.as_deref());
     // The history is read (a replay) or written only as a history.
     inputs.extend(a.db.as_deref());
     let outputs = Outputs::new(inputs, false);

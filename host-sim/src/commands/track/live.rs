@@ -12,23 +12,20 @@ use super::Args;
 use crate::commands::locate::live::{LiveSource, reader};
 use crate::estimate::stations::{StationSetup, station_setup};
 use crate::inputs::capture::{Decoder, LineFeed, StationInfo};
-use crate::inputs::stations::PriorFrom;
 use crate::outputs::cot::{self, CotSender};
 use crate::outputs::terminal::{Out, Outcome, Stop, note};
 use crate::outputs::tracks;
 use crate::track::capture::{Reading, TrackDecoder};
 use crate::track::indoor::AnchorsFile;
-use crate::track::live::{Dropped, LIVE_CHANNELS, LiveChannels, LiveTracker, Ready};
+use crate::track::live::{Dropped, LIVE_CHANNELS, LiveChannels, LiveTracker, Ready, unheard};
 use crate::track::moving::{Settings, TrackPoint, Update};
 use crate::track::noise::array_hint;
-use crate::track::tracks::{
-    Options, Tracks, memory_s, offset_prior, one_station, settings, start_region, track_noise,
-};
+use crate::track::tracks::{Options, Tracks, offset_prior, one_station, settings, start_region};
 use crate::track::updates::{AnchorEpochs, Channel, anchor_positions, level};
 use foxhunt_bridge::BridgeConfig;
 use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::fix::observation::Observation;
-use foxhunt_core::track::{Layout, Level, Motion};
+use foxhunt_core::track::Level;
 use std::time::Duration;
 
 /// Track what `source` delivers until it closes (or stays quiet for `quiet_exit`), printing a
@@ -53,15 +50,7 @@ pub fn run(
         mean: 0.0,
         sd: o.offset_sd,
     };
-    let mut settings = Settings::new(Layout::default(), o.motion.unwrap_or(Motion::OUTDOOR));
-    settings.method = o.method;
-    settings.particles = o.particles;
-    settings.seed = o.seed;
-    settings.memory_s = memory_s(o);
-    if let Some(a) = o.accel_sd {
-        settings.motion.accel_sd = a;
-    }
-    let mut live = LiveChannels::new(o.width_mhz, settings, unheard(o, fallback));
+    let mut live = LiveChannels::for_options(o);
     let mut line = reader(&source, None, None)?;
     let mut heard = 0usize;
     let mut points = Points::new(a);
@@ -309,7 +298,7 @@ impl<'a> Timed<'a> {
         let s = settings(&channel, Some(file), o, &setup);
         Self {
             o,
-            live: LiveChannels::with_rssi(o.width_mhz, s, unheard(o, fallback)),
+            live: LiveChannels::with_rssi(o.width_mhz, s, unheard(o)),
             file: file.clone(),
             at: None,
             base_ms: None,
@@ -426,17 +415,12 @@ fn push_bearings(
 /// update it closed.
 fn push_bearing(
     live: &mut LiveChannels,
-    mut b: Observation,
+    b: Observation,
     sigma: Option<f32>,
     setup: &StationSetup,
     dropped: &mut [bool; 2],
 ) -> Option<Ready> {
-    let stated = track_noise(setup, sigma, usize::from(b.station));
-    if let Some(s) = stated {
-        b.bearing.sigma = s;
-    }
-    live.directions.correct(&mut b, &setup.priors);
-    match live.push(b, stated.is_some()) {
+    match live.push_stated(b, sigma, setup) {
         Ok(r) => r,
         Err(why) => {
             let k = why as usize;
@@ -611,26 +595,5 @@ impl Points {
                 "no update could be tracked".into()
             }
         })))
-    }
-}
-
-/// The offset prior of a station not yet heard when its channel's tracker starts: the widest
-/// of the priors the stations file states and `--offset-sd`'s, centred on zero (a station the
-/// file names without a prior has `--offset-sd`'s, as a recording gives it).
-fn unheard(o: &Options, fallback: BiasPrior) -> BiasPrior {
-    let widest = o
-        .network
-        .iter()
-        .flat_map(|n| {
-            n.stations
-                .iter()
-                .filter(|s| s.from != PriorFrom::Default)
-                .map(|s| s.prior.sd)
-                .chain(n.default_prior.map(|p| p.sd))
-        })
-        .fold(fallback.sd, f32::max);
-    BiasPrior {
-        mean: 0.0,
-        sd: widest,
     }
 }

@@ -19,7 +19,7 @@ use crate::track::moving::{
     DEFAULT_METHOD, PARTICLES, TRACK_METHODS, TRACK_PARTICLES, max_sources,
 };
 use crate::track::noise::{STATED_TOO_SMALL, array_hint};
-use crate::track::tracks::{Options, Tracks};
+use crate::track::tracks::{OFFSET_SD_DEG, Options, Tracks, WIDTH_MHZ};
 use foxhunt_core::Method;
 use foxhunt_core::track::Motion;
 use std::path::{Path, PathBuf};
@@ -88,7 +88,7 @@ pub struct Args {
     #[arg(long, default_value_t = PARTICLES)]
     pub particles: usize,
     /// Prior sd of each DF unit's bearing offset, degrees.
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = OFFSET_SD_DEG)]
     pub offset_sd: f32,
     /// How the emitter moves: `outdoor` (a drone, a vehicle: 1 m/s^2, starting at up to
     /// 10 m/s, a stop or start once in ten minutes) or `indoor` (a person walking: 0.5 m/s^2,
@@ -119,7 +119,7 @@ pub struct Args {
     #[arg(long, value_name = "FILE")]
     pub stations: Option<PathBuf>,
     /// Channel width for grouping bearings by frequency, MHz.
-    #[arg(long, default_value_t = 0.025)]
+    #[arg(long, default_value_t = WIDTH_MHZ)]
     pub channel_width: f32,
     /// Seed of the particle filter.
     #[arg(long, default_value_t = 1)]

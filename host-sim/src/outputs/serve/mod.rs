@@ -15,6 +15,7 @@
 pub mod moving;
 pub mod state;
 
+use crate::estimate::options::LocateOptions;
 use crate::guidance::guide::Guide;
 use crate::inputs::capture::Decoder;
 use crate::inputs::files::CHUNK;
@@ -93,6 +94,8 @@ pub struct ServeOptions {
     pub tiles: Option<String>,
     /// After the input ends, serve this long more and exit (`None`: until stopped).
     pub linger: Option<Duration>,
+    /// How the fix is made (the stations file, the reference transmitters), as `locate`'s.
+    pub locate: LocateOptions,
 }
 
 struct Shared {
@@ -171,14 +174,16 @@ pub fn roads_geojson(g: &RoadGraph) -> String {
 fn feed(
     input: Input,
     mut guide: Guide,
+    locate: &LocateOptions,
     shared: Arc<Shared>,
     done: Arc<Notify>,
 ) -> Result<(), String> {
     let mut dec = Decoder::new(BridgeConfig::default(), false);
+    locate.survey(&mut dec);
     let mut update = 0u64;
     let mut history: Vec<[f64; 2]> = Vec::new();
     let mut reported = (0usize, 0u32);
-    let mut tracker = moving::MapTracker::default();
+    let mut tracker = moving::MapTracker::new(locate.network.as_deref());
     let mut publish = |dec: &mut Decoder, end: bool| {
         // New bearings, or a DF unit's new sentences (its user port carries no bearings).
         let n = (dec.decoded.observations.len(), dec.decoded.unit.sentences);
@@ -189,7 +194,15 @@ fn feed(
         dec.snapshot();
         update += 1;
         tracker.update(&dec.decoded, end);
-        let st = state::build(&dec.decoded, update, &history, &mut guide, &tracker, end);
+        let st = state::build(
+            &dec.decoded,
+            update,
+            &history,
+            &mut guide,
+            &tracker,
+            locate,
+            end,
+        );
         history = st.history.clone();
         if let Ok(body) = serde_json::to_string(&st) {
             if let Ok(mut l) = shared.latest.write() {
@@ -332,11 +345,11 @@ pub fn serve(o: ServeOptions) -> Result<(), String> {
             )
             .with_state(shared.clone());
         let done = Arc::new(Notify::new());
-        let (feeder_done, input, guide) = (done.clone(), o.input, o.guide);
+        let (feeder_done, input, guide, locate) = (done.clone(), o.input, o.guide, o.locate);
         let feeder = std::thread::Builder::new()
             .name("foxhunt-serve-input".into())
             .spawn(move || {
-                if let Err(e) = feed(input, guide, shared, feeder_done.clone()) {
+                if let Err(e) = feed(input, guide, &locate, shared, feeder_done.clone()) {
                     crate::outputs::terminal::note(&format!("foxhunt serve: {e}"));
                     feeder_done.notify_one();
                 }

@@ -3,26 +3,22 @@
 //! 95 % ellipse and a velocity arrow on the channels whose bearings the field pipeline finds
 //! moving (where it gives a fix, the emitter stands still and the fix is drawn instead).
 
+use crate::estimate::stations::station_setup;
 use crate::inputs::capture::Decoded;
+use crate::inputs::stations::Network;
 use crate::locate::report::geodetic;
 use crate::outputs::maps::ellipse_ring;
 use crate::track::live::{LiveChannels, Ready};
-use crate::track::moving::{Settings, TrackPoint};
+use crate::track::moving::TrackPoint;
+use crate::track::tracks::{Options, WIDTH_MHZ, offset_prior};
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_core::fix::bias::BiasPrior;
-use foxhunt_core::track::{Layout, Motion};
 use serde::Serialize;
 
 /// Track points kept per channel for the line (thinned to every other beyond).
 const TRACK_POINTS: usize = 2000;
-/// Particles of the map's trackers (the tracking default).
-const PARTICLES: usize = crate::track::moving::PARTICLES;
-/// Prior sd of a station's offset, degrees (`foxhunt track`'s default).
-const OFFSET_SD_DEG: f32 = 2.0;
 /// The velocity arrow shows where the emitter will be this many seconds on.
 pub const ARROW_S: f32 = 60.0;
-/// Channel width, MHz, as `locate`'s default groups them.
-const WIDTH_MHZ: f32 = 0.025;
 
 /// A moving emitter on the map.
 #[derive(Debug, Clone, Serialize)]
@@ -76,51 +72,62 @@ impl Line {
     }
 }
 
-/// Every channel tracked as its bearings arrive.
+/// Every channel tracked as its bearings arrive, as `foxhunt track -` tracks them with the
+/// same stations file: each station's stated noise and class, its offset prior, its stated
+/// direction-dependent error.
 pub struct MapTracker {
     live: LiveChannels,
     lines: Vec<Line>,
     /// Observations already handed to the trackers.
     taken: usize,
-    prior: BiasPrior,
+    options: Options,
 }
 
 impl Default for MapTracker {
     fn default() -> Self {
-        let mut settings = Settings::new(Layout::default(), Motion::OUTDOOR);
-        settings.particles = PARTICLES;
-        let prior = BiasPrior {
-            mean: 0.0,
-            sd: OFFSET_SD_DEG.to_radians(),
-        };
-        Self {
-            live: LiveChannels::new(WIDTH_MHZ, settings, prior),
-            lines: Vec::new(),
-            taken: 0,
-            prior,
-        }
+        Self::new(None)
     }
 }
 
 impl MapTracker {
+    /// Trackers at `track`'s defaults, each station as `network` (a stations file) states it.
+    pub fn new(network: Option<&Network>) -> Self {
+        let options = Options {
+            network: network.cloned(),
+            ..Options::default()
+        };
+        Self {
+            live: LiveChannels::for_options(&options),
+            lines: Vec::new(),
+            taken: 0,
+            options,
+        }
+    }
+
     /// Track the bearings `d` gained since the last call; `end`: the input ended, so the
     /// open updates close.
     pub fn update(&mut self, d: &Decoded, end: bool) {
         let mut new = d.observations[self.taken.min(d.observations.len())..].to_vec();
         self.taken = d.observations.len();
         new.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+        let fallback = BiasPrior {
+            mean: 0.0,
+            sd: self.options.offset_sd,
+        };
+        let ids = d.stations.iter().map(|s| s.id.as_str());
+        let setup = station_setup(ids, self.options.network.as_ref(), fallback, false);
         // A channel or station beyond the live tracker's is left off the map's tracks (the
-        // field pipeline still has its bearings); each station's noise is estimated.
+        // field pipeline still has its bearings); an unstated station's noise is estimated.
         let mut ready: Vec<Ready> = new
             .into_iter()
-            .filter_map(|o| self.live.push(o, false).ok().flatten())
+            .filter_map(|o| self.live.push_stated(o, None, &setup).ok().flatten())
             .collect();
         if end {
             ready.extend(self.live.close());
         }
-        let prior = self.prior;
+        let prior_of = |s: u16| offset_prior(&setup, usize::from(s));
         for r in ready {
-            let Ok(Some(p)) = self.live.step(r, &|_| prior) else {
+            let Ok(Some(p)) = self.live.step(r, &prior_of) else {
                 continue;
             };
             if self.lines.len() <= r.channel {
@@ -176,5 +183,58 @@ impl MapTracker {
                 })
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::runs::moving::MovingScenario;
+    use crate::track::capture::measure;
+    use crate::track::tracks::tracks;
+
+    /// A stations file of `text`, read as `--stations` reads one.
+    fn network(text: &str) -> Network {
+        let dir = std::env::temp_dir().join(format!("foxhunt-map-track-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("stations.toml");
+        std::fs::write(&path, text).unwrap();
+        let n = Network::load(&path).unwrap();
+        std::fs::remove_dir_all(&dir).ok();
+        n
+    }
+
+    #[test]
+    fn the_map_tracks_each_station_as_the_stations_file_states_it() {
+        // Four wall anchors' arrays watching a walker; the file states their class alone
+        // (twice their noise, a wider offset prior, a short memory: `DeviceClass::track`).
+        let scenario = MovingScenario::named("move-indoor-aoa").unwrap();
+        let run = crate::runs::moving::capture(&scenario, 1, crate::runs::simulate::DEFAULT_ORIGIN)
+            .unwrap();
+        let m = measure(&run.bytes, None);
+        let class = network("[default]\nantenna = \"indoor-aoa\"\n");
+        let o = Options {
+            network: Some(class.clone()),
+            ..Options::default()
+        };
+        let recorded = tracks(&m, None, &o).unwrap();
+        let want = &recorded.tracks[0].points;
+        let mut map = MapTracker::new(Some(&class));
+        map.update(&m.decoded, true);
+        let got = &map.lines[0];
+        println!(
+            "{} map points, {} recorded; last {:?} against {:?}",
+            got.seen,
+            want.len(),
+            got.last.map(|p| p.position),
+            want.last().map(|p| p.position)
+        );
+        // `foxhunt track --stations`'s track, point for point: the map's trackers are track's.
+        assert_eq!(got.seen, want.len());
+        assert_eq!(got.last.as_ref(), want.last());
+        // Without the file the class is not known and the track is another.
+        let mut plain = MapTracker::default();
+        plain.update(&m.decoded, true);
+        assert_ne!(plain.lines[0].last, got.last);
     }
 }

@@ -4,22 +4,22 @@
 //! sentences, the unit's fix as the unit said it. Everything is in latitude and longitude
 //! (the page draws, it does not compute).
 
+use crate::estimate::Pipeline;
 use crate::estimate::options::LocateOptions;
 use crate::estimate::stations::station_setup;
-use crate::estimate::{Pipeline, PipelineRun};
 use crate::guidance::guide::Guide;
 use crate::inputs::capture::Decoded;
 use crate::inputs::unit::UnitReport;
 use crate::locate::explain::open_range;
+use crate::locate::pipeline::solve;
 use crate::locate::report::{RegionReport, geodetic};
-use crate::locate::stations::{Found, station_reports};
+use crate::locate::stations::{Found, StationReport, station_reports};
 use crate::outputs::maps::{ellipse_ring, wedge_ring};
 use crate::outputs::serve::moving::{MapTrack, MapTracker};
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;
-use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::fix::ellipse::Ellipse;
-use foxhunt_core::fix::locate::{ChannelOutcome, LocateConfig, NoEmitter, Source};
+use foxhunt_core::fix::locate::{ChannelOutcome, NoEmitter, Source};
 use serde::Serialize;
 
 /// Route points sent at most (the route is thinned evenly beyond).
@@ -65,6 +65,9 @@ pub struct MapStation {
     /// Its offset and the offset's sd, degrees (from the fix holding most of its bearings;
     /// the prior's where no fix used it).
     pub offset_deg: [f32; 2],
+    /// Where the offset came from: `estimated`, or its prior's origin (`reference`,
+    /// `stations-file`, `default`, ...), as `locate`'s station report says.
+    pub offset_from: &'static str,
     /// Bearings it gave.
     pub bearings: u32,
 }
@@ -214,35 +217,14 @@ fn map_unit(report: UnitReport) -> MapUnit {
     }
 }
 
-/// The field pipeline on the observations, as `foxhunt locate` runs it.
-fn fix(d: &Decoded) -> Result<PipelineRun, String> {
-    crate::estimate::pipeline(
-        &d.observations,
-        &LocateConfig::default(),
-        &crate::estimate::Priors::default(),
-        1,
-    )
-    .map_err(|e| e.to_string())
-}
-
-/// Every station with its latest bearing (a ray `reach` metres long) and its offset.
+/// Every station with its latest bearing (a ray `reach` metres long) and its offset, as
+/// `reports` (`locate`'s) give them.
 fn map_stations(
     d: &Decoded,
     frame: &LocalFrame,
-    run: Option<&PipelineRun>,
+    reports: Vec<StationReport>,
     reach: f32,
 ) -> Vec<MapStation> {
-    let setup = station_setup(
-        d.stations.iter().map(|s| s.id.as_str()),
-        None,
-        BiasPrior::default(),
-        false,
-    );
-    let found = run.map_or_else(Found::default, |r| Found {
-        offsets: &r.offsets,
-        directions: &r.found,
-    });
-    let reports = station_reports(d, None, &setup, found, &[], &[]);
     let latest = crate::outputs::maps::latest_bearings(d);
     reports
         .into_iter()
@@ -259,10 +241,23 @@ fn map_stations(
                 at: ll(frame, b.vehicle),
                 ray: [ll(frame, b.vehicle), ll(frame, end)],
                 offset_deg: [r.offset_deg, r.offset_sd_deg],
+                offset_from: r.offset_from,
                 bearings: r.bearings,
             })
         })
         .collect()
+}
+
+/// Every station as `locate` reports it when no fix came out: its prior's offset.
+fn unsolved_stations(d: &Decoded, o: &LocateOptions) -> Vec<StationReport> {
+    let network = o.network.as_deref();
+    let setup = station_setup(
+        d.stations.iter().map(|s| s.id.as_str()),
+        network,
+        o.offset.unwrap_or_default(),
+        o.offset.is_some(),
+    );
+    station_reports(d, network, &setup, Found::default(), &[], &[])
 }
 
 fn no_emitter(r: &Pipeline) -> String {
@@ -293,13 +288,15 @@ pub struct MapRegion {
 
 /// Build the map's state after `update` updates; `history` carries the CEP50 history from
 /// the last state; `guide` advises (with roads: a road turn); `tracker` has tracked every
-/// channel (drawn where the emitter moves).
+/// channel (drawn where the emitter moves); `o`: `locate`'s options (the stations file, the
+/// reference transmitters), so the map shows what `locate` says.
 pub fn build(
     d: &Decoded,
     update: u64,
     history: &[[f64; 2]],
     guide: &mut Guide,
     tracker: &MapTracker,
+    o: &LocateOptions,
     done: bool,
 ) -> MapState {
     let bearings: Vec<foxhunt_core::Bearing> = d.bearings().copied().collect();
@@ -323,8 +320,11 @@ pub fn build(
         .chain(bearings.last())
         .map(|b| ll(&frame, b.vehicle))
         .collect();
-    let run = fix(d);
-    let report = run.as_ref().map(|r| r.report).map_err(String::clone);
+    let solved = solve(d, o, &frame);
+    let report = solved
+        .as_ref()
+        .map(|s| &s.run.report)
+        .map_err(|u| u.error.clone());
     let sources: Vec<Source> = report
         .as_ref()
         .map(|r| r.emitters().to_vec())
@@ -337,7 +337,11 @@ pub fn build(
         })
         .unwrap_or(3000.0)
         .clamp(500.0, 20_000.0);
-    st.stations = map_stations(d, &frame, run.as_ref().ok(), reach);
+    let reports = match &solved {
+        Ok(s) => s.stations.clone(),
+        Err(_) => unsolved_stations(d, o),
+    };
+    st.stations = map_stations(d, &frame, reports, reach);
     st.rays = bearings[bearings.len().saturating_sub(RAYS)..]
         .iter()
         .map(|b| {
@@ -401,7 +405,7 @@ pub fn build(
         st.advice_error = Some("no bearing yet".into());
         return st;
     };
-    match guide.advise_every(d, &sources, &LocateOptions::default()) {
+    match guide.advise_every(d, &sources, o) {
         Ok(g) => {
             let a = g.advice;
             st.advice = Some(MapAdvice {
@@ -459,7 +463,15 @@ mod tests {
         .unwrap();
         let d = crate::inputs::capture::decode(&bytes, Default::default(), false);
         let mut guide = Guide::new(None, 100.0).unwrap();
-        let st = build(&d, 1, &[], &mut guide, &MapTracker::default(), true);
+        let st = build(
+            &d,
+            1,
+            &[],
+            &mut guide,
+            &MapTracker::default(),
+            &LocateOptions::default(),
+            true,
+        );
         let ids: Vec<(&str, bool)> = st
             .stations
             .iter()
@@ -479,6 +491,84 @@ mod tests {
     }
 
     #[test]
+    fn the_map_fixes_with_the_stations_file_and_its_references_as_locate_does() {
+        // Three masts and a beacon they all hear: the stations file states each mast's noise
+        // and prior, and the beacon calibrates them.
+        let origin = LatLon {
+            lat: 47.0,
+            lon: 8.0,
+        };
+        let (bytes, toml, _) = crate::runs::network::capture(
+            crate::runs::network::NetworkCondition::Reference,
+            0,
+            origin,
+        )
+        .unwrap();
+        let dir = std::env::temp_dir().join(format!("foxhunt-map-net-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("stations.toml");
+        std::fs::write(&file, toml).unwrap();
+        let network = crate::inputs::stations::Network::load(&file).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        let o = LocateOptions {
+            network: Some(std::sync::Arc::new(network)),
+            ..LocateOptions::default()
+        };
+        let d = crate::inputs::capture::decode(&bytes, Default::default(), false);
+        let mut guide = Guide::new(None, 100.0).unwrap();
+        let tracker = MapTracker::new(o.network.as_deref());
+        let st = build(&d, 1, &[], &mut guide, &tracker, &o, true);
+        let located = crate::locate::locate(&d, &o).unwrap();
+        // The map's emitter is `locate --stations`'s, to the bit.
+        let (e, l) = (&st.emitters[0], &located.report.emitters[0]);
+        assert_eq!(e.at, [l.lat, l.lon]);
+        assert_eq!(e.cep50_m, l.cep50_m);
+        // Every mast's offset as `locate` reports it, the beacon's calibration among them.
+        assert_eq!(st.stations.len(), located.report.stations.len());
+        for (m, r) in st.stations.iter().zip(&located.report.stations) {
+            assert_eq!(
+                (m.id.as_str(), m.offset_deg, m.offset_from),
+                (
+                    r.id.as_str(),
+                    [r.offset_deg, r.offset_sd_deg],
+                    r.offset_from
+                )
+            );
+        }
+        let priors: Vec<_> = located
+            .report
+            .stations
+            .iter()
+            .map(|r| r.prior_from)
+            .collect();
+        println!("priors {priors:?}");
+        assert!(
+            priors
+                .iter()
+                .all(|p| *p == crate::estimate::stations::PriorOrigin::Reference),
+            "{priors:?}"
+        );
+        // Without the file the beacon's channel is an emitter of its own and no mast is
+        // calibrated: the map is not the same.
+        let plain = build(
+            &d,
+            1,
+            &[],
+            &mut guide,
+            &MapTracker::default(),
+            &LocateOptions::default(),
+            true,
+        );
+        assert!(plain.stations.iter().all(|s| s.offset_from != "reference"));
+        assert_ne!(
+            plain.emitters.len(),
+            st.emitters.len(),
+            "{:?}",
+            plain.emitters
+        );
+    }
+
+    #[test]
     fn an_open_range_is_drawn_as_its_region() {
         // Six 15 degree bearings on 300 m: no fix, a region; the page gets its wedge and words.
         let (bytes, truths) = crate::runs::field::capture(
@@ -489,7 +579,15 @@ mod tests {
         .unwrap();
         let d = crate::inputs::capture::decode(&bytes, Default::default(), false);
         let mut guide = Guide::new(None, 100.0).unwrap();
-        let st = build(&d, 1, &[], &mut guide, &MapTracker::default(), true);
+        let st = build(
+            &d,
+            1,
+            &[],
+            &mut guide,
+            &MapTracker::default(),
+            &LocateOptions::default(),
+            true,
+        );
         assert!(st.emitters.is_empty(), "{:?}", st.emitters);
         assert_eq!(st.regions.len(), 1, "{:?}", st.fix_error);
         let r = &st.regions[0];
