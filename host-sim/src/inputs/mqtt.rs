@@ -362,6 +362,18 @@ pub struct Subscription {
     waiting: Mutex<BTreeMap<String, String>>,
 }
 
+/// A client of `options` with a request queue of `cap`, its socket sending each packet at
+/// once: with Nagle's algorithm (rumqttc's default) a small message waits for the peer's
+/// delayed acknowledgement of the last, tens of milliseconds a bearing or a fix
+/// (docs/src/speed.md, "Through an MQTT broker").
+pub fn client(options: MqttOptions, cap: usize) -> (Client, Connection) {
+    let (client, mut conn) = Client::new(options, cap);
+    let mut network = conn.eventloop.network_options();
+    network.set_tcp_nodelay(true);
+    conn.eventloop.set_network_options(network);
+    (client, conn)
+}
+
 /// Wait for the first connection: a broker that cannot be reached is the command's error.
 pub fn first_connect(conn: &mut Connection, url: &MqttUrl) -> Result<bool, String> {
     let start = Instant::now();
@@ -422,7 +434,7 @@ impl Subscription {
         // had used them would stall the broker's few messages in flight behind each solve,
         // and overflow its queue for this worker.
         options.set_manual_acks(true);
-        let (client, mut conn) = Client::new(options, 64);
+        let (client, mut conn) = client(options, 64);
         let filter = url.worker_filter(shard);
         first_connect(&mut conn, url)?;
         // Also on a session the broker kept: the same client id may have subscribed under
