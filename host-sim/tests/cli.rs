@@ -485,6 +485,10 @@ fn a_direction_dependent_error_no_one_stated_is_found_and_said() {
     // The emitter at (1500, 1500) m: the fix within its ellipse and far tighter than the
     // 120 m one that ignored the error (bars: twice the semi-axes measured).
     let e = &r["emitters"][0];
+    // Found on the emitter's channel (within the channel's 25 kHz).
+    let on = found["channel_mhz"].as_f64().expect("its channel")
+        - e["freq_mhz"].as_f64().expect("a frequency");
+    assert!(on.abs() <= 0.025, "{found}");
     let (east, north) = (
         e["east_m"].as_f64().expect("east"),
         e["north_m"].as_f64().expect("north"),

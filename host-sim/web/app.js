@@ -87,7 +87,9 @@ function render(st) {
   for (const s of st.stations || []) {
     L.polyline(s.ray, { color: "#8c564b", weight: 1.5, opacity: 0.8 }).addTo(layers);
     const tip = `${s.id} (${s.fixed ? "fixed" : "mobile"}): offset ${fmt(s.offset_deg[0], 1)} ± `
-      + `${fmt(s.offset_deg[1], 1)}° (${s.offset_from}), ${s.bearings} bearings`;
+      + `${fmt(s.offset_deg[1], 1)}° (${s.offset_from}), ${s.bearings} bearings`
+      + (s.direction_found_deg ? `; an error that follows the direction found: `
+        + `${fmt(s.direction_found_deg[0], 1)}° and ${fmt(s.direction_found_deg[1], 1)}° harmonics` : "");
     if (s.fixed) {
       const icon = L.divIcon({ className: "station-fixed", html: "<div></div>", iconSize: [12, 12] });
       L.marker(s.at, { icon, keyboard: false, title: s.id }).addTo(layers).bindTooltip(tip);

@@ -48,6 +48,9 @@ pub struct FoundReport {
     pub tested: usize,
     /// The prior sd of each coefficient the fix then modelled them with, degrees.
     pub modelled_sd_deg: f32,
+    /// The channel of the fix whose residuals showed it (its lowest frequency, MHz; null for
+    /// bearings without one).
+    pub channel_mhz: Option<f32>,
 }
 
 impl From<&FoundDirection> for FoundReport {
@@ -58,6 +61,7 @@ impl From<&FoundDirection> for FoundReport {
             chi2: f.chi2,
             tested: f.rank,
             modelled_sd_deg: f.prior_sd.to_degrees(),
+            channel_mhz: f.channel_mhz,
         }
     }
 }

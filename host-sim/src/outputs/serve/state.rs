@@ -68,6 +68,9 @@ pub struct MapStation {
     /// Where the offset came from: `estimated`, or its prior's origin (`reference`,
     /// `stations-file`, `default`, ...), as `locate`'s station report says.
     pub offset_from: &'static str,
+    /// A direction-dependent error no one stated that its residuals showed: the first and
+    /// second harmonic's amplitudes, degrees (null: none found, or one stated).
+    pub direction_found_deg: Option<[f32; 2]>,
     /// Bearings it gave.
     pub bearings: u32,
 }
@@ -242,6 +245,7 @@ fn map_stations(
                 ray: [ll(frame, b.vehicle), ll(frame, end)],
                 offset_deg: [r.offset_deg, r.offset_sd_deg],
                 offset_from: r.offset_from,
+                direction_found_deg: r.direction_found.as_ref().map(|f| f.amplitudes_deg),
                 bearings: r.bearings,
             })
         })
@@ -566,6 +570,30 @@ mod tests {
             "{:?}",
             plain.emitters
         );
+    }
+
+    #[test]
+    fn a_direction_dependent_error_found_is_on_the_map() {
+        // A unit whose error follows the direction relative to the vehicle, nothing stated:
+        // `locate` finds it, and the map's station says so with its harmonics.
+        let (bytes, _) = crate::runs::field::capture(
+            crate::runs::field::Condition::DirectionUnstated,
+            3,
+            crate::runs::simulate::DEFAULT_ORIGIN,
+        )
+        .unwrap();
+        let d = crate::inputs::capture::decode(&bytes, Default::default(), false);
+        let mut guide = Guide::new(None, 100.0).unwrap();
+        let o = LocateOptions::default();
+        let st = build(&d, 1, &[], &mut guide, &MapTracker::default(), &o, true);
+        let located = crate::locate::locate(&d, &o).unwrap();
+        let want = located.report.stations[0]
+            .direction_found
+            .as_ref()
+            .map(|f| f.amplitudes_deg);
+        println!("found {want:?}");
+        assert!(want.is_some());
+        assert_eq!(st.stations[0].direction_found_deg, want);
     }
 
     #[test]
