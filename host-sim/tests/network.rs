@@ -3,6 +3,8 @@
 //! finds the emitter and each station's offset as the simulation drew it; its GeoJSON and KML
 //! carry every station.
 
+mod common;
+
 use std::process::Command;
 
 use foxhunt_sim::runs::network::{NetworkCondition, simulate};
@@ -14,22 +16,29 @@ fn foxhunt(args: &[&str]) -> std::process::Output {
         .expect("run foxhunt")
 }
 
-#[test]
-fn a_simulated_network_reads_back_with_its_stations_and_offsets() {
-    let dir = std::env::temp_dir().join(format!("foxhunt-network-{}", std::process::id()));
+/// `simulate --condition network-reference --run RUN` into a scratch directory named `name`:
+/// the directory, and the records' path (the stations file beside, `net.stations.toml`).
+fn simulated(name: &str, run: &str) -> (std::path::PathBuf, String) {
+    let dir = std::env::temp_dir().join(format!("foxhunt-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("scratch");
-    let out = dir.join("net.xml");
-    let out = out.to_str().expect("path");
+    let out = dir.join("net.xml").to_str().expect("path").to_string();
     let s = foxhunt(&[
         "simulate",
         "--condition",
         "network-reference",
         "--run",
-        "2",
+        run,
         "--out",
-        out,
+        &out,
     ]);
     assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
+    (dir, out)
+}
+
+#[test]
+fn a_simulated_network_reads_back_with_its_stations_and_offsets() {
+    let (dir, out) = simulated("network", "2");
+    let out = out.as_str();
     let stations = dir.join("net.stations.toml");
     let (geo, kml) = (dir.join("net.geojson"), dir.join("net.kml"));
     let l = foxhunt(&[
@@ -120,33 +129,9 @@ fn a_simulated_network_reads_back_with_its_stations_and_offsets() {
 
 /// `foxhunt serve --stations` on a network's records, the input ended: the map's `/state`.
 fn served_state(capture: &str, stations: &str) -> serde_json::Value {
-    use std::io::{BufRead, BufReader, Read, Write};
-    let mut child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
-        .args([
-            "serve",
-            "--addr",
-            "127.0.0.1:0",
-            "--pace",
-            "0",
-            "--linger",
-            "60",
-        ])
-        .args(["--stations", stations, capture])
-        .stderr(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::null())
-        .spawn()
-        .expect("start foxhunt serve");
-    let mut addr = None;
-    for l in BufReader::new(child.stderr.take().expect("its stderr")).lines() {
-        let l = l.expect("a line of its stderr");
-        if let Some(a) = l.strip_prefix("foxhunt serve: http://") {
-            addr = Some(a.trim_end_matches('/').to_string());
-        }
-        if l.contains("input ended") {
-            break;
-        }
-    }
-    let addr = addr.expect("serve printed its address");
+    use std::io::{Read, Write};
+    let (mut child, addr) =
+        common::serve_ended(&["--linger", "60", "--stations", stations, capture]);
     let mut conn = std::net::TcpStream::connect(&addr).expect("connect to serve");
     write!(conn, "GET /state HTTP/1.0\r\nHost: {addr}\r\n\r\n").expect("request");
     let mut reply = String::new();
@@ -159,20 +144,8 @@ fn served_state(capture: &str, stations: &str) -> serde_json::Value {
 
 #[test]
 fn the_live_map_fixes_with_the_stations_file_as_locate_does() {
-    let dir = std::env::temp_dir().join(format!("foxhunt-network-map-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("scratch");
-    let out = dir.join("net.xml");
-    let out = out.to_str().expect("path");
-    let s = foxhunt(&[
-        "simulate",
-        "--condition",
-        "network-reference",
-        "--run",
-        "3",
-        "--out",
-        out,
-    ]);
-    assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
+    let (dir, out) = simulated("network-map", "3");
+    let out = out.as_str();
     let stations = dir.join("net.stations.toml");
     let stations = stations.to_str().expect("path");
     let l = foxhunt(&["locate", out, "--stations", stations, "--json"]);

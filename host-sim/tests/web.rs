@@ -2,9 +2,8 @@
 //! replayed through `foxhunt serve`, the page loaded, and its DOM checked for the fix and the
 //! suggested move; a screenshot is saved to target/tmp/web/live-map.png.
 
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Command};
 
 mod common;
 use common::{grid_osm, simulate};
@@ -23,37 +22,17 @@ fn chromium() -> PathBuf {
 /// `foxhunt serve` on `capture` (roads from `osm`), once its input has ended: the child and its
 /// address.
 fn serve(capture: &Path, osm: &Path) -> (Child, String) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_foxhunt"))
-        .args([
-            "serve",
-            "--addr",
-            "127.0.0.1:0",
-            "--pace",
-            "0",
-            // The page's event stream ends with `end` (the input has ended), which lets the
-            // browser finish loading; the server stays until the test stops it.
-            "--linger",
-            "300",
-        ])
-        .arg("--roads")
-        .arg(osm)
-        .arg(capture)
-        .stderr(Stdio::piped())
-        .stdout(Stdio::null())
-        .spawn()
-        .expect("start foxhunt serve");
-    let mut lines = BufReader::new(child.stderr.take().expect("its stderr")).lines();
-    let mut addr = None;
-    for l in lines.by_ref() {
-        let l = l.expect("a line of its stderr");
-        if let Some(a) = l.strip_prefix("foxhunt serve: http://") {
-            addr = Some(format!("http://{a}"));
-        }
-        if l.contains("input ended") {
-            break;
-        }
-    }
-    (child, addr.expect("serve printed its address"))
+    // The page's event stream ends with `end` (the input has ended), which lets the browser
+    // finish loading; the server stays until the test stops it.
+    let linger = std::ffi::OsStr::new("300");
+    let (child, addr) = common::serve_ended(&[
+        std::ffi::OsStr::new("--linger"),
+        linger,
+        std::ffi::OsStr::new("--roads"),
+        osm.as_os_str(),
+        capture.as_os_str(),
+    ]);
+    (child, format!("http://{addr}"))
 }
 
 fn browser(dir: &Path, what: &[&str], url: &str) -> std::process::Output {

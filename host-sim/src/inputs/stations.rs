@@ -302,6 +302,13 @@ impl Network {
             .map_err(|e| format!("{name}: {e}"))
     }
 
+    /// The network of a stations file's `text` (calibration files relative to the working
+    /// directory): the tests' stations files, without a file.
+    #[cfg(test)]
+    pub(crate) fn from_text(text: &str) -> Result<Self, String> {
+        Self::from_toml(crate::inputs::files::parse_toml(text)?, Path::new("."))
+    }
+
     /// The checked network of a parsed file (calibration files relative to `dir`).
     fn from_toml(t: FileToml, dir: &Path) -> Result<Self, String> {
         if t.station.len() > MAX_STATIONS {
@@ -516,8 +523,7 @@ mod tests {
     use super::*;
 
     fn parse(text: &str) -> Result<Network, String> {
-        let t: FileToml = crate::inputs::files::parse_toml(text)?;
-        Network::from_toml(t, Path::new("."))
+        Network::from_text(text)
     }
 
     #[test]

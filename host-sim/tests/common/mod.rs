@@ -72,6 +72,29 @@ pub fn piped(args: &[&str]) -> Child {
         .expect("run foxhunt")
 }
 
+/// `foxhunt serve ARGS` on any free port, unpaced, once its input has ended (the server
+/// stays until the caller stops it): the child and its address, `HOST:PORT`.
+pub fn serve_ended<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> (Child, String) {
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_foxhunt"))
+        .args(["serve", "--addr", "127.0.0.1:0", "--pace", "0"])
+        .args(args)
+        .stderr(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .expect("start foxhunt serve");
+    let mut addr = None;
+    for l in BufReader::new(child.stderr.take().expect("its stderr")).lines() {
+        let l = l.expect("a line of its stderr");
+        if let Some(a) = l.strip_prefix("foxhunt serve: http://") {
+            addr = Some(a.trim_end_matches('/').to_string());
+        }
+        if l.contains("input ended") {
+            break;
+        }
+    }
+    (child, addr.expect("serve printed its address"))
+}
+
 /// The lines of `child`'s standard output as they come, read on a thread of their own (a live
 /// command prints while its input is still open).
 pub fn line_reader(child: &mut Child) -> Receiver<String> {

@@ -193,17 +193,6 @@ mod tests {
     use crate::track::capture::measure;
     use crate::track::tracks::tracks;
 
-    /// A stations file of `text`, read as `--stations` reads one.
-    fn network(text: &str) -> Network {
-        let dir = std::env::temp_dir().join(format!("foxhunt-map-track-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("stations.toml");
-        std::fs::write(&path, text).unwrap();
-        let n = Network::load(&path).unwrap();
-        std::fs::remove_dir_all(&dir).ok();
-        n
-    }
-
     #[test]
     fn the_map_tracks_each_station_as_the_stations_file_states_it() {
         // Four wall anchors' arrays watching a walker; the file states their class alone
@@ -212,7 +201,7 @@ mod tests {
         let run = crate::runs::moving::capture(&scenario, 1, crate::runs::simulate::DEFAULT_ORIGIN)
             .unwrap();
         let m = measure(&run.bytes, None);
-        let class = network("[default]\nantenna = \"indoor-aoa\"\n");
+        let class = Network::from_text("[default]\nantenna = \"indoor-aoa\"\n").unwrap();
         let o = Options {
             network: Some(class.clone()),
             ..Options::default()

@@ -453,29 +453,28 @@ mod tests {
         );
     }
 
-    #[test]
-    fn every_station_is_on_the_map_with_its_latest_bearing_and_offset() {
+    /// Run 0 of network condition `c` about 47.0, 8.0: its records decoded, its stations file.
+    fn network_run(c: crate::runs::network::NetworkCondition) -> (Decoded, String) {
         let origin = LatLon {
             lat: 47.0,
             lon: 8.0,
         };
-        let (bytes, _, _) = crate::runs::network::capture(
-            crate::runs::network::NetworkCondition::Mobile,
-            0,
-            origin,
-        )
-        .unwrap();
+        let (bytes, toml, _) = crate::runs::network::capture(c, 0, origin).unwrap();
         let d = crate::inputs::capture::decode(&bytes, Default::default(), false);
+        (d, toml)
+    }
+
+    /// The map once `d` has been decoded to its end, located as `o` says.
+    fn map(d: &Decoded, o: &LocateOptions) -> MapState {
         let mut guide = Guide::new(None, 100.0).unwrap();
-        let st = build(
-            &d,
-            1,
-            &[],
-            &mut guide,
-            &MapTracker::default(),
-            &LocateOptions::default(),
-            true,
-        );
+        let tracker = MapTracker::new(o.network.as_deref());
+        build(d, 1, &[], &mut guide, &tracker, o, true)
+    }
+
+    #[test]
+    fn every_station_is_on_the_map_with_its_latest_bearing_and_offset() {
+        let (d, _) = network_run(crate::runs::network::NetworkCondition::Mobile);
+        let st = map(&d, &LocateOptions::default());
         let ids: Vec<(&str, bool)> = st
             .stations
             .iter()
@@ -498,30 +497,13 @@ mod tests {
     fn the_map_fixes_with_the_stations_file_and_its_references_as_locate_does() {
         // Three masts and a beacon they all hear: the stations file states each mast's noise
         // and prior, and the beacon calibrates them.
-        let origin = LatLon {
-            lat: 47.0,
-            lon: 8.0,
-        };
-        let (bytes, toml, _) = crate::runs::network::capture(
-            crate::runs::network::NetworkCondition::Reference,
-            0,
-            origin,
-        )
-        .unwrap();
-        let dir = std::env::temp_dir().join(format!("foxhunt-map-net-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let file = dir.join("stations.toml");
-        std::fs::write(&file, toml).unwrap();
-        let network = crate::inputs::stations::Network::load(&file).unwrap();
-        std::fs::remove_dir_all(&dir).unwrap();
+        let (d, toml) = network_run(crate::runs::network::NetworkCondition::Reference);
+        let network = crate::inputs::stations::Network::from_text(&toml).unwrap();
         let o = LocateOptions {
             network: Some(std::sync::Arc::new(network)),
             ..LocateOptions::default()
         };
-        let d = crate::inputs::capture::decode(&bytes, Default::default(), false);
-        let mut guide = Guide::new(None, 100.0).unwrap();
-        let tracker = MapTracker::new(o.network.as_deref());
-        let st = build(&d, 1, &[], &mut guide, &tracker, &o, true);
+        let st = map(&d, &o);
         let located = crate::locate::locate(&d, &o).unwrap();
         // The map's emitter is `locate --stations`'s, to the bit.
         let (e, l) = (&st.emitters[0], &located.report.emitters[0]);
@@ -554,15 +536,7 @@ mod tests {
         );
         // Without the file the beacon's channel is an emitter of its own and no mast is
         // calibrated: the map is not the same.
-        let plain = build(
-            &d,
-            1,
-            &[],
-            &mut guide,
-            &MapTracker::default(),
-            &LocateOptions::default(),
-            true,
-        );
+        let plain = map(&d, &LocateOptions::default());
         assert!(plain.stations.iter().all(|s| s.offset_from != "reference"));
         assert_ne!(
             plain.emitters.len(),
@@ -583,9 +557,8 @@ mod tests {
         )
         .unwrap();
         let d = crate::inputs::capture::decode(&bytes, Default::default(), false);
-        let mut guide = Guide::new(None, 100.0).unwrap();
         let o = LocateOptions::default();
-        let st = build(&d, 1, &[], &mut guide, &MapTracker::default(), &o, true);
+        let st = map(&d, &o);
         let located = crate::locate::locate(&d, &o).unwrap();
         let want = located.report.stations[0]
             .direction_found
@@ -606,16 +579,7 @@ mod tests {
         )
         .unwrap();
         let d = crate::inputs::capture::decode(&bytes, Default::default(), false);
-        let mut guide = Guide::new(None, 100.0).unwrap();
-        let st = build(
-            &d,
-            1,
-            &[],
-            &mut guide,
-            &MapTracker::default(),
-            &LocateOptions::default(),
-            true,
-        );
+        let st = map(&d, &LocateOptions::default());
         assert!(st.emitters.is_empty(), "{:?}", st.emitters);
         assert_eq!(st.regions.len(), 1, "{:?}", st.fix_error);
         let r = &st.regions[0];
