@@ -375,8 +375,12 @@ pub fn locate_bearings(
         cloud: run.cloud,
     })
 }
+/// Stack of every thread that estimates ([`pool`]'s workers, a live track's, the live map's
+/// input): filters are sized at compile time and built on the stack.
+pub const STACK_BYTES: usize = 64 << 20;
+
 /// The thread pool of every estimation on the host (fixes and Monte Carlo runs): one worker per
-/// core, with 64 MiB stacks. Filters are sized at
+/// core, with [`STACK_BYTES`] stacks. Filters are sized at
 /// compile time and built on the stack (a 100 000-particle filter is megabytes); a rayon
 /// worker that waits on a join can also run a stolen run on top of its own, so the default
 /// 2 MiB stacks overflow. The reservation is virtual: only touched pages cost memory.
@@ -384,14 +388,14 @@ pub fn pool() -> &'static rayon::ThreadPool {
     static POOL: OnceLock<rayon::ThreadPool> = OnceLock::new();
     POOL.get_or_init(|| {
         rayon::ThreadPoolBuilder::new()
-            .stack_size(64 << 20)
+            .stack_size(STACK_BYTES)
             .thread_name(|i| format!("foxhunt-mc-{i}"))
             .build()
             .unwrap_or_else(|_| {
                 // Without threads the runs still go, one at a time on a big stack.
                 rayon::ThreadPoolBuilder::new()
                     .num_threads(1)
-                    .stack_size(64 << 20)
+                    .stack_size(STACK_BYTES)
                     .build()
                     .unwrap_or_else(|e| panic!("no thread for the Monte Carlo runs: {e}"))
             })

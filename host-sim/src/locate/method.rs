@@ -45,6 +45,10 @@ fn within_budget(o: &LocateOptions, bearings: usize) -> Result<(), String> {
     ))
 }
 
+/// Locate with a method other than the field pipeline. Not inlined: its methods'
+/// fixed-capacity state is megabytes of stack, which the default method should not reserve
+/// in `locate_answer`'s frame (inlined, 1.9 MB: a 2 MiB thread's whole stack).
+#[inline(never)]
 pub(crate) fn located_by(
     d: &Decoded,
     o: &LocateOptions,

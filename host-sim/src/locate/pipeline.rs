@@ -71,6 +71,19 @@ pub(crate) struct Solved<'a> {
     pub fixes: Vec<ReferenceFix>,
 }
 
+/// Each station of `d`'s prior and noise as `o` states them: the stations file's, else the
+/// calibration's or the defaults.
+pub(crate) fn stations_setup(d: &Decoded, o: &LocateOptions) -> StationSetup {
+    let mut setup = station_setup(
+        d.stations.iter().map(|s| s.id.as_str()),
+        o.network.as_deref(),
+        o.offset.unwrap_or_default(),
+        o.offset.is_some(),
+    );
+    o.calibrated_direction(&mut setup.priors);
+    setup
+}
+
 /// Solve `d` as `locate` does: each station's prior and noise from the stations file (else
 /// the defaults), the reference transmitters' channels calibrating the stations that hear
 /// them, then every channel by the field pipeline. The one place `locate` and the live map
@@ -81,13 +94,7 @@ pub(crate) fn solve<'a>(
     frame: &LocalFrame,
 ) -> Result<Solved<'a>, Unlocated> {
     let network = o.network.as_deref();
-    let mut setup = station_setup(
-        d.stations.iter().map(|s| s.id.as_str()),
-        network,
-        o.offset.unwrap_or_default(),
-        o.offset.is_some(),
-    );
-    o.calibrated_direction(&mut setup.priors);
+    let mut setup = stations_setup(d, o);
     let references: Vec<Reference> = network.map_or_else(Vec::new, |n| n.references.clone());
     let local: Vec<LocalReference> = references
         .iter()

@@ -50,7 +50,7 @@ impl LiveTracker {
         let thread = std::thread::Builder::new()
             .name("foxhunt-track".into())
             // The filters are built on the stack, as on the estimation pool's workers.
-            .stack_size(64 << 20)
+            .stack_size(crate::estimate::STACK_BYTES)
             .spawn(move || {
                 track_each(&mut rx.into_iter(), &settings, &mut |p| {
                     let _ = tx.send(p);

@@ -348,6 +348,8 @@ pub fn serve(o: ServeOptions) -> Result<(), String> {
         let (feeder_done, input, guide, locate) = (done.clone(), o.input, o.guide, o.locate);
         let feeder = std::thread::Builder::new()
             .name("foxhunt-serve-input".into())
+            // It fixes and advises on every update: the estimating threads' stack.
+            .stack_size(crate::estimate::STACK_BYTES)
             .spawn(move || {
                 if let Err(e) = feed(input, guide, &locate, shared, feeder_done.clone()) {
                     crate::outputs::terminal::note(&format!("foxhunt serve: {e}"));

@@ -6,12 +6,11 @@
 
 use crate::estimate::Pipeline;
 use crate::estimate::options::LocateOptions;
-use crate::estimate::stations::station_setup;
 use crate::guidance::guide::Guide;
 use crate::inputs::capture::Decoded;
 use crate::inputs::unit::UnitReport;
 use crate::locate::explain::open_range;
-use crate::locate::pipeline::solve;
+use crate::locate::pipeline::{solve, stations_setup};
 use crate::locate::report::{RegionReport, geodetic};
 use crate::locate::stations::{Found, StationReport, station_reports};
 use crate::outputs::maps::{ellipse_ring, wedge_ring};
@@ -254,14 +253,8 @@ fn map_stations(
 
 /// Every station as `locate` reports it when no fix came out: its prior's offset.
 fn unsolved_stations(d: &Decoded, o: &LocateOptions) -> Vec<StationReport> {
-    let network = o.network.as_deref();
-    let setup = station_setup(
-        d.stations.iter().map(|s| s.id.as_str()),
-        network,
-        o.offset.unwrap_or_default(),
-        o.offset.is_some(),
-    );
-    station_reports(d, network, &setup, Found::default(), &[], &[])
+    let setup = stations_setup(d, o);
+    station_reports(d, o.network.as_deref(), &setup, Found::default(), &[], &[])
 }
 
 fn no_emitter(r: &Pipeline) -> String {
