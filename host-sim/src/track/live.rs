@@ -408,8 +408,8 @@ pub fn unheard(o: &Options) -> BiasPrior {
         })
         .fold(o.offset_sd, f32::max);
     BiasPrior {
-        mean: 0.0,
         sd: widest,
+        ..o.fallback()
     }
 }
 

@@ -50,6 +50,16 @@ pub const OFFSET_SD_DEG: f32 = 2.0;
 /// Channel width for grouping bearings by frequency, MHz (as `locate`'s default).
 pub const WIDTH_MHZ: f32 = 0.025;
 
+impl Options {
+    /// The offset prior of a station nothing states: `--offset-sd`'s, centred on zero.
+    pub fn fallback(&self) -> BiasPrior {
+        BiasPrior {
+            mean: 0.0,
+            sd: self.offset_sd,
+        }
+    }
+}
+
 impl Default for Options {
     /// `foxhunt track`'s defaults: the default tracker, each record's own noise (estimated),
     /// no stations file.
@@ -258,10 +268,7 @@ pub(crate) fn start_region(room: Option<[f32; 2]>, at: &[[f32; 2]]) -> ([f32; 2]
 
 /// Track every channel of `m`.
 pub fn tracks(m: &Measured, anchors: Option<&AnchorsFile>, o: &Options) -> Result<Tracks, String> {
-    let fallback = BiasPrior {
-        mean: 0.0,
-        sd: o.offset_sd,
-    };
+    let fallback = o.fallback();
     let ids = m.decoded.stations.iter().map(|s| s.id.as_str());
     let setup = station_setup(ids, o.network.as_ref(), fallback, false);
     // `--sigma` over the stations file's noise over each record's own.

@@ -46,10 +46,7 @@ pub fn run(
             dec.begin_input(u.base.trim_start_matches("http://"))?;
         }
     }
-    let fallback = BiasPrior {
-        mean: 0.0,
-        sd: o.offset_sd,
-    };
+    let fallback = o.fallback();
     let mut live = LiveChannels::for_options(o);
     let mut line = reader(&source, None, None)?;
     let mut heard = 0usize;
@@ -121,10 +118,7 @@ pub fn rssi(
              serial device, not --kraken or --mqtt",
         ));
     }
-    let fallback = BiasPrior {
-        mean: 0.0,
-        sd: o.offset_sd,
-    };
+    let fallback = o.fallback();
     let mut dec = TrackDecoder::new(Some(file));
     let mut line = reader(&source, None, None)?;
     let mut points = Points::new(a);

@@ -12,7 +12,6 @@ use crate::track::live::{LiveChannels, Ready};
 use crate::track::moving::TrackPoint;
 use crate::track::tracks::{Options, WIDTH_MHZ, offset_prior};
 use foxhunt_bridge::geo::LocalFrame;
-use foxhunt_core::fix::bias::BiasPrior;
 use serde::Serialize;
 
 /// Track points kept per channel for the line (thinned to every other beyond).
@@ -110,10 +109,7 @@ impl MapTracker {
         let mut new = d.observations[self.taken.min(d.observations.len())..].to_vec();
         self.taken = d.observations.len();
         new.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
-        let fallback = BiasPrior {
-            mean: 0.0,
-            sd: self.options.offset_sd,
-        };
+        let fallback = self.options.fallback();
         let ids = d.stations.iter().map(|s| s.id.as_str());
         let setup = station_setup(ids, self.options.network.as_ref(), fallback, false);
         // A channel or station beyond the live tracker's is left off the map's tracks (the
