@@ -8,6 +8,7 @@ use crate::outputs::maps::{ellipse_ring, polygon_geometry, split_antimeridian};
 use crate::track::moving::TrackPoint;
 use crate::track::tracks::{StationNoise, Tracks};
 use foxhunt_bridge::nmea::LatLon;
+use foxhunt_core::fix::device::DeviceClass;
 use serde_json::{Map, Value, json};
 use std::fmt::Write;
 
@@ -88,8 +89,8 @@ pub fn json(t: &Tracks) -> Value {
 }
 
 /// A DF station's noise on a track: its id, the noise its bearings were given and the one
-/// tracked (degrees), their scatter about the track in given sds, and whether the noise was
-/// estimated.
+/// tracked (degrees), their scatter about the track in given sds, whether the noise was
+/// estimated, and the class the track took it as from its scatter (none stated).
 fn station(s: &StationNoise) -> Value {
     let n = &s.noise;
     json!({
@@ -98,6 +99,7 @@ fn station(s: &StationNoise) -> Value {
         "noise_deg": n.tracked().to_degrees().short(),
         "scatter": n.scatter.short(),
         "estimated": !s.stated,
+        "class_from_scatter": n.array.then_some(DeviceClass::IndoorAoa.name()),
     })
 }
 

@@ -20,8 +20,8 @@ use crate::estimate::stations::StationSetup;
 use crate::inputs::stations::PriorFrom;
 use crate::track::direction::Directions;
 use crate::track::moving::{Settings, TrackPoint, Update, max_sources, track_each};
-use crate::track::noise::LiveScatter;
-use crate::track::tracks::{Options, memory_s, observable, track_noise};
+use crate::track::noise::{LiveScatter, Unstated, as_arrays};
+use crate::track::tracks::{Options, memory_s, observable, track_noise, unstated_of};
 use crate::track::updates::Window;
 use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::fix::channel::belongs;
@@ -99,8 +99,8 @@ struct LiveChannel {
     freq_mhz: Option<f32>,
     /// The line's station index of each source, by source number.
     sources: Vec<u16>,
-    /// Whether each source's noise is estimated (no one stated it), by source number.
-    free: Vec<bool>,
+    /// What no one stated of each source (its noise is then estimated), by source number.
+    unstated: Vec<Unstated>,
     /// Its sources' bearings about the track, and their noise where estimated.
     scatter: LiveScatter,
     /// Whether a bearing set its band (an RSSI channel opened by a reading has none yet).
@@ -220,7 +220,7 @@ impl LiveChannels {
             lowest: freq_mhz.map(|f| f - self.width_mhz / 2.0),
             freq_mhz,
             sources: Vec::new(),
-            free: Vec::new(),
+            unstated: Vec::new(),
             scatter: LiveScatter::default(),
             banded,
             levels: false,
@@ -230,10 +230,14 @@ impl LiveChannels {
         self.channels.len() - 1
     }
 
-    /// Take bearing `o` (the line's station index in `o.station`; `stated`: whether its noise
-    /// is the user's, else it is estimated as it comes, [`LiveScatter`]): the update it closed,
-    /// if any, or why it was left out.
-    pub fn push(&mut self, mut o: Observation, stated: bool) -> Result<Option<Ready>, Dropped> {
+    /// Take bearing `o` (the line's station index in `o.station`; `unstated`: what no one
+    /// stated of its station, learned as it comes, [`LiveScatter`]): the update it closed, if
+    /// any, or why it was left out.
+    pub fn push(
+        &mut self,
+        mut o: Observation,
+        unstated: Unstated,
+    ) -> Result<Option<Ready>, Dropped> {
         // The RSSI channel a reading opened takes the first bearing's band.
         if let Some(ch) = self.channels.first_mut().filter(|c| !c.banded) {
             ch.banded = true;
@@ -257,7 +261,7 @@ impl LiveChannels {
             Some(s) => s,
             None if ch.sources.len() < max => {
                 ch.sources.push(o.station);
-                ch.free.push(!stated);
+                ch.unstated.push(unstated);
                 ch.sources.len() - 1
             }
             None => return Err(Dropped::Stations),
@@ -280,12 +284,13 @@ impl LiveChannels {
         sigma: Option<f32>,
         setup: &StationSetup,
     ) -> Result<Option<Ready>, Dropped> {
-        let stated = track_noise(setup, sigma, usize::from(b.station));
+        let station = usize::from(b.station);
+        let stated = track_noise(setup, sigma, station);
         if let Some(s) = stated {
             b.bearing.sigma = s;
         }
         self.directions.correct(&mut b, &setup.priors);
-        self.push(b, stated.is_some())
+        self.push(b, unstated_of(setup, stated.is_some(), station))
     }
 
     /// Take RSSI reading `l` taken at `t_s` (the bearings' time base): the update it closed, if
@@ -342,6 +347,8 @@ impl LiveChannels {
                 settings.offsets = (0..usize::from(settings.layout.sources))
                     .map(|k| ch.sources.get(k).map_or(self.unheard, |s| prior_of(*s)))
                     .collect();
+                let arrays = (0..ch.sources.len()).filter(|k| ch.scatter.array(*k as u16));
+                as_arrays(&mut settings, arrays);
                 ch.tracker.insert(LiveTracker::start(settings)?)
             }
         };
@@ -349,7 +356,13 @@ impl LiveChannels {
         ch.scatter.widen(&mut u);
         let point = tracker.step(u);
         match &point {
-            Ok(p) => ch.scatter.learn(&r.update, p, &ch.free),
+            // A source found to be an indoor array: the next update starts the channel's
+            // tracker again with the array's offset prior and memory.
+            Ok(p) => {
+                if ch.scatter.learn(&r.update, p, &ch.unstated) {
+                    ch.tracker = None;
+                }
+            }
             // The next update starts a new tracker from its bearings.
             Err(_) => ch.tracker = None,
         }
@@ -357,21 +370,19 @@ impl LiveChannels {
     }
 
     /// The stations of channel `c` whose noise is estimated and widened, by their index on
-    /// the line: how many times their records' noise their bearings now take, and that
-    /// noise (radians).
-    pub fn widened(&self, c: usize) -> Vec<(u16, f32, f32)> {
+    /// the line: how many times their records' noise they scatter, the noise their bearings
+    /// now take (radians), and whether they are taken as indoor arrays.
+    pub fn widened(&self, c: usize) -> Vec<(u16, f32, f32, bool)> {
         self.channels.get(c).map_or_else(Vec::new, |ch| {
             ch.sources
                 .iter()
                 .enumerate()
                 .map(|(k, s)| {
-                    (
-                        *s,
-                        ch.scatter.widened(k as u16),
-                        ch.scatter.tracked(k as u16),
-                    )
+                    let k = k as u16;
+                    let c = &ch.scatter;
+                    (*s, c.shown(k), c.tracked(k), c.array(k))
                 })
-                .filter(|(_, w, _)| *w > 1.0)
+                .filter(|(_, w, _, _)| *w > 1.0)
                 .collect()
         })
     }
@@ -459,7 +470,7 @@ mod tests {
         let mut live = LiveChannels::new(0.025, settings.clone(), prior);
         let mut points = Vec::new();
         for o in &obs {
-            if let Some(r) = live.push(*o, true).unwrap() {
+            if let Some(r) = live.push(*o, Unstated::Nothing).unwrap() {
                 points.push(live.step(r, &|_| prior).unwrap().expect("a point"));
             }
         }
@@ -497,7 +508,7 @@ mod tests {
         let (mut none, mut points) = (0, 0);
         // Ten seconds of station 7 alone, then every station.
         for o in obs.iter().filter(|o| o.time_s >= 10.0 || o.station == 7) {
-            if let Some(r) = live.push(*o, true).unwrap() {
+            if let Some(r) = live.push(*o, Unstated::Nothing).unwrap() {
                 match live.step(r, &|_| prior).unwrap() {
                     None => {
                         assert_eq!(live.lone_station(r.channel), Some(7));
@@ -528,7 +539,7 @@ mod tests {
             .collect();
         let mut steps = Vec::new();
         for o in &obs[..5] {
-            if let Some(r) = live.push(*o, true).unwrap() {
+            if let Some(r) = live.push(*o, Unstated::Nothing).unwrap() {
                 steps.push(live.step(r, &|_| prior).unwrap().is_some());
             }
         }
@@ -547,7 +558,7 @@ mod tests {
             "a reading measures range"
         );
         let r = live
-            .push(obs[5], true)
+            .push(obs[5], Unstated::Nothing)
             .unwrap()
             .expect("closes the reading's update");
         assert_eq!(r.update.epoch.bearings().len(), 0);
@@ -555,7 +566,7 @@ mod tests {
         // A bearing of another channel is not this line's.
         let mut other = obs[6];
         other.freq_mhz = Some(145.0);
-        assert_eq!(live.push(other, true), Err(Dropped::Channels));
+        assert_eq!(live.push(other, Unstated::Nothing), Err(Dropped::Channels));
     }
 
     #[test]
@@ -565,20 +576,20 @@ mod tests {
         let mut o = bearings(1)[0];
         for s in 0..u16::from(LIVE_SOURCES) {
             o.station = s;
-            assert!(live.push(o, true).is_ok());
+            assert!(live.push(o, Unstated::Nothing).is_ok());
         }
         assert_eq!(LIVE_SOURCES, 6, "what a recording's state holds");
         o.station = 6;
-        assert_eq!(live.push(o, true), Err(Dropped::Stations));
+        assert_eq!(live.push(o, Unstated::Nothing), Err(Dropped::Stations));
         for c in 1..16 {
             o.station = 0;
             o.freq_mhz = Some(100.0 + c as f32);
-            assert!(live.push(o, true).is_ok());
+            assert!(live.push(o, Unstated::Nothing).is_ok());
         }
         o.freq_mhz = Some(300.0);
-        assert_eq!(live.push(o, true), Err(Dropped::Channels));
+        assert_eq!(live.push(o, Unstated::Nothing), Err(Dropped::Channels));
         // A bearing within the band of a known channel still lands.
         o.freq_mhz = Some(433.93);
-        assert!(live.push(o, true).is_ok());
+        assert!(live.push(o, Unstated::Nothing).is_ok());
     }
 }

@@ -18,25 +18,71 @@
 
 use crate::track::moving::{Settings, TrackPoint, TrackRun, Update, track};
 use foxhunt_core::Error;
+use foxhunt_core::fix::device::{DeviceClass, TrackTraits};
 use foxhunt_core::fix::observation::Observation;
 use foxhunt_core::model::bearing::wrap;
 use std::collections::{BTreeMap, VecDeque};
 
 /// Beyond this noise, radians, a unit scatters as no working outdoor array does (the
 /// ceiling of their device classes, `core/src/fix/device.rs`) and as an indoor array's
-/// reports do (10-16 degrees): [`array_hint`].
-pub const ARRAY_HINT_ABOVE: f32 = 10.0 * std::f32::consts::PI / 180.0;
+/// reports do (10-16 degrees): a source of which nothing is stated is then tracked as an
+/// indoor array ([`Unstated::Everything`]).
+pub const ARRAY_ABOVE: f32 = 10.0 * std::f32::consts::PI / 180.0;
 
-/// What a note on a source's estimated noise adds when the noise is an indoor array's: a
-/// track takes such reports as independent unless the stations file states the class
-/// (its ellipses then held a simulated walker 62-68 % of the time, against 93-97 %).
-pub fn array_hint(tracked: f32) -> &'static str {
-    if tracked > ARRAY_HINT_ABOVE {
-        "; an indoor angle-of-arrival array scatters so: if it is one, state its class \
-         (antenna = \"indoor-aoa\" in a stations file), which tells the track its reports \
-         are not independent"
+/// How a track takes an indoor array's reports ([`DeviceClass::track`]).
+const ARRAY: TrackTraits = DeviceClass::IndoorAoa.track();
+
+/// What a note on a source's estimated noise adds when the track took the source as an
+/// indoor array: taken as independent, such reports held a simulated walker 50-68 % of the
+/// time, as an array's 95-98 % (docs/src/tracking.md).
+pub fn array_note(array: bool) -> &'static str {
+    if array {
+        "; a scatter no outdoor unit shows: taken as an indoor angle-of-arrival array's \
+         (each report at twice it, a 7.2 deg offset prior, offsets forgetting in 10 s); a \
+         stations file's antenna states its class"
     } else {
         ""
+    }
+}
+
+/// `s` with sources `arrays` (by number) taken as indoor arrays: their offset priors widened
+/// to the class's, the offsets forgetting in the class's time unless `s` says otherwise.
+/// (Their reports' noise is the caller's: [`report_factor`].)
+pub fn as_arrays(s: &mut Settings, arrays: impl Iterator<Item = usize>) {
+    let mut any = false;
+    for k in arrays {
+        any = true;
+        if let (Some(prior), Some(sd)) = (s.offsets.get_mut(k), ARRAY.offset_sd) {
+            prior.sd = prior.sd.max(sd);
+        }
+    }
+    if any {
+        s.memory_s = s.memory_s.or(ARRAY.memory_s);
+    }
+}
+
+/// How many times its scatter an array's reports take (1 for other sources).
+pub fn report_factor(array: bool) -> f32 {
+    if array { ARRAY.report_sd_factor } else { 1.0 }
+}
+
+/// What no one stated of a source, and so what its track learns from its bearings.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Unstated {
+    /// Nothing to learn: its noise is stated (`--sigma`, the stations file, its class).
+    Nothing,
+    /// Its noise (its class or its offset prior is stated): estimated.
+    Noise,
+    /// Its noise, its class and its offset prior: the noise estimated, and a noise beyond
+    /// [`ARRAY_ABOVE`] tracks it as an indoor array ([`DeviceClass::IndoorAoa`]'s
+    /// [`track`](DeviceClass::track) traits), the one kind of unit that scatters so.
+    Everything,
+}
+
+impl Unstated {
+    /// Whether the source's noise is estimated.
+    pub fn noise(self) -> bool {
+        self != Unstated::Nothing
     }
 }
 
@@ -93,12 +139,19 @@ pub struct SourceNoise {
     pub scatter: f32,
     /// How many times `given` the track took (1: as given).
     pub widened: f32,
+    /// Tracked as an indoor array, its class unstated ([`Unstated::Everything`]).
+    pub array: bool,
 }
 
 impl SourceNoise {
     /// The noise the track took, radians.
     pub fn tracked(&self) -> f32 {
         self.given * self.widened
+    }
+
+    /// How many times `given` its scatter was taken as (`widened` less an array's factor).
+    pub fn shown(&self) -> f32 {
+        self.widened / report_factor(self.array)
     }
 }
 
@@ -122,6 +175,7 @@ pub fn scatter(updates: &[Update], points: &[TrackPoint]) -> Vec<SourceNoise> {
                 given: given[given.len() / 2],
                 scatter,
                 widened: 1.0,
+                array: false,
             })
         })
         .collect()
@@ -141,55 +195,84 @@ fn widen(updates: &[Update], widened: &[f32]) -> Vec<Update> {
         .collect()
 }
 
-/// Track `updates` as `s` says, each source whose noise is not stated (`free[source]`)
+/// Track `updates` as `s` says, each source whose noise is not stated (`unstated[source]`)
 /// widened to its bearings' scatter about the track where that is more than
-/// [`WIDEN_ABOVE`] times the noise given ([the module](self)): the track and each source's
-/// noise (sources with [`MIN_BEARINGS`] or more). The run's evaluations are every pass's.
+/// [`WIDEN_ABOVE`] times the noise given ([the module](self)), then, if the estimate makes a
+/// source of which nothing is stated an indoor array ([`Unstated::Everything`]), tracked
+/// once more with the array's traits: the track and each source's noise (sources with
+/// [`MIN_BEARINGS`] or more). The run's evaluations are every pass's.
 pub fn track_estimating(
     updates: &[Update],
     s: &Settings,
-    free: &[bool],
+    unstated: &[Unstated],
 ) -> Result<(TrackRun, Vec<SourceNoise>), Error> {
     let mut run = track(updates, s)?;
     let mut noise = scatter(updates, &run.points);
-    let is_free = |k: u16| free.get(usize::from(k)).copied().unwrap_or(false);
-    if !noise
+    let of = |k: u16| {
+        unstated
+            .get(usize::from(k))
+            .copied()
+            .unwrap_or(Unstated::Nothing)
+    };
+    let mut widened = vec![1.0f32; unstated.len()];
+    if noise
         .iter()
-        .any(|n| is_free(n.source) && n.scatter > WIDEN_ABOVE)
+        .any(|n| of(n.source).noise() && n.scatter > WIDEN_ABOVE)
     {
-        return Ok((run, noise));
-    }
-    let mut widened = vec![1.0f32; free.len()];
-    for _ in 1..PASSES {
-        let mut moved = false;
-        for n in noise.iter().filter(|n| is_free(n.source)) {
-            let k = usize::from(n.source);
-            let next = n.scatter.max(1.0);
-            moved |= (next / widened[k] - 1.0).abs() > SETTLED;
-            widened[k] = next;
+        for _ in 1..PASSES {
+            let mut moved = false;
+            for n in noise.iter().filter(|n| of(n.source).noise()) {
+                let k = usize::from(n.source);
+                let next = n.scatter.max(1.0);
+                moved |= (next / widened[k] - 1.0).abs() > SETTLED;
+                widened[k] = next;
+            }
+            if !moved {
+                break;
+            }
+            let spent = run.evaluations;
+            run = track(&widen(updates, &widened), s)?;
+            run.evaluations += spent;
+            noise = scatter(updates, &run.points);
         }
-        if !moved {
-            break;
+    }
+    let arrays: Vec<u16> = noise
+        .iter()
+        .filter(|n| {
+            let tracked = n.given * widened.get(usize::from(n.source)).unwrap_or(&1.0);
+            of(n.source) == Unstated::Everything && tracked > ARRAY_ABOVE
+        })
+        .map(|n| n.source)
+        .collect();
+    if !arrays.is_empty() {
+        let mut s = s.clone();
+        as_arrays(&mut s, arrays.iter().map(|k| usize::from(*k)));
+        for k in arrays.iter().map(|k| usize::from(*k)) {
+            widened[k] *= report_factor(true);
         }
         let spent = run.evaluations;
-        run = track(&widen(updates, &widened), s)?;
+        run = track(&widen(updates, &widened), &s)?;
         run.evaluations += spent;
         noise = scatter(updates, &run.points);
     }
     for n in noise.iter_mut() {
         n.widened = widened.get(usize::from(n.source)).copied().unwrap_or(1.0);
+        n.array = arrays.contains(&n.source);
     }
     Ok((run, noise))
 }
 
 /// A live channel's sources' scatter about its track: each source's last [`LIVE_WINDOW`]
-/// residuals, and the noise its next bearings take.
+/// residuals, the noise its next bearings take, and which it takes as indoor arrays.
 #[derive(Debug, Clone, Default)]
 pub struct LiveScatter {
     residuals: Vec<VecDeque<f32>>,
-    widened: Vec<f32>,
+    /// How many times its records' noise each source's scatter is (1: as given).
+    shown: Vec<f32>,
     /// Each source's records' noise, its last bearing's, radians.
     given: Vec<f32>,
+    /// Whether each is taken as an indoor array.
+    arrays: Vec<bool>,
 }
 
 impl LiveScatter {
@@ -202,7 +285,18 @@ impl LiveScatter {
 
     /// How many times its records' noise source `k`'s bearings take (1: as given).
     pub fn widened(&self, k: u16) -> f32 {
-        self.widened.get(usize::from(k)).copied().unwrap_or(1.0)
+        self.shown(k) * report_factor(self.array(k))
+    }
+
+    /// How many times its records' noise source `k`'s bearings scatter, as far as it is
+    /// taken (1: as given, or too few bearings yet).
+    pub fn shown(&self, k: u16) -> f32 {
+        self.shown.get(usize::from(k)).copied().unwrap_or(1.0)
+    }
+
+    /// Whether source `k` is taken as an indoor array.
+    pub fn array(&self, k: u16) -> bool {
+        self.arrays.get(usize::from(k)).copied().unwrap_or(false)
     }
 
     /// The noise source `k`'s bearings now take, radians (0 before it was heard).
@@ -211,15 +305,23 @@ impl LiveScatter {
     }
 
     /// Learn from update `u` (as given, before [`widen`](Self::widen)) and its point `p`:
-    /// each free source's (`free[source]`) scale, widened once it passes [`WIDEN_ABOVE`].
-    pub fn learn(&mut self, u: &Update, p: &TrackPoint, free: &[bool]) {
-        let is_free = |k: u16| free.get(usize::from(k)).copied().unwrap_or(false);
-        for o in u.epoch.bearings().iter().filter(|o| is_free(o.station)) {
+    /// each source's scale whose noise is estimated (`unstated[source]`), widened once it
+    /// passes [`WIDEN_ABOVE`]; whether a source became an indoor array ([`ARRAY_ABOVE`]).
+    pub fn learn(&mut self, u: &Update, p: &TrackPoint, unstated: &[Unstated]) -> bool {
+        let of = |k: u16| {
+            unstated
+                .get(usize::from(k))
+                .copied()
+                .unwrap_or(Unstated::Nothing)
+        };
+        let mut became = false;
+        for o in u.epoch.bearings().iter().filter(|o| of(o.station).noise()) {
             let k = usize::from(o.station);
             if self.residuals.len() <= k {
                 self.residuals.resize_with(k + 1, VecDeque::new);
-                self.widened.resize(k + 1, 1.0);
+                self.shown.resize(k + 1, 1.0);
                 self.given.resize(k + 1, 0.0);
+                self.arrays.resize(k + 1, false);
             }
             self.given[k] = o.bearing.sigma;
             let r = &mut self.residuals[k];
@@ -228,12 +330,18 @@ impl LiveScatter {
             }
             r.push_back(residual(o, p.position));
             if let Some(z) = robust_scale(r.iter().copied().collect()) {
-                let w = &mut self.widened[k];
+                let w = &mut self.shown[k];
                 if *w > 1.0 || z > WIDEN_ABOVE {
                     *w = z.max(1.0);
                 }
             }
+            let noise = self.given[k] * self.shown[k];
+            if of(o.station) == Unstated::Everything && !self.arrays[k] && noise > ARRAY_ABOVE {
+                self.arrays[k] = true;
+                became = true;
+            }
         }
+        became
     }
 }
 
@@ -291,8 +399,13 @@ mod tests {
     #[test]
     fn a_unit_noisier_than_stated_is_widened_to_its_noise_and_one_as_stated_is_not() {
         let updates = masts([3.0, 3.0, 3.0, 1.0]);
-        let (_, noise) =
-            track_estimating(&updates, &settings(), &[true, true, true, false]).expect("a track");
+        let free = [
+            Unstated::Noise,
+            Unstated::Noise,
+            Unstated::Noise,
+            Unstated::Nothing,
+        ];
+        let (_, noise) = track_estimating(&updates, &settings(), &free).expect("a track");
         for n in &noise {
             println!(
                 "source {}: scatter {:.2}, tracked {:.2} deg",
@@ -310,8 +423,50 @@ mod tests {
         assert_eq!(noise[3].widened, 1.0, "stated right: kept");
         // A noise given right scatters 0.86-1.23 times ([`WIDEN_ABOVE`]); these four are
         // widened up to 1.24 (measured): 1.3 leaves room, and a 3 degree unit's 3x fails it.
-        let (_, right) = track_estimating(&masts([1.0; 4]), &settings(), &[true; 4]).unwrap();
+        let (_, right) =
+            track_estimating(&masts([1.0; 4]), &settings(), &[Unstated::Noise; 4]).unwrap();
         assert!(right.iter().all(|n| n.widened < 1.3), "{right:?}");
+    }
+
+    #[test]
+    fn a_source_of_which_nothing_is_stated_scattering_as_an_indoor_array_is_tracked_as_one() {
+        // Three masts scattering 12 degrees, one 1; of the first nothing is stated, of the
+        // second its class (its noise estimated), of the fourth nothing.
+        let updates = masts([12.0, 12.0, 12.0, 1.0]);
+        let unstated = [
+            Unstated::Everything,
+            Unstated::Noise,
+            Unstated::Everything,
+            Unstated::Everything,
+        ];
+        let (run, noise) = track_estimating(&updates, &settings(), &unstated).expect("a track");
+        for n in &noise {
+            println!(
+                "source {}: tracked {:.1} deg, array {}",
+                n.source,
+                n.tracked().to_degrees(),
+                n.array
+            );
+        }
+        let arrays: Vec<bool> = noise.iter().map(|n| n.array).collect();
+        assert_eq!(arrays, [true, false, true, false]);
+        // An array takes twice its scatter; the others their scatter (a 12 degree estimate
+        // from 240 bearings is within a fifth).
+        for n in &noise[..3] {
+            let shown = n.given * n.shown();
+            assert!((9.6..14.4).contains(&shown.to_degrees()), "{n:?}");
+            assert_eq!(n.tracked(), shown * report_factor(n.array));
+        }
+        // The widened passes and the array's: more than one track's evaluations.
+        assert!(run.evaluations > 1);
+        let mut s = settings();
+        as_arrays(&mut s, [0, 2].into_iter());
+        assert_eq!(s.memory_s, ARRAY.memory_s);
+        assert!(s.offsets[0].sd >= 7.2f32.to_radians() - 1e-6);
+        assert_eq!(s.offsets[1], settings().offsets[1]);
+        // Told to take nothing as arrays, no array.
+        let (_, noise) = track_estimating(&updates, &settings(), &[Unstated::Noise; 4]).unwrap();
+        assert!(noise.iter().all(|n| !n.array));
     }
 
     #[test]
@@ -319,7 +474,12 @@ mod tests {
         let updates = masts([3.0, 3.0, 3.0, 1.0]);
         let run = track(&updates, &settings()).unwrap();
         let mut live = LiveScatter::default();
-        let free = [true, true, true, false];
+        let free = [
+            Unstated::Noise,
+            Unstated::Noise,
+            Unstated::Noise,
+            Unstated::Nothing,
+        ];
         for (u, p) in updates.iter().zip(&run.points).take(MIN_BEARINGS - 1) {
             live.learn(u, p, &free);
         }
@@ -334,5 +494,25 @@ mod tests {
         let sigma = u.epoch.bearings()[0].bearing.sigma;
         assert!((sigma / 1f32.to_radians() - live.widened(0)).abs() < 1e-4);
         assert!(live.residuals.iter().all(|r| r.len() <= LIVE_WINDOW));
+        assert!(!live.array(0), "its class stated: no array");
+        // Of which nothing is stated, a 12 degree unit becomes an array once, and its channel
+        // is told so (about a track that knew its noise).
+        let updates = masts([12.0, 1.0, 1.0, 1.0]);
+        let run = track(&widen(&updates, &[12.0, 1.0, 1.0, 1.0]), &settings()).unwrap();
+        let mut live = LiveScatter::default();
+        let became: Vec<usize> = updates
+            .iter()
+            .zip(&run.points)
+            .enumerate()
+            .filter(|(_, (u, p))| live.learn(u, p, &[Unstated::Everything; 4]))
+            .map(|(k, _)| k)
+            .collect();
+        println!(
+            "array from update {became:?}: {:.1} deg",
+            live.tracked(0).to_degrees()
+        );
+        assert_eq!(became.len(), 1, "{became:?}");
+        assert!(live.array(0) && !live.array(1));
+        assert_eq!(live.widened(0), 2.0 * live.shown(0));
     }
 }

@@ -7,7 +7,7 @@ use crate::inputs::stations::Network;
 use crate::track::capture::Measured;
 use crate::track::indoor::AnchorsFile;
 use crate::track::moving::{Settings, TrackPoint};
-use crate::track::noise::{SourceNoise, track_estimating};
+use crate::track::noise::{SourceNoise, Unstated, track_estimating};
 use crate::track::updates::{Channel, channels};
 use foxhunt_bridge::geo::LocalFrame;
 use foxhunt_bridge::nmea::LatLon;
@@ -226,6 +226,20 @@ pub fn offset_prior(setup: &StationSetup, s: usize) -> BiasPrior {
     }
 }
 
+/// What no one stated of station `s` (`noise`: whether its noise is, [`track_noise`]).
+pub fn unstated_of(setup: &StationSetup, noise: bool, s: usize) -> Unstated {
+    let own_prior = setup
+        .origins
+        .get(s)
+        .is_some_and(|o| *o != PriorOrigin::Default);
+    let class = setup.classes.get(s).copied().flatten();
+    match (noise, class.is_some() || own_prior) {
+        (true, _) => Unstated::Nothing,
+        (false, true) => Unstated::Noise,
+        (false, false) => Unstated::Everything,
+    }
+}
+
 /// Station `s`'s noise on a track: `sigma` (every station's, stated), else its stations
 /// file's or class's, times its class's factor ([`DeviceClass::track`](
 /// foxhunt_core::fix::device::DeviceClass::track)); `None`: the records' own, estimated.
@@ -301,19 +315,23 @@ pub fn tracks(m: &Measured, anchors: Option<&AnchorsFile>, o: &Options) -> Resul
             });
             continue;
         }
-        let stated: Vec<bool> = c
+        let unstated: Vec<Unstated> = c
             .sources
             .iter()
-            .map(|k| given.get(usize::from(*k)).is_some_and(Option::is_some))
+            .map(|k| {
+                let k = usize::from(*k);
+                unstated_of(&setup, given.get(k).is_some_and(Option::is_some), k)
+            })
             .collect();
-        let free: Vec<bool> = stated.iter().map(|s| !s).collect();
-        let (run, found) = track_estimating(&c.updates, &settings(c, anchors, o, &setup), &free)
-            .map_err(|e| {
-                let what = c
-                    .freq_mhz
-                    .map_or(String::new(), |f| format!(" on {f:.3} MHz"));
-                format!("cannot track{what}: {e}")
-            })?;
+        let (run, found) =
+            track_estimating(&c.updates, &settings(c, anchors, o, &setup), &unstated).map_err(
+                |e| {
+                    let what = c
+                        .freq_mhz
+                        .map_or(String::new(), |f| format!(" on {f:.3} MHz"));
+                    format!("cannot track{what}: {e}")
+                },
+            )?;
         let noise = found
             .into_iter()
             .filter_map(|mut n| {
@@ -322,7 +340,7 @@ pub fn tracks(m: &Measured, anchors: Option<&AnchorsFile>, o: &Options) -> Resul
                 Some(StationNoise {
                     id: m.decoded.stations.get(usize::from(n.source))?.id.clone(),
                     noise: n,
-                    stated: stated[k],
+                    stated: !unstated[k].noise(),
                 })
             })
             .collect();

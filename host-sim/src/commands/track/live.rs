@@ -19,7 +19,7 @@ use crate::track::capture::{Reading, TrackDecoder};
 use crate::track::indoor::AnchorsFile;
 use crate::track::live::{Dropped, LIVE_CHANNELS, LiveChannels, LiveTracker, Ready, unheard};
 use crate::track::moving::{Settings, TrackPoint, Update};
-use crate::track::noise::array_hint;
+use crate::track::noise::array_note;
 use crate::track::tracks::{Options, Tracks, offset_prior, one_station, settings, start_region};
 use crate::track::updates::{AnchorEpochs, Channel, anchor_positions, level};
 use foxhunt_bridge::BridgeConfig;
@@ -447,8 +447,9 @@ fn push_bearing(
 struct Said {
     /// Channels heard by one station alone.
     lone: Vec<usize>,
-    /// Stations (channel, line index) whose noise was estimated wider than their records'.
-    widened: Vec<(usize, u16)>,
+    /// Stations (channel, line index, taken as an indoor array) whose noise was estimated
+    /// wider than their records'.
+    widened: Vec<(usize, u16, bool)>,
 }
 
 /// Step each of `ready` with its channel's tracker and print its point; a channel heard by
@@ -482,9 +483,9 @@ fn step_all(
             }
             Err(e) => Err(e),
         };
-        for (station, w, tracked) in live.widened(r.channel) {
-            if !said.widened.contains(&(r.channel, station)) {
-                said.widened.push((r.channel, station));
+        for (station, w, tracked, array) in live.widened(r.channel) {
+            if !said.widened.contains(&(r.channel, station, array)) {
+                said.widened.push((r.channel, station, array));
                 let id = stations
                     .get(usize::from(station))
                     .map_or("a station", |s| s.id.as_str());
@@ -493,9 +494,15 @@ fn step_all(
                     .map_or(String::new(), |f| format!(" on {f:.3} MHz"));
                 note(&format!(
                     "foxhunt: {id}'s bearings scatter {w:.1} times their records' noise about \
-                     the track{on}: from here they take the noise they show, estimated \
-                     (--sigma or the stations file's noise_deg states it){}",
-                    array_hint(tracked)
+                     the track{on}: from here they take {:.1} deg, estimated (--sigma or the \
+                     stations file's noise_deg states it){}{}",
+                    tracked.to_degrees(),
+                    array_note(array),
+                    if array {
+                        "; the channel's track starts again"
+                    } else {
+                        ""
+                    },
                 ));
             }
         }

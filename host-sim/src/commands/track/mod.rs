@@ -18,7 +18,7 @@ use crate::track::indoor::AnchorsFile;
 use crate::track::moving::{
     DEFAULT_METHOD, PARTICLES, TRACK_METHODS, TRACK_PARTICLES, max_sources,
 };
-use crate::track::noise::{STATED_TOO_SMALL, array_hint};
+use crate::track::noise::{STATED_TOO_SMALL, array_note};
 use crate::track::tracks::{OFFSET_SD_DEG, Options, Tracks, WIDTH_MHZ};
 use foxhunt_core::Method;
 use foxhunt_core::track::Motion;
@@ -345,9 +345,9 @@ pub(crate) fn note_noise(t: &Tracks) {
                     "foxhunt: {id}'s bearings scatter {:.1} times their records' noise \
                      ({given:.1} deg) about the track{what}: tracked with {:.1} deg, \
                      estimated (--sigma or the stations file's noise_deg states it){}",
-                    n.widened,
+                    n.shown(),
                     n.tracked().to_degrees(),
-                    array_hint(n.tracked())
+                    array_note(n.array)
                 ));
             }
         }

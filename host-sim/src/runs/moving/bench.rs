@@ -20,7 +20,7 @@ use crate::track::moving::{
     DEFAULT_METHOD, K, PARTICLES, STATE_SIZES, Settings, TRACK_METHODS, TRACK_PARTICLES,
     TrackPoint, TrackRun, track,
 };
-use crate::track::noise::track_estimating;
+use crate::track::noise::{Unstated, track_estimating};
 use foxhunt_core::track::MODE;
 use foxhunt_core::track::bound::{estimated, information, position_rmse, prior, step, transition};
 use foxhunt_core::{Error, Method};
@@ -90,9 +90,11 @@ pub fn one(
     settings.smooth = smooth;
     settings.seed = run as u64 + 1;
     let t0 = std::time::Instant::now();
-    // Told a noise of the records', the tracker estimates each unit's, as `track` does.
+    // Told a noise of the records' and nothing else, the tracker estimates each unit's, as
+    // `track` does with no stations file.
+    let unstated = vec![Unstated::Everything; s.stations.len()];
     let tracked = match s.told_sigma {
-        Some(_) => track_estimating(&sim.updates, &settings, &vec![true; s.stations.len()])?.0,
+        Some(_) => track_estimating(&sim.updates, &settings, &unstated)?.0,
         None => track(&sim.updates, &settings)?,
     };
     let seconds = t0.elapsed().as_secs_f64();
