@@ -396,24 +396,31 @@ mod tests {
         s
     }
 
+    /// The first three masts' noise estimated, the fourth's stated.
+    const THREE_FREE: [Unstated; 4] = [
+        Unstated::Noise,
+        Unstated::Noise,
+        Unstated::Noise,
+        Unstated::Nothing,
+    ];
+
+    fn show(noise: &[SourceNoise]) {
+        for n in noise {
+            println!(
+                "source {}: scatter {:.2}, tracked {:.2} deg, array {}",
+                n.source,
+                n.scatter,
+                n.tracked().to_degrees(),
+                n.array
+            );
+        }
+    }
+
     #[test]
     fn a_unit_noisier_than_stated_is_widened_to_its_noise_and_one_as_stated_is_not() {
         let updates = masts([3.0, 3.0, 3.0, 1.0]);
-        let free = [
-            Unstated::Noise,
-            Unstated::Noise,
-            Unstated::Noise,
-            Unstated::Nothing,
-        ];
-        let (_, noise) = track_estimating(&updates, &settings(), &free).expect("a track");
-        for n in &noise {
-            println!(
-                "source {}: scatter {:.2}, tracked {:.2} deg",
-                n.source,
-                n.scatter,
-                n.tracked().to_degrees()
-            );
-        }
+        let (_, noise) = track_estimating(&updates, &settings(), &THREE_FREE).expect("a track");
+        show(&noise);
         assert_eq!(noise.len(), 4);
         // The estimate of a 3 degree unit from 240 bearings: its own spread is about 7 %, the
         // filtered track's residuals a little short of the noise; 2.4-3.6 leaves both room.
@@ -440,14 +447,7 @@ mod tests {
             Unstated::Everything,
         ];
         let (run, noise) = track_estimating(&updates, &settings(), &unstated).expect("a track");
-        for n in &noise {
-            println!(
-                "source {}: tracked {:.1} deg, array {}",
-                n.source,
-                n.tracked().to_degrees(),
-                n.array
-            );
-        }
+        show(&noise);
         let arrays: Vec<bool> = noise.iter().map(|n| n.array).collect();
         assert_eq!(arrays, [true, false, true, false]);
         // An array takes twice its scatter; the others their scatter (a 12 degree estimate
@@ -474,12 +474,7 @@ mod tests {
         let updates = masts([3.0, 3.0, 3.0, 1.0]);
         let run = track(&updates, &settings()).unwrap();
         let mut live = LiveScatter::default();
-        let free = [
-            Unstated::Noise,
-            Unstated::Noise,
-            Unstated::Noise,
-            Unstated::Nothing,
-        ];
+        let free = THREE_FREE;
         for (u, p) in updates.iter().zip(&run.points).take(MIN_BEARINGS - 1) {
             live.learn(u, p, &free);
         }
