@@ -100,9 +100,9 @@ pub struct Args {
     #[arg(long)]
     pub accel_sd: Option<f32>,
     /// Seconds in which each station's offset forgets what it learned (default: 10 where the
-    /// stations file states an `indoor-aoa` class, whose error changes with where the
-    /// emitter is; else 0.15 s a particle, at least 250: 1500 at the default 10000; 1500 for
-    /// `ekf`).
+    /// stations file states an `indoor-aoa` class, or a station of which nothing is stated
+    /// scatters as one, past 10 degrees: its error changes with where the emitter is; else
+    /// 0.15 s a particle, at least 250: 1500 at the default 10000; 1500 for `ekf`).
     #[arg(long)]
     pub memory_s: Option<f32>,
     /// A recording's track smoothed: each point also from the 15 updates after it (a
@@ -111,7 +111,8 @@ pub struct Args {
     pub smooth: bool,
     /// Every bearing's noise, degrees, stated (default: the stations file's, else each
     /// record's own, a PFOXB's 1, widened to what a unit's bearings show where they scatter
-    /// more).
+    /// more; past 10 degrees, a station of which nothing is stated is tracked as an indoor
+    /// array, `indoor-aoa`).
     #[arg(long)]
     pub sigma: Option<f32>,
     /// A stations file (TOML, as `locate --stations`): each station's noise and offset prior
