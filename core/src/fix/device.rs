@@ -103,6 +103,21 @@ impl DeviceClass {
     }
 }
 
+/// The widest ceiling of any class, radians: bearings that scatter by more than this about
+/// anything share nothing a DF unit could have measured.
+pub const WIDEST_CEILING: f32 = {
+    let mut widest = UNSTATED.ceiling;
+    let mut k = 0;
+    while k < DeviceClass::ALL.len() {
+        let c = DeviceClass::ALL[k].noise().ceiling;
+        if c > widest {
+            widest = c;
+        }
+        k += 1;
+    }
+    widest
+};
+
 /// How a tracker takes a class's reports, where they differ from independent bearings at
 /// the class's noise (docs/src/tracking.md, "Indoors from angles of arrival").
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -172,6 +187,7 @@ mod tests {
             );
         }
         assert_eq!(DeviceClass::from_name("nonsense"), None);
+        assert_eq!(WIDEST_CEILING, DeviceClass::IndoorAoa.noise().ceiling);
         assert_eq!(class_noise(None), UNSTATED);
     }
 }

@@ -11,6 +11,7 @@ use super::super::reach;
 use super::{Item, LocateConfig, NoEmitter};
 use crate::error::Error;
 use crate::fix::bias::Sighting;
+use crate::fix::device::WIDEST_CEILING;
 use crate::model::bearing::wrap;
 use crate::stats;
 
@@ -315,9 +316,12 @@ pub const MAX_DIRECTION_HALF_WIDTH: f32 = core::f32::consts::PI / 6.0;
 /// (each less its station's prior offset) from their centroid, at any range (`min_range` 0:
 /// with no fit there is no likelihood to bound it). Only when the directions are concentrated
 /// beyond what luck gives (the Rayleigh test at [`LocateConfig::significance`], the same bar
-/// as a fix's), with enough effective bearings to estimate their scatter, and a half-width
-/// within [`MAX_DIRECTION_HALF_WIDTH`]; `None` otherwise. [`LocateConfig::max_sigma`] is a
-/// fix's bar, not a direction's: the half-width carries the noise.
+/// as a fix's), with enough effective bearings to estimate their scatter, a half-width
+/// within [`MAX_DIRECTION_HALF_WIDTH`] and a scatter not beyond doubt wider than any device
+/// class shows ([`WIDEST_CEILING`], the chi-square test at the same 1 %); `None` otherwise. [`LocateConfig::max_sigma`] is a fix's bar, not a
+/// direction's (a crossing counts as noise here), but the half-width shrinks with the count:
+/// thousands of bearings from arrays round a room, each looking in, scatter by 97 degrees
+/// about their mean direction and still passed Rayleigh's test with a half-width of 6.
 ///
 /// The noise is estimated from that scatter (at least the stated sigmas' under
 /// [`super::NoiseModel::Known`]); bearings that do cross count their crossing as noise, which
@@ -372,7 +376,15 @@ pub(super) fn direction_only(
         super::NoiseModel::Estimated => estimated,
         super::NoiseModel::Known => estimated.max(1.0),
     };
-    let sigma = scale * super::super::noise::median_sigma(set);
+    let median = super::super::noise::median_sigma(set);
+    let sigma = scale * median;
+    // The scatter beyond the widest any class shows, beyond doubt (a few bearings' estimate
+    // may pass it by luck): no direction is shared.
+    let ceiling = config.max_sigma.max(WIDEST_CEILING);
+    let at_ceiling = chi2 / tau * (median / ceiling) * (median / ceiling);
+    if !stats::chi2_sf(at_ceiling, dof).is_ok_and(|p| p >= config.significance) {
+        return None;
+    }
     let (apex, _) = apex_of(set).ok()?;
     let half_width =
         direction_half_width(set, stations, scale, tau, config.confidence, Some(dof)).ok()?;
