@@ -15,6 +15,12 @@
 //! little wide, rather than narrowed by the estimate's luck). A recording is tracked again
 //! with the widened noise ([`track_estimating`]); a live line widens a source's noise from the
 //! update after its scatter is known ([`LiveScatter`]).
+//!
+//! A scatter alone does not show an error that persists over many reports, as an indoor
+//! array's compression toward boresight does: a source of which nothing at all is stated
+//! whose noise passes [`ARRAY_ABOVE`], which no outdoor unit reaches, is tracked as an indoor
+//! array (the recording once more, a live channel's track from the start again;
+//! docs/src/tracking.md, "An indoor array no one stated").
 
 use crate::track::moving::{Settings, TrackPoint, TrackRun, Update, track};
 use foxhunt_core::Error;
