@@ -116,6 +116,13 @@ pub struct StationSetup {
 }
 
 impl StationSetup {
+    /// Whether station `s`'s offset prior is its own (stated or measured), not the default.
+    pub fn own_prior(&self, s: usize) -> bool {
+        self.origins
+            .get(s)
+            .is_some_and(|o| *o != PriorOrigin::Default)
+    }
+
     /// How a track takes station `s`'s reports: its class's ([`DeviceClass::track`]).
     pub fn track_traits(&self, s: usize) -> TrackTraits {
         self.classes

@@ -242,19 +242,20 @@ pub fn track_estimating(
             noise = scatter(updates, &run.points);
         }
     }
-    let arrays: Vec<u16> = noise
+    let arrays: Vec<usize> = noise
         .iter()
-        .filter(|n| {
-            let tracked = n.given * widened.get(usize::from(n.source)).unwrap_or(&1.0);
+        .map(|n| (n, usize::from(n.source)))
+        .filter(|(n, k)| {
+            let tracked = n.given * widened.get(*k).unwrap_or(&1.0);
             of(n.source) == Unstated::Everything && tracked > ARRAY_ABOVE
         })
-        .map(|n| n.source)
+        .map(|(_, k)| k)
         .collect();
     if !arrays.is_empty() {
         let mut s = s.clone();
-        as_arrays(&mut s, arrays.iter().map(|k| usize::from(*k)));
-        for k in arrays.iter().map(|k| usize::from(*k)) {
-            widened[k] *= report_factor(true);
+        as_arrays(&mut s, arrays.iter().copied());
+        for k in &arrays {
+            widened[*k] *= report_factor(true);
         }
         let spent = run.evaluations;
         run = track(&widen(updates, &widened), &s)?;
@@ -263,7 +264,7 @@ pub fn track_estimating(
     }
     for n in noise.iter_mut() {
         n.widened = widened.get(usize::from(n.source)).copied().unwrap_or(1.0);
-        n.array = arrays.contains(&n.source);
+        n.array = arrays.contains(&usize::from(n.source));
     }
     Ok((run, noise))
 }

@@ -2,7 +2,7 @@
 //! with the moving-emitter tracker ([`crate::track::moving`]), every update's point placed in
 //! latitude and longitude when the capture (or the anchors file's origin) gives a frame.
 
-use crate::estimate::stations::{PriorOrigin, StationSetup, station_setup};
+use crate::estimate::stations::{StationSetup, station_setup};
 use crate::inputs::stations::Network;
 use crate::track::capture::Measured;
 use crate::track::indoor::AnchorsFile;
@@ -213,12 +213,8 @@ pub fn memory_s(o: &Options) -> Option<f32> {
 /// its class's ([`DeviceClass::track`](foxhunt_core::fix::device::DeviceClass::track)).
 pub fn offset_prior(setup: &StationSetup, s: usize) -> BiasPrior {
     let prior = setup.priors.of(s);
-    let own = setup
-        .origins
-        .get(s)
-        .is_some_and(|o| *o != PriorOrigin::Default);
     match setup.track_traits(s).offset_sd {
-        Some(sd) if !own => BiasPrior {
+        Some(sd) if !setup.own_prior(s) => BiasPrior {
             sd: prior.sd.max(sd),
             ..prior
         },
@@ -228,12 +224,8 @@ pub fn offset_prior(setup: &StationSetup, s: usize) -> BiasPrior {
 
 /// What no one stated of station `s` (`noise`: whether its noise is, [`track_noise`]).
 pub fn unstated_of(setup: &StationSetup, noise: bool, s: usize) -> Unstated {
-    let own_prior = setup
-        .origins
-        .get(s)
-        .is_some_and(|o| *o != PriorOrigin::Default);
     let class = setup.classes.get(s).copied().flatten();
-    match (noise, class.is_some() || own_prior) {
+    match (noise, class.is_some() || setup.own_prior(s)) {
         (true, _) => Unstated::Nothing,
         (false, true) => Unstated::Noise,
         (false, false) => Unstated::Everything,

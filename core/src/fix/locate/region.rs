@@ -318,10 +318,11 @@ pub const MAX_DIRECTION_HALF_WIDTH: f32 = core::f32::consts::PI / 6.0;
 /// beyond what luck gives (the Rayleigh test at [`LocateConfig::significance`], the same bar
 /// as a fix's), with enough effective bearings to estimate their scatter, a half-width
 /// within [`MAX_DIRECTION_HALF_WIDTH`] and a scatter not beyond doubt wider than any device
-/// class shows ([`WIDEST_CEILING`], the chi-square test at the same 1 %); `None` otherwise. [`LocateConfig::max_sigma`] is a fix's bar, not a
-/// direction's (a crossing counts as noise here), but the half-width shrinks with the count:
-/// thousands of bearings from arrays round a room, each looking in, scatter by 97 degrees
-/// about their mean direction and still passed Rayleigh's test with a half-width of 6.
+/// class shows ([`WIDEST_CEILING`], the chi-square test at the same 1 %); `None` otherwise.
+/// [`LocateConfig::max_sigma`] is a fix's bar, not a direction's (a crossing counts as noise
+/// here), but the half-width shrinks with the count: thousands of bearings from arrays round
+/// a room, each looking in, scatter by 97 degrees about their mean direction and still passed
+/// Rayleigh's test with a half-width of 6.
 ///
 /// The noise is estimated from that scatter (at least the stated sigmas' under
 /// [`super::NoiseModel::Known`]); bearings that do cross count their crossing as noise, which
