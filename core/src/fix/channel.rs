@@ -7,7 +7,7 @@
 //! their own, listed first. [`belongs`] is that rule for one frequency and one channel, for
 //! whoever needs to pick a channel's bearings out again.
 
-use super::order::heapsort_by;
+use super::order::quicksort_by;
 use crate::error::{Error, check_finite};
 
 /// Marks an item that belongs to no channel (excluded, or beyond the capacity).
@@ -138,8 +138,8 @@ pub fn group<const C: usize>(
         }
     }
     let f_of = |i: u32| freq(i as usize).flatten().unwrap_or(0.0);
-    heapsort_by(&mut order[..k], |a, b| {
-        (f_of(*a), *a).partial_cmp(&(f_of(*b), *b)) == Some(core::cmp::Ordering::Less)
+    quicksort_by(&mut order[..k], |a, b| {
+        f_of(*a).total_cmp(&f_of(*b)).then(a.cmp(b))
     });
     let mut lowest = f32::NEG_INFINITY;
     let mut current: Option<usize> = None;

@@ -16,7 +16,7 @@
 //! occurrence is kept. Three sorts, O(n log n), no table per station.
 
 use super::observation::Observation;
-use super::order::heapsort_by;
+use super::order::quicksort_by;
 use crate::error::Error;
 
 /// What one observation is worth (as a tag byte in the working storage: `Verdict as u8`).
@@ -99,7 +99,7 @@ pub fn sort_out(
     };
     reset(order);
     let key_of = |i: u32| obs(i as usize).map(|o| key(&o));
-    heapsort_by(order, |a, b| (key_of(*a), *a) < (key_of(*b), *b));
+    quicksort_by(order, |a, b| (key_of(*a), *a).cmp(&(key_of(*b), *b)));
     for w in order.windows(2) {
         if key_of(w[0]) == key_of(w[1]) {
             repeated(tags, w[1]);
@@ -108,7 +108,7 @@ pub fn sort_out(
     // A stamped bearing by a second path: the same station, time and channel, in input order.
     reset(order);
     let stamp_of = |i: u32| obs(i as usize).filter(|o| o.stamped).map(|o| stamp(&o));
-    heapsort_by(order, |a, b| (stamp_of(*a), *a) < (stamp_of(*b), *b));
+    quicksort_by(order, |a, b| (stamp_of(*a), *a).cmp(&(stamp_of(*b), *b)));
     for w in order.windows(2) {
         if stamp_of(w[0]).is_some() && stamp_of(w[0]) == stamp_of(w[1]) {
             repeated(tags, w[1]);
@@ -118,7 +118,7 @@ pub fn sort_out(
     reset(order);
     let stream_of = |o: &Observation| (o.station, channel_key(o.freq_mhz));
     let stream = |i: u32| obs(i as usize).map(|o| stream_of(&o));
-    heapsort_by(order, |a, b| (stream(*a), *a) < (stream(*b), *b));
+    quicksort_by(order, |a, b| (stream(*a), *a).cmp(&(stream(*b), *b)));
     let mut latest: Option<((u16, i32), f32)> = None;
     for &i in order.iter() {
         let Some(o) = obs(i as usize) else { continue };

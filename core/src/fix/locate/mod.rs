@@ -184,8 +184,8 @@ pub fn locate<const C: usize, const O: usize, R: Rng + ?Sized>(
     for (k, slot) in order.iter_mut().enumerate().take(n) {
         *slot = k as u32;
     }
-    super::order::heapsort_by(&mut order[..n], |a, b| {
-        (tags[*a as usize], *a) < (tags[*b as usize], *b)
+    super::order::quicksort_by(&mut order[..n], |a, b| {
+        (tags[*a as usize], *a).cmp(&(tags[*b as usize], *b))
     });
     for (s, &i) in scratch.iter_mut().zip(order.iter()).take(n) {
         *s = items[i as usize];
