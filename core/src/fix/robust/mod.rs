@@ -28,7 +28,9 @@ mod consensus;
 mod tests;
 mod trimmed;
 
-pub use consensus::{Consensus, OffsetWindow, RansacOptions, chance, ransac};
+pub use consensus::{
+    Consensus, MIN_PAIRS, MISS_ODDS, OffsetWindow, RansacOptions, chance, pairs_needed, ransac,
+};
 pub use trimmed::{RefineOptions, RobustFix, refine, trim_cut};
 
 /// How far from the drive an emitter is sought, metres (the default
