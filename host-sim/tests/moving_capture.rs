@@ -360,6 +360,16 @@ fn an_indoor_walker_s_records_track_as_well_as_its_measurements() {
                 .collect();
             judge(&moved, &placed, f64::from(s.warmup_s))
         };
+        // `locate` with nothing stated: no fix, and the words say the anchors' own noise is
+        // an indoor array's and how to state it.
+        let l = foxhunt(&["locate", path]);
+        let words = String::from_utf8_lossy(&l.stderr);
+        println!("run {run}: {words}");
+        assert_eq!(l.status.code(), Some(1), "{words}");
+        assert!(
+            words.contains("`\"indoor-aoa\"` in a `--stations` file"),
+            "{words}"
+        );
         let seed = (run + 1).to_string();
         let stations = out.with_extension("stations.toml");
         for (k, file) in [Some(stations.as_path()), Some(class_only.as_path()), None]

@@ -2,6 +2,7 @@
 
 use crate::inputs::capture::Decoded;
 use crate::locate::report::RegionReport;
+use foxhunt_core::fix::device::WIDEST_CEILING;
 use foxhunt_core::fix::locate::motion::Motion;
 use foxhunt_core::fix::locate::{ChannelOutcome, NoEmitter, Observation};
 use foxhunt_core::model::bearing::wrap;
@@ -258,6 +259,13 @@ impl Steps {
         let below = 1.0 - 3.5 / (self.pairs as f32).sqrt();
         self.deg < max_deg * below.max(1.0 / 3.0)
     }
+
+    /// Whether these steps are too large for noise within `max_deg`: three sds of their
+    /// median above it (the mirror of [`Steps::steady`]), so that the bearings' own noise, not
+    /// only their scatter about a point, passes the ceiling.
+    pub fn beyond(&self, max_deg: f32) -> bool {
+        self.deg > max_deg * (1.0 + 3.5 / (self.pairs as f32).sqrt())
+    }
 }
 
 /// How much a station's bearing changes from one to the next: the robust sd of the steps
@@ -300,7 +308,9 @@ const STEADY_PAIRS: usize = 20;
 /// What a channel with no consistent emitter, heard by `stations` DF stations, whose bearings
 /// step by `step` (its [`step_deg`]) adds to `why` (the bearings scatter, agree on nothing, or
 /// pin no point): bearings whose steps are too small for noise beyond the ceiling `max_sigma`
-/// (radians; [`Steps::steady`]) follow something, not noise. One station's offset beyond its
+/// (radians; [`Steps::steady`]) follow something, not noise; bearings too scattered whose own
+/// steps pass that ceiling but not the widest class's ([`Steps::beyond`]) are as noisy as a
+/// Yagi's or an indoor array's, and the user is told how to say so. One station's offset beyond its
 /// prior may be an emitter that moves: one station's bearings on a drone circling 500 m away
 /// fit a still point with a 15 or 60 degree offset (`move-vehicle-turning` run 1), and nothing
 /// in them tells the two apart. Nothing for the other reasons.
@@ -326,6 +336,22 @@ pub(crate) fn steady_clause(
              (multipath, a direction-dependent error)",
             s.deg
         ),
+        Some(s)
+            if matches!(why, NoEmitter::TooNoisy)
+                && max_sigma < WIDEST_CEILING
+                && s.beyond(max_sigma.to_degrees())
+                && !s.beyond(WIDEST_CEILING.to_degrees()) =>
+        {
+            format!(
+                "; each bearing differs from its station's one before by about {:.1} degrees: \
+                 noise beyond the {:.0} of this class of DF unit, as a hand-turned Yagi's (up \
+                 to 20) or an indoor angle-of-arrival array's (10-16); if the stations are such, \
+                 say so (`antenna = \"yagi\"` or `\"indoor-aoa\"` in a `--stations` file); \
+                 `foxhunt track` takes stations this noisy as indoor arrays unasked",
+                s.deg,
+                max_sigma.to_degrees()
+            )
+        }
         _ if matches!(why, NoEmitter::OffsetBeyondPrior(_)) && stations == 1 => {
             "; or the emitter moves: one station's bearings on an emitter that moves can fit a \
              still one with a large offset (a second station tells them apart)"
@@ -493,6 +519,19 @@ mod tests {
             prior: foxhunt_core::fix::bias::BiasPrior { mean: 0.0, sd: 0.1 },
             z: 4.0,
         });
+        // Noise itself past the ceiling (12 degrees over 600 steps, the bar 11.4), yet within
+        // an indoor array's: the arrays' class is named; not at 11 degrees, nor at 30, nor for
+        // a class whose ceiling is already the widest (there 12 degrees is steady).
+        let arrays = steady_clause(NoEmitter::TooNoisy, steps(12.0, 600), 4, ceiling);
+        assert!(arrays.contains("by about 12.0 degrees"), "{arrays}");
+        assert!(
+            arrays.contains("`\"indoor-aoa\"` in a `--stations` file"),
+            "{arrays}"
+        );
+        for (deg, max) in [(11.0, ceiling), (30.0, ceiling), (12.0, WIDEST_CEILING)] {
+            let clause = steady_clause(NoEmitter::TooNoisy, steps(deg, 600), 4, max);
+            assert!(!clause.contains("indoor-aoa"), "{deg} at {max}: {clause}");
+        }
         let alone = steady_clause(beyond, steps(3.0, 20), 1, ceiling);
         assert!(alone.contains("or the emitter moves"), "{alone}");
         assert_eq!(steady_clause(beyond, steps(3.0, 20), 3, ceiling), "");

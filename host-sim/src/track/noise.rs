@@ -18,7 +18,7 @@
 //!
 //! A scatter alone does not show an error that persists over many reports, as an indoor
 //! array's compression toward boresight does: a source of which nothing at all is stated
-//! whose noise passes [`ARRAY_ABOVE`], which no outdoor unit reaches, is tracked as an indoor
+//! whose noise passes [`ARRAY_ABOVE`], which no outdoor array reaches, is tracked as an indoor
 //! array (the recording once more, a live channel's track from the start again;
 //! docs/src/tracking.md, "An indoor array no one stated").
 
@@ -43,7 +43,7 @@ const ARRAY: TrackTraits = DeviceClass::IndoorAoa.track();
 /// time, as an array's 95-98 % (docs/src/tracking.md).
 pub fn array_note(array: bool) -> &'static str {
     if array {
-        "; a scatter no outdoor unit shows: taken as an indoor angle-of-arrival array's \
+        "; a scatter no outdoor array shows: taken as an indoor angle-of-arrival array's \
          (each report at twice it, a 7.2 deg offset prior, offsets forgetting in 10 s); a \
          stations file's antenna states its class"
     } else {
