@@ -12,7 +12,9 @@
 //!    common offset for that hypothesis (the densest window of its residuals, within the
 //!    offset prior's range), so a mounting offset does not hide the emitter. Bounded work:
 //!    `hypotheses` scored, `max_attempts` pairs drawn, a sample of at most [`SCORE_SAMPLE`].
-//!    Deterministic given the generator.
+//!    Deterministic given the generator. A live channel's search starts from its last fix
+//!    ([`RansacOptions::start`]) and draws only the pairs its agreement needs
+//!    ([`pairs_needed`], RANSAC's stopping rule).
 //! 2. [`refine`]: Tukey's biweight from the best hypothesis, then trimmed ML: keep the bearings
 //!    Tukey gave weight to, fit position and offsets by Gaussian ML on them alone, re-estimate
 //!    the scale from their residuals (truncation-corrected), cut at [`trim_cut`] scale sigmas
