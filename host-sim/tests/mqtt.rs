@@ -703,15 +703,17 @@ fn the_load_harness_shards_to_pinned_workers_and_counts_every_bearing_once() {
     // 16 channels: the hash gives each of two shards some (10/6).
     let row = perf_row(
         &broker.url("load"),
-        &["--stations", "4", "--channels", "16", "--rate-hz", "5"],
+        &["--stations", "8", "--channels", "16", "--rate-hz", "10"],
         &["--seconds", "3", "--workers", "2", "--pin-workers"],
     );
     // | stations | channels | rate | bearings/s | workers | sent | taken | fixes | updates |
-    // worker CPU s | ...: 4 x 16 x 5 x 3 = 960 bearings, each taken by one worker.
+    // worker CPU s | ...: 8 x 16 x 10 x 3 = 3 840 bearings, each taken by one worker; enough
+    // solves that each worker's processor time shows in the table's tenths of a second (four
+    // stations at 5 Hz, once the live search started from the last fix, left one at 0.0).
     assert_eq!(row[5], "2 (pinned)");
     assert_eq!(
         (row[6].as_str(), row[7].as_str()),
-        ("960", "960"),
+        ("3840", "3840"),
         "sent and taken"
     );
     let cpu: Vec<f64> = per_worker(&row[10]);
