@@ -4,7 +4,6 @@
 
 use super::Priors;
 use crate::inputs::stations::Network;
-use foxhunt_bridge::nmea::LatLon;
 use foxhunt_core::Method;
 use foxhunt_core::fix::bias::{BiasPrior, DirectionPrior};
 use foxhunt_core::fix::locate::{LocateConfig, NoiseModel};
@@ -38,10 +37,6 @@ pub struct LocateOptions {
     /// What is known of the network's stations and reference transmitters (`--stations`,
     /// `--reference`; docs/src/networks.md).
     pub network: Option<std::sync::Arc<Network>>,
-    /// Where a live channel's last update put its emitter: the robust search scores it first
-    /// and stops once it has drawn the pairs that point's agreement needs (the core's
-    /// `RansacOptions::start`; docs/src/speed.md). `None` for a recording: a full search.
-    pub start: Option<LatLon>,
 }
 
 impl Default for LocateOptions {
@@ -55,7 +50,6 @@ impl Default for LocateOptions {
             direction: None,
             channel_width_mhz: LocateConfig::default().channel_width_mhz,
             network: None,
-            start: None,
         }
     }
 }

@@ -144,13 +144,8 @@ pub(crate) fn solve<'a>(
     };
     // The bearings alone, for the words of an error.
     let bearings = || -> Vec<Bearing> { obs.iter().map(|x| x.bearing).collect() };
-    let mut config = o.config();
-    config.ransac.start = o
-        .start
-        .and_then(|g| frame.to_local(g).ok())
-        .map(|p| [p[0] as f32, p[1] as f32]);
     let r: PipelineRun = pool()
-        .install(|| pipeline(&obs, &config, &setup.priors, o.seed))
+        .install(|| pipeline(&obs, &o.config(), &setup.priors, o.seed))
         .map_err(|e| explain(e, &bearings()))?;
     let found = Found {
         offsets: &r.offsets,

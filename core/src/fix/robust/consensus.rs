@@ -28,31 +28,6 @@ pub struct RansacOptions {
     /// Hypotheses farther than this from the drive's centroid are dropped, metres (default
     /// [`MAX_RANGE_M`]).
     pub max_range: f32,
-    /// A point scored before any pair, metres: a live channel's last fix. With one, the search
-    /// stops once it has drawn as many pairs as the best point's agreement needs to have
-    /// drawn one of its own ([`pairs_needed`]), rather than scoring every hypothesis.
-    pub start: Option<[f32; 2]>,
-}
-
-/// Odds the search may have missed a point agreed on as widely as its best one
-/// ([`pairs_needed`]).
-pub const MISS_ODDS: f32 = 1e-5;
-/// Random pairs a search with a start scores at least.
-pub const MIN_PAIRS: u32 = 16;
-
-/// Random pairs to draw so that, when a fraction `agree` of the bearings agree on a point, a
-/// pair of them was drawn but with odds [`MISS_ODDS`] (RANSAC's stopping rule): ln(odds) /
-/// ln(1 - agree^2), at least [`MIN_PAIRS`], at most `cap`.
-pub fn pairs_needed(agree: f32, cap: u32) -> u32 {
-    let both = (agree * agree).clamp(0.0, 1.0);
-    if both >= 1.0 {
-        return MIN_PAIRS.min(cap);
-    }
-    let n = libm::logf(MISS_ODDS) / libm::log1pf(-both);
-    if !(n < cap as f32) {
-        return cap;
-    }
-    (libm::ceilf(n) as u32).clamp(MIN_PAIRS.min(cap), cap)
 }
 
 impl Default for RansacOptions {
@@ -64,7 +39,6 @@ impl Default for RansacOptions {
             threshold: 3.0,
             floor: 0.5 * PI / 180.0,
             max_range: MAX_RANGE_M,
-            start: None,
         }
     }
 }
@@ -78,9 +52,6 @@ impl RansacOptions {
             self.floor,
             self.max_range,
         ])?;
-        if let Some(p) = self.start {
-            check_finite(&p)?;
-        }
         if self.hypotheses > 0
             && self.max_attempts > 0
             && self.min_crossing >= 0.0
@@ -142,11 +113,8 @@ pub struct Consensus {
     pub inliers: u32,
     /// Usable bearings in the set.
     pub candidates: u32,
-    /// Hypotheses the chance is charged for: those scored, or a full search's when it started
-    /// from a point ([`RansacOptions::start`]).
+    /// Hypotheses scored.
     pub hypotheses: u32,
-    /// Random pairs scored.
-    pub pairs: u32,
     /// The agreement angle used, radians.
     pub threshold: f32,
 }
@@ -201,54 +169,6 @@ fn best_offset(r: &[f32], t: f32, window: OffsetWindow) -> (u32, f32) {
     best
 }
 
-/// The residuals of a hypothesis, its near ones sorted: what it is scored on.
-struct Scoring<'a, T> {
-    items: &'a [T],
-    stride: usize,
-    /// The agreement angle, radians.
-    t: f32,
-    window: OffsetWindow,
-    /// Only residuals in this range can count or enter the spread (those within a window of
-    /// width 2t centred in the allowed range, or within t of its mean): the rest are left out
-    /// before the sort, which is most of the scoring's cost (the sorted list, and so every
-    /// sum over it, is what it was, a margin of t spare).
-    near: (f32, f32),
-    residuals: [f32; SCORE_SAMPLE],
-}
-
-impl<T: Sighting> Scoring<'_, T> {
-    /// Hypothesis `p`'s agreeing count, spread and best common offset; `None` when it cannot
-    /// reach `beat` agreeing bearings (no more than its near residuals can agree: such a
-    /// hypothesis needs no sort).
-    fn score(&mut self, p: [f32; 2], beat: u32) -> Option<(u32, f32, f32)> {
-        let mut k = 0;
-        for it in self.items.iter().step_by(self.stride) {
-            let bg = it.bearing();
-            if bg.check().is_err() {
-                continue;
-            }
-            if let Some(slot) = self.residuals.get_mut(k) {
-                *slot = wrap(bg.theta - predicted(&p, &bg.vehicle));
-                if *slot >= self.near.0 && *slot <= self.near.1 {
-                    k += 1;
-                }
-            }
-        }
-        if (k as u32) < beat {
-            return None;
-        }
-        let r = &mut self.residuals[..k];
-        super::super::order::quicksort(r);
-        let (count, offset) = best_offset(r, self.t, self.window);
-        let spread = r
-            .iter()
-            .map(|r| libm::fabsf(r - offset))
-            .filter(|d| *d <= self.t)
-            .sum::<f32>();
-        Some((count, spread, offset))
-    }
-}
-
 /// RANSAC over bearing pairs: the point most bearings agree on, with its common offset.
 pub fn ransac<T: Sighting, R: Rng + ?Sized>(
     items: &[T],
@@ -270,41 +190,13 @@ pub fn ransac<T: Sighting, R: Rng + ?Sized>(
         centroid[0] += it.bearing().vehicle[0] / candidates as f32;
         centroid[1] += it.bearing().vehicle[1] / candidates as f32;
     }
-    let in_range =
-        |p: &[f32; 2]| libm::hypotf(p[0] - centroid[0], p[1] - centroid[1]) <= options.max_range;
     let stride = items.len().div_ceil(SCORE_SAMPLE).max(1);
-    let sampled = items
-        .iter()
-        .step_by(stride)
-        .filter(|t| usable(t))
-        .count()
-        .min(SCORE_SAMPLE) as f32;
-    let mut scoring = Scoring {
-        items,
-        stride,
-        t,
-        window,
-        near: (
-            window.centre - window.half_width - 3.0 * t,
-            window.centre + window.half_width + 3.0 * t,
-        ),
-        residuals: [0.0f32; SCORE_SAMPLE],
-    };
     let n = items.len();
-    // (count, spread, position, offset); ties go to the tighter window (smaller spread).
     let mut best: Option<(u32, f32, [f32; 2], f32)> = None;
-    let start = options.start.filter(in_range);
-    if let Some(p) = start {
-        best = scoring.score(p, 0).map(|(c, s, o)| (c, s, p, o));
-    }
-    let mut wanted = options.hypotheses;
     let mut scored = 0u32;
+    let mut residuals = [0.0f32; SCORE_SAMPLE];
     for _ in 0..options.max_attempts {
-        if start.is_some() {
-            let agree = best.map_or(0.0, |b| b.0 as f32 / sampled.max(1.0));
-            wanted = pairs_needed(agree, options.hypotheses);
-        }
-        if scored >= wanted {
+        if scored >= options.hypotheses {
             break;
         }
         let i = ((random::uniform(rng) * n as f32) as usize).min(n - 1);
@@ -322,13 +214,41 @@ pub fn ransac<T: Sighting, R: Rng + ?Sized>(
         let Ok(p) = intersect(&ba, &bb, options.min_crossing) else {
             continue;
         };
-        if !in_range(&p) {
+        if libm::hypotf(p[0] - centroid[0], p[1] - centroid[1]) > options.max_range {
             continue;
         }
         scored += 1;
-        let Some((count, spread, offset)) = scoring.score(p, best.map_or(0, |b| b.0)) else {
+        // Only residuals near the allowed offsets can count or enter the spread (those
+        // within a window of width 2t centred in the allowed range, or within t of its
+        // mean): the rest are left out before the sort, which is most of the scoring's cost
+        // (the sorted list, and so every sum over it, is what it was, a margin of t spare).
+        let near = (
+            window.centre - window.half_width - 3.0 * t,
+            window.centre + window.half_width + 3.0 * t,
+        );
+        let mut k = 0;
+        for it in items.iter().step_by(stride).filter(|t| usable(t)) {
+            if let Some(slot) = residuals.get_mut(k) {
+                let bg = it.bearing();
+                *slot = wrap(bg.theta - predicted(&p, &bg.vehicle));
+                if *slot >= near.0 && *slot <= near.1 {
+                    k += 1;
+                }
+            }
+        }
+        // No more than the k near residuals can agree: a hypothesis with fewer than the best's
+        // count cannot win, and needs no sort.
+        if best.is_some_and(|(c, ..)| (k as u32) < c) {
             continue;
-        };
+        }
+        super::super::order::quicksort(&mut residuals[..k]);
+        let (count, offset) = best_offset(&residuals[..k], t, window);
+        // Ties go to the tighter window (smaller spread about its offset).
+        let spread = residuals[..k]
+            .iter()
+            .map(|r| libm::fabsf(r - offset))
+            .filter(|d| *d <= t)
+            .sum::<f32>();
         let better = match best {
             None => true,
             Some((c, s, _, _)) => count > c || (count == c && spread < s),
@@ -353,14 +273,7 @@ pub fn ransac<T: Sighting, R: Rng + ?Sized>(
         bias: offset,
         inliers,
         candidates,
-        // A search that started from a point is charged the whole search it stands in for
-        // (the start came from one on nearly the same bearings), so its chance is judged as a
-        // cold search's.
-        hypotheses: match start {
-            Some(_) => options.hypotheses.max(scored + 1),
-            None => scored,
-        },
-        pairs: scored,
+        hypotheses: scored,
         threshold: t,
     })
 }

@@ -12,9 +12,7 @@
 //!    common offset for that hypothesis (the densest window of its residuals, within the
 //!    offset prior's range), so a mounting offset does not hide the emitter. Bounded work:
 //!    `hypotheses` scored, `max_attempts` pairs drawn, a sample of at most [`SCORE_SAMPLE`].
-//!    Deterministic given the generator. A live channel's search starts from its last fix
-//!    ([`RansacOptions::start`]) and draws only the pairs its agreement needs
-//!    ([`pairs_needed`], RANSAC's stopping rule).
+//!    Deterministic given the generator.
 //! 2. [`refine`]: Tukey's biweight from the best hypothesis, then trimmed ML: keep the bearings
 //!    Tukey gave weight to, fit position and offsets by Gaussian ML on them alone, re-estimate
 //!    the scale from their residuals (truncation-corrected), cut at [`trim_cut`] scale sigmas
@@ -30,9 +28,7 @@ mod consensus;
 mod tests;
 mod trimmed;
 
-pub use consensus::{
-    Consensus, MIN_PAIRS, MISS_ODDS, OffsetWindow, RansacOptions, chance, pairs_needed, ransac,
-};
+pub use consensus::{Consensus, OffsetWindow, RansacOptions, chance, ransac};
 pub use trimmed::{RefineOptions, RobustFix, refine, trim_cut};
 
 /// How far from the drive an emitter is sought, metres (the default

@@ -33,7 +33,6 @@ use crate::outputs::terminal::{Out, Stop, note};
 use foxhunt_bridge::BridgeConfig;
 use foxhunt_bridge::Frame;
 use foxhunt_bridge::kraken::KrakenXml;
-use foxhunt_bridge::nmea::LatLon;
 use foxhunt_core::fix::locate::Observation;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -316,7 +315,6 @@ fn each_channel(
     channels: Vec<(i64, Vec<Observation>)>,
     o: &LocateOptions,
     guide: &Guide,
-    starts: &BTreeMap<i64, LatLon>,
 ) -> Vec<(i64, Result<Located, Box<NoFix>>)> {
     let all = std::mem::take(&mut d.observations);
     let rest = &*d;
@@ -328,11 +326,7 @@ fn each_channel(
                     observations,
                     ..rest.clone()
                 };
-                let o = LocateOptions {
-                    start: starts.get(&key).copied(),
-                    ..o.clone()
-                };
-                (key, locate_guided(&one, &o, &mut guide.clone()))
+                (key, locate_guided(&one, o, &mut guide.clone()))
             })
             .collect()
     });
@@ -397,9 +391,6 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
     // key; empty until one is printed.
     let mut last: BTreeMap<i64, Option<String>> = BTreeMap::new();
     let mut updates = 0u64;
-    // Each channel's emitter at its last update, by its key: the next solve's robust search
-    // starts there.
-    let mut starts: BTreeMap<i64, LatLon> = BTreeMap::new();
     // A broker's channels waiting for a solve, and the bearings already counted in them.
     let mut pending = Pending::default();
     let mut seen = 0usize;
@@ -481,24 +472,10 @@ pub fn run(o: &LiveOptions, guide: &mut Guide, out: &mut Out) -> Result<LiveEnd,
             }
             vec![(-1, l)]
         } else {
-            each_channel(&mut dec.decoded, channels, &o.locate, guide, &starts)
+            each_channel(&mut dec.decoded, channels, &o.locate, guide)
         };
         for (key, located) in located {
             updates += 1;
-            match located
-                .as_ref()
-                .ok()
-                .and_then(|l| l.report.emitters.first())
-            {
-                Some(e) => starts.insert(
-                    key,
-                    LatLon {
-                        lat: e.lat,
-                        lon: e.lon,
-                    },
-                ),
-                None => starts.remove(&key),
-            };
             // TAK missing an update is no reason to stop following the emitter: the next
             // update sends the whole picture again.
             if let (Some(tak), Ok(l)) = (tak.as_mut(), &located)

@@ -461,7 +461,6 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
         direction: calibration.as_ref().and_then(Calibration::direction),
         channel_width_mhz: a.channel_width_mhz,
         network: a.network.network()?,
-        start: None,
     };
     options.check().map_err(Stop::Usage)?;
     // `inf` (the default): until the line closes.
