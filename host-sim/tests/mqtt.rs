@@ -748,6 +748,31 @@ fn the_load_harness_counts_a_worker_with_an_empty_shard_idle() {
     );
 }
 
+/// Stations sending on their own clocks (`--stagger`): each bearing has a time of its own, and
+/// every one after its channel's first fix is reached by a fix (a worker counts time from its
+/// first bearing: were the first tick staggered too, a station other than the first arriving
+/// first would leave the last ones unreached, counted as `no fix`).
+#[test]
+fn the_load_harness_staggers_its_stations_and_reaches_every_bearing() {
+    let _one_broker = serial();
+    let broker = Broker::start("stagger");
+    let row = perf_row(
+        &broker.url("stagger"),
+        &["--stations", "4", "--channels", "2", "--rate-hz", "5"],
+        &["--seconds", "2", "--stagger"],
+    );
+    assert_eq!(row[3], "5 (staggered)");
+    // 4 x 2 x 5 x 2 = 80 bearings.
+    assert_eq!(
+        (row[6].as_str(), row[7].as_str()),
+        ("80", "80"),
+        "sent and taken"
+    );
+    assert_eq!(row[15], "0", "bearings no fix reached");
+    let p99: f64 = row[13].parse().expect("a p99");
+    assert!(p99 > 0.0, "{p99}");
+}
+
 #[test]
 fn a_worker_the_broker_gives_nothing_says_so() {
     let _one_broker = serial();

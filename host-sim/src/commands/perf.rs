@@ -63,6 +63,11 @@ pub struct Args {
     /// sharding scales, measured.
     #[arg(long, requires = "mqtt")]
     pub pin_workers: bool,
+    /// With --mqtt: station k sends k/S of a period after station 0, as stations polling
+    /// their receivers on their own clocks do; without it every station sends each tick at
+    /// once (a burst: the worst case).
+    #[arg(long, requires = "mqtt")]
+    pub stagger: bool,
     /// With --mqtt: each worker's bearings kept per channel (`locate --mqtt-keep`).
     #[arg(long, value_name = "N", requires = "mqtt",
           value_parser = super::values::count_at_least(2, "bearings per channel"))]
@@ -84,6 +89,7 @@ pub fn run(a: &Args, out: &mut Out) -> Outcome {
             workers: a.workers,
             keep: a.mqtt_keep,
             pin: a.pin_workers,
+            stagger: a.stagger,
         };
         let exe = std::env::current_exe().map_err(|e| e.to_string())?;
         let f = crate::runs::mqtt_load::run(&load, &exe)?;

@@ -142,11 +142,9 @@ pub(crate) fn solve<'a>(
             calibrate_on_references(&with_noise, &local, o.channel_width_mhz, &mut setup);
         (Cow::Owned(rest), fixes)
     };
-    // The bearings alone, for the words of an error.
-    let bearings = || -> Vec<Bearing> { obs.iter().map(|x| x.bearing).collect() };
     let r: PipelineRun = pool()
         .install(|| pipeline(&obs, &o.config(), &setup.priors, o.seed))
-        .map_err(|e| explain(e, &bearings()))?;
+        .map_err(|e| explain(e, &bearings_of(&obs)))?;
     let found = Found {
         offsets: &r.offsets,
         directions: &r.found,
@@ -160,6 +158,11 @@ pub(crate) fn solve<'a>(
         references,
         fixes,
     })
+}
+
+/// The bearings alone, for the words of an error.
+fn bearings_of(obs: &[Observation]) -> Vec<Bearing> {
+    obs.iter().map(|x| x.bearing).collect()
 }
 
 /// Every channel of the field pipeline's `locate` (emitters, regions and others): a channel
@@ -179,7 +182,7 @@ pub(crate) fn located_by_pipeline(
         references,
         fixes,
     } = solve(d, o, frame)?;
-    let bearings = || -> Vec<Bearing> { obs.iter().map(|x| x.bearing).collect() };
+    let bearings = || bearings_of(&obs);
     let rj = &r.rejected;
     for (k, v) in [
         ("outlier", rj.outliers),

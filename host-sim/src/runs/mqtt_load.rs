@@ -6,9 +6,10 @@
 //! A bearing's latency: from its send to the arrival (at a subscriber beside the stations) of
 //! the first fix of its channel whose bearings reach its time (the fix's `time_span_s`; the
 //! synthetic bearings' times are their send schedule), published after it was sent; counted
-//! for each tick's last bearing on each channel, the latest any station sent (a fix that came
-//! before the tick's last station had sent its other channels' bearings is on time), from the
-//! channel's first fix on; the start-up, to the last channel's first fix, is its own figure.
+//! for each bearing time on each channel once, from the latest send of that time (stations
+//! sending at once share a tick's time: a fix that came before the tick's last station had
+//! sent its other channels' bearings is on time), from the channel's first fix on; the
+//! start-up, to the last channel's first fix, is its own figure.
 //! The workers' peak resident memory is their own `--stats` figure; their resident memory is
 //! also sampled every few seconds, to show whether it stays flat over a long run.
 
@@ -44,6 +45,10 @@ pub struct Load {
     /// Pin worker k to the k-th processor this process may use (`taskset`): one core each,
     /// its solves on one thread.
     pub pin: bool,
+    /// Station k sends k/S of a period after station 0 (from the second tick on), as
+    /// unsynchronised stations do (each polls its receiver on its own clock); otherwise every
+    /// station sends at once, each tick a burst (the worst case).
+    pub stagger: bool,
 }
 
 /// Seconds between samples of the timeline.
@@ -286,13 +291,17 @@ pub fn run(load: &Load, exe: &Path) -> Result<Figures, String> {
     let freqs: Vec<f64> = (0..load.channels).map(|c| 430.0 + 0.2 * c as f64).collect();
     let ticks = (load.rate_hz * load.seconds).round() as u64;
     let epoch0: i64 = 1_780_308_000_000;
-    // When each tick's last bearing on each channel was sent (by any station).
-    let (stx, srx) = mpsc::channel::<(u64, usize, Instant)>();
+    // Each bearing's tick, time (ms from the first tick), channel and send.
+    let (stx, srx) = mpsc::channel::<(u64, i64, usize, Instant)>();
     let start = Instant::now() + Duration::from_millis(200);
     let mut threads = Vec::new();
     for k in 0..load.stations {
         let (url, freqs, stx) = (url.clone(), freqs.clone(), stx.clone());
         let (rate, ring, shards) = (load.rate_hz, load.stations, load.workers);
+        let phase = match load.stagger {
+            true => k as f64 / ring as f64,
+            false => 0.0,
+        };
         threads.push(std::thread::spawn(move || -> Result<u64, String> {
             let at = station(k, ring);
             let truth = bearing_to_emitter(at)?;
@@ -308,14 +317,18 @@ pub fn run(load: &Load, exe: &Path) -> Result<Figures, String> {
             )?;
             let mut rng = XorShiftRng::seed_from_u64(k as u64 + 1);
             for i in 0..ticks {
-                let due = start + Duration::from_secs_f64(i as f64 / rate);
+                // The first tick at once: a worker's clock starts at its first bearing, which
+                // is then at the first tick's time whichever station's came first.
+                let at_tick = i as f64 + if i == 0 { 0.0 } else { phase };
+                let due = start + Duration::from_secs_f64(at_tick / rate);
+                let ms = (at_tick * 1000.0 / rate).round() as i64;
                 if let Some(w) = due.checked_duration_since(Instant::now()) {
                     std::thread::sleep(w);
                 }
                 for (c, &f) in freqs.iter().enumerate() {
                     let m = BearingMessage {
                         station: id.clone(),
-                        time_ms: epoch0 + (i as f64 * 1000.0 / rate).round() as i64,
+                        time_ms: epoch0 + ms,
                         lat: at.lat,
                         lon: at.lon,
                         bearing_deg: (truth + 2.0 * gauss(&mut rng)).rem_euclid(360.0),
@@ -328,7 +341,7 @@ pub fn run(load: &Load, exe: &Path) -> Result<Figures, String> {
                         topic: url.sharded_topic(shards, &m.channel(), &m.station),
                         payload: serde_json::to_vec(&m).map_err(|e| e.to_string())?,
                     })?;
-                    let _ = stx.send((i, c, Instant::now()));
+                    let _ = stx.send((i, ms, c, Instant::now()));
                 }
             }
             Ok(link.finish().acked)
@@ -339,13 +352,16 @@ pub fn run(load: &Load, exe: &Path) -> Result<Figures, String> {
     for t in threads {
         acked += t.join().map_err(|_| "a station thread panicked")??;
     }
-    let mut sent_at = vec![vec![start; freqs.len()]; ticks as usize];
-    for (i, c, t) in srx.iter() {
-        if let Some(s) = sent_at.get_mut(i as usize).and_then(|s| s.get_mut(c))
-            && t > *s
-        {
-            *s = t;
+    // Each channel's bearing times in order, each with its tick and its latest send.
+    let mut sent_at: Vec<Vec<(i64, u64, Instant)>> = vec![Vec::new(); freqs.len()];
+    for (i, ms, c, t) in srx.iter() {
+        if let Some(s) = sent_at.get_mut(c) {
+            s.push((ms, i, t));
         }
+    }
+    for s in &mut sent_at {
+        s.sort_by_key(|m| (m.0, std::cmp::Reverse(m.2)));
+        s.dedup_by_key(|m| m.0);
     }
     let number = |notes: &[String], key: &str, tail: &str| {
         notes.iter().find_map(|l| {
@@ -389,34 +405,36 @@ pub fn run(load: &Load, exe: &Path) -> Result<Figures, String> {
     // before it the channel has none to update (start-up: its first solve needs every
     // station's first bearings), timed apart.
     let mut lat = Vec::new();
-    let mut by_tick: Vec<Vec<f64>> = vec![Vec::new(); sent_at.len()];
+    let mut by_tick: Vec<Vec<f64>> = vec![Vec::new(); ticks as usize];
     let mut never = 0;
     let mut first_fix_ms = 0.0f64;
     for (c, f) in freqs.iter().enumerate() {
         let channel = channel_name(Some(*f));
         let mine: Vec<&(String, f64, Instant)> = seen.iter().filter(|s| s.0 == channel).collect();
         let Some(first) = mine.first().map(|s| s.2) else {
-            never += sent_at.len() as u64;
+            never += sent_at[c].len() as u64;
             continue;
         };
         first_fix_ms = first_fix_ms.max(first.duration_since(start).as_secs_f64() * 1000.0);
         // The fixes arrive in order: the first that reaches a tick is found from the last
         // tick's.
         let mut from = 0;
-        for (i, sent) in sent_at.iter().map(|s| &s[c]).enumerate() {
-            if *sent < first {
+        for &(ms, i, sent) in &sent_at[c] {
+            if sent < first {
                 continue;
             }
-            let t = i as f64 / load.rate_hz;
+            let t = ms as f64 / 1000.0;
             match mine[from..]
                 .iter()
-                .position(|s| s.1 + 1e-3 >= t && s.2 >= *sent)
+                .position(|s| s.1 + 1e-3 >= t && s.2 >= sent)
             {
                 Some(j) => {
                     from += j;
-                    let ms = mine[from].2.duration_since(*sent).as_secs_f64() * 1000.0;
-                    lat.push(ms);
-                    by_tick[i].push(ms);
+                    let latency = mine[from].2.duration_since(sent).as_secs_f64() * 1000.0;
+                    lat.push(latency);
+                    if let Some(b) = by_tick.get_mut(i as usize) {
+                        b.push(latency);
+                    }
                 }
                 None => never += 1,
             }
@@ -488,11 +506,12 @@ pub fn table(l: &Load, f: &Figures) -> String {
          worker CPU s | first fix ms | p50 ms | p99 ms | max ms | no fix | RSS MB at 1 min | at \
          end | worker peak MB |\n\
          |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n\
-         | {} | {} | {} | {:.0} | {}{} | {} | {} | {} | {} | {} | {:.0} | {:.0} | {:.0} | {:.0} | \
+         | {} | {} | {}{} | {:.0} | {}{} | {} | {} | {} | {} | {} | {:.0} | {:.0} | {:.0} | {:.0} | \
          {} | {:.1} | {:.1} | {:.1} |",
         l.stations,
         l.channels,
         l.rate_hz,
+        if l.stagger { " (staggered)" } else { "" },
         l.stations as f64 * l.channels as f64 * l.rate_hz,
         l.workers,
         if l.pin { " (pinned)" } else { "" },
