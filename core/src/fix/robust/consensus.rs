@@ -150,6 +150,9 @@ fn best_offset(r: &[f32], t: f32, window: OffsetWindow) -> (u32, f32) {
     if high.0 > best.0 {
         best = high;
     }
+    // The best run's ends; its mean is summed once, at the end (the count rises run by run
+    // toward the densest, and summing each better run was most of the scan's cost).
+    let mut run: Option<(usize, usize)> = None;
     let mut j = 0;
     for i in 0..r.len() {
         let centre = r[i] + t;
@@ -162,9 +165,12 @@ fn best_offset(r: &[f32], t: f32, window: OffsetWindow) -> (u32, f32) {
         }
         let n = (j - i) as u32;
         if n > best.0 {
-            let mean = r[i..j].iter().sum::<f32>() / n as f32;
-            best = (n, mean);
+            best.0 = n;
+            run = Some((i, j));
         }
+    }
+    if let Some((i, j)) = run {
+        best.1 = r[i..j].iter().sum::<f32>() / best.0 as f32;
     }
     best
 }
@@ -191,6 +197,16 @@ pub fn ransac<T: Sighting, R: Rng + ?Sized>(
         centroid[1] += it.bearing().vehicle[1] / candidates as f32;
     }
     let stride = items.len().div_ceil(SCORE_SAMPLE).max(1);
+    // The scored sample's usable bearings (angle, observer), taken once for every hypothesis.
+    let mut sample = [(0.0f32, [0.0f32; 2]); SCORE_SAMPLE];
+    let mut m = 0;
+    for it in items.iter().step_by(stride).filter(|t| usable(t)) {
+        if let Some(slot) = sample.get_mut(m) {
+            *slot = (it.bearing().theta, it.bearing().vehicle);
+            m += 1;
+        }
+    }
+    let sample = &sample[..m];
     let n = items.len();
     let mut best: Option<(u32, f32, [f32; 2], f32)> = None;
     let mut scored = 0u32;
@@ -227,10 +243,9 @@ pub fn ransac<T: Sighting, R: Rng + ?Sized>(
             window.centre + window.half_width + 3.0 * t,
         );
         let mut k = 0;
-        for it in items.iter().step_by(stride).filter(|t| usable(t)) {
+        for (theta, observer) in sample {
             if let Some(slot) = residuals.get_mut(k) {
-                let bg = it.bearing();
-                *slot = wrap(bg.theta - predicted(&p, &bg.vehicle));
+                *slot = wrap(theta - predicted(&p, observer));
                 if *slot >= near.0 && *slot <= near.1 {
                     k += 1;
                 }
@@ -306,7 +321,7 @@ pub fn chance(
 
 #[cfg(test)]
 mod window_tests {
-    use super::window_at;
+    use super::{OffsetWindow, best_offset, window_at};
     use crate::random;
     use rand_core::SeedableRng;
     use rand_xorshift::XorShiftRng;
@@ -333,6 +348,45 @@ mod window_tests {
                 };
                 assert_eq!(window_at(r, lo, width), (count, mean), "n {n} lo {lo}");
             }
+        }
+    }
+
+    /// The densest window as summed at each better run (the scan before its mean was summed
+    /// once): the same count and the same bits of the offset.
+    #[test]
+    fn the_best_offset_summed_once_is_the_one_summed_at_each_better_run() {
+        let mut rng = XorShiftRng::seed_from_u64(5);
+        for n in 0..80 {
+            let mut r: [f32; 80] =
+                core::array::from_fn(|_| 0.3 * (random::uniform(&mut rng) - 0.5));
+            let r = &mut r[..n];
+            r.sort_unstable_by(f32::total_cmp);
+            let t = 0.02 + 0.05 * random::uniform(&mut rng);
+            let window = OffsetWindow {
+                centre: 0.1 * (random::uniform(&mut rng) - 0.5),
+                half_width: 0.1 * random::uniform(&mut rng),
+            };
+            let (lo_c, hi_c) = (
+                window.centre - window.half_width,
+                window.centre + window.half_width,
+            );
+            let mut expected = window_at(r, lo_c - t, 2.0 * t);
+            let high = window_at(r, hi_c - t, 2.0 * t);
+            if high.0 > expected.0 {
+                expected = high;
+            }
+            for i in 0..r.len() {
+                let centre = r[i] + t;
+                if centre < lo_c || centre > hi_c {
+                    continue;
+                }
+                let j = i + r[i..].iter().take_while(|x| **x <= r[i] + 2.0 * t).count();
+                let count = (j - i) as u32;
+                if count > expected.0 {
+                    expected = (count, r[i..j].iter().sum::<f32>() / count as f32);
+                }
+            }
+            assert_eq!(best_offset(r, t, window), expected, "n {n}");
         }
     }
 }
