@@ -27,6 +27,7 @@ use foxhunt_core::fix::bias::BiasPrior;
 use foxhunt_core::fix::channel::belongs;
 use foxhunt_core::fix::observation::Observation;
 use foxhunt_core::track::{Layout, Level, Motion};
+use std::collections::VecDeque;
 use std::sync::mpsc;
 use std::thread::JoinHandle;
 
@@ -109,6 +110,55 @@ struct LiveChannel {
     levels: bool,
     window: Window,
     tracker: Option<LiveTracker>,
+    /// The updates its tracker took (as given, the last [`REPLAYED`]): a tracker started
+    /// again when a source is found to be an indoor array takes them first.
+    taken: VecDeque<Update>,
+}
+
+/// Updates a live channel keeps for a tracker started again ([`LiveChannel::taken`]): the
+/// first ones, where sources are found to be arrays (on the indoor walker within two seconds),
+/// with room to spare; stepping 512 again takes a second or two at 10 000 particles.
+const REPLAYED: usize = 512;
+
+impl LiveChannel {
+    /// A tracker of `settings` for this channel: each heard source's offset prior
+    /// (`prior_of` its station, `unheard` for a source not yet heard), the sources found to
+    /// be indoor arrays taken as such.
+    fn start(
+        &self,
+        settings: &Settings,
+        unheard: BiasPrior,
+        prior_of: &dyn Fn(u16) -> BiasPrior,
+    ) -> Result<LiveTracker, String> {
+        let mut settings = settings.clone();
+        settings.offsets = (0..usize::from(settings.layout.sources))
+            .map(|k| self.sources.get(k).map_or(unheard, |s| prior_of(*s)))
+            .collect();
+        let arrays = (0..self.sources.len()).filter(|k| self.scatter.array(*k as u16));
+        as_arrays(&mut settings, arrays);
+        LiveTracker::start(settings)
+    }
+
+    /// Start the tracker again and step it through the updates taken: the last one's point
+    /// (a tracker that stops on the way leaves none: the next update starts one).
+    fn retrack(
+        &mut self,
+        settings: &Settings,
+        unheard: BiasPrior,
+        prior_of: &dyn Fn(u16) -> BiasPrior,
+    ) -> Result<TrackPoint, String> {
+        self.tracker = None;
+        let mut tracker = self.start(settings, unheard, prior_of)?;
+        let mut last = Err("no update to track".to_string());
+        for u in &self.taken {
+            let mut u = *u;
+            self.scatter.widen(&mut u);
+            last = tracker.step(u);
+            last.as_ref()?;
+        }
+        self.tracker = Some(tracker);
+        last
+    }
 }
 
 /// Why a bearing was left out.
@@ -226,6 +276,7 @@ impl LiveChannels {
             levels: false,
             window: Window::default(),
             tracker: None,
+            taken: VecDeque::new(),
         });
         self.channels.len() - 1
     }
@@ -336,6 +387,7 @@ impl LiveChannels {
         r: Ready,
         prior_of: &dyn Fn(u16) -> BiasPrior,
     ) -> Result<Option<TrackPoint>, String> {
+        let (settings, unheard) = (&self.settings, self.unheard);
         let ch = self.channels.get_mut(r.channel).ok_or("no such channel")?;
         if !observable(ch.sources.len(), ch.levels) {
             return Ok(None);
@@ -343,24 +395,25 @@ impl LiveChannels {
         let tracker = match ch.tracker.as_mut() {
             Some(t) => t,
             None => {
-                let mut settings = self.settings.clone();
-                settings.offsets = (0..usize::from(settings.layout.sources))
-                    .map(|k| ch.sources.get(k).map_or(self.unheard, |s| prior_of(*s)))
-                    .collect();
-                let arrays = (0..ch.sources.len()).filter(|k| ch.scatter.array(*k as u16));
-                as_arrays(&mut settings, arrays);
-                ch.tracker.insert(LiveTracker::start(settings)?)
+                ch.taken.clear();
+                ch.tracker.insert(ch.start(settings, unheard, prior_of)?)
             }
         };
         let mut u = r.update;
         ch.scatter.widen(&mut u);
         let point = tracker.step(u);
         match &point {
-            // A source found to be an indoor array: the next update starts the channel's
-            // tracker again with the array's offset prior and memory.
             Ok(p) => {
+                if ch.taken.len() == REPLAYED {
+                    ch.taken.pop_front();
+                }
+                ch.taken.push_back(r.update);
+                // A source found to be an indoor array: a tracker with the array's offset
+                // prior and memory takes the channel's updates again, so its track goes on
+                // as if the array had been known from the start (this update's point is the
+                // new tracker's).
                 if ch.scatter.learn(&r.update, p, &ch.unstated) {
-                    ch.tracker = None;
+                    return ch.retrack(settings, unheard, prior_of).map(Some);
                 }
             }
             // The next update starts a new tracker from its bearings.

@@ -499,7 +499,7 @@ fn step_all(
                     tracked.to_degrees(),
                     array_note(array),
                     if array {
-                        "; the channel's track starts again"
+                        "; the channel's updates are tracked again with it taken as such"
                     } else {
                         ""
                     },
