@@ -2,8 +2,9 @@
 //! updates as they come ([`Window`]) and each update is stepped at once by that channel's
 //! tracker, which lives on a thread of its own between updates (the core's filters are sized
 //! at compile time and dispatched inside a call, [`track_each`], so the thread is what keeps
-//! one across updates). Memory stays bounded: a channel keeps its filter and its open update,
-//! never the points already handed out.
+//! one across updates). Memory stays bounded: a channel keeps its filter, its open update and
+//! its last 512 updates (a station found to be an indoor array has them tracked again with it
+//! taken as such), never the points already handed out.
 //!
 //! Stations join a channel as they are heard, so the state is sized for [`LIVE_SOURCES`]
 //! from the start (a recorded capture's is sized for the stations it holds): a later station
