@@ -32,24 +32,7 @@ fn judge(points: &[Value], truth: &[(f64, [f64; 2])], warmup_s: f64) -> Vec<(f64
         let Some((_, x)) = truth.iter().find(|(tt, _)| (tt - t).abs() < 1e-3) else {
             panic!("no truth at {t} s");
         };
-        let n = |k: &str| p[k].as_f64().expect(k);
-        let d = [x[0] - n("east_m"), x[1] - n("north_m")];
-        let e = &p["ellipse"];
-        let held = e.is_object() && {
-            let (a, b) = (
-                e["major_m"].as_f64().expect("major"),
-                e["minor_m"].as_f64().expect("minor"),
-            );
-            let o = e["orientation_deg"]
-                .as_f64()
-                .expect("orientation")
-                .to_radians();
-            // The major axis clockwise from north: (east, north) = (sin, cos).
-            let along = d[0] * o.sin() + d[1] * o.cos();
-            let across = d[0] * o.cos() - d[1] * o.sin();
-            (along / a).powi(2) + (across / b).powi(2) <= 1.0
-        };
-        out.push((d[0].hypot(d[1]), held));
+        out.push(common::error_and_held(p, *x));
     }
     out
 }

@@ -242,17 +242,9 @@ fn the_rssi_rooms_track_no_worse_than_before_with_honest_ellipses() {
                 "{name} run {run}: a point an epoch"
             );
             for (p, t) in points.iter().zip(&truth) {
-                let num = |k: &serde_json::Value| k.as_f64().expect("a number");
-                let (de, dn) = (
-                    num(&p["east_m"]) - f64::from(t[0]),
-                    num(&p["north_m"]) - f64::from(t[1]),
-                );
-                let e = &p["ellipse"];
-                let th = num(&e["orientation_deg"]).to_radians();
-                let along = (de * th.sin() + dn * th.cos()) / num(&e["major_m"]);
-                let across = (de * th.cos() - dn * th.sin()) / num(&e["minor_m"]);
-                squares += de * de + dn * dn;
-                inside += usize::from(along * along + across * across <= 1.0);
+                let (error, held) = common::error_and_held(p, [f64::from(t[0]), f64::from(t[1])]);
+                squares += error * error;
+                inside += usize::from(held);
                 n += 1;
             }
         }

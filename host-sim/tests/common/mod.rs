@@ -162,3 +162,26 @@ pub fn simulate(condition: &str, run: Option<usize>, out: &Path) {
         String::from_utf8_lossy(&sim.stderr)
     );
 }
+
+/// A track point's (`track --json`) distance from `truth` (east, north, metres) and whether
+/// its 95 % ellipse holds it (false when the point has none).
+pub fn error_and_held(p: &serde_json::Value, truth: [f64; 2]) -> (f64, bool) {
+    let n = |k: &str| p[k].as_f64().expect(k);
+    let d = [truth[0] - n("east_m"), truth[1] - n("north_m")];
+    let e = &p["ellipse"];
+    let held = e.is_object() && {
+        let (a, b) = (
+            e["major_m"].as_f64().expect("major"),
+            e["minor_m"].as_f64().expect("minor"),
+        );
+        let o = e["orientation_deg"]
+            .as_f64()
+            .expect("orientation")
+            .to_radians();
+        // The major axis clockwise from north: (east, north) = (sin, cos).
+        let along = d[0] * o.sin() + d[1] * o.cos();
+        let across = d[0] * o.cos() - d[1] * o.sin();
+        (along / a).powi(2) + (across / b).powi(2) <= 1.0
+    };
+    (d[0].hypot(d[1]), held)
+}
