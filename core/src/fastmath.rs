@@ -24,6 +24,19 @@ pub fn round_to_int(x: f32) -> (f32, i32) {
     (t - ROUND, t.to_bits().wrapping_sub(ROUND.to_bits()) as i32)
 }
 
+/// `libm::roundf(x) as i32` (halves away from zero, saturating, NaN to 0) without the call:
+/// the channel of every bearing is its frequency so rounded, several times a solve. Below
+/// 2^23 in magnitude the fraction x - trunc(x) is exact; above, x is whole.
+#[inline]
+pub fn round_half_away(x: f32) -> i32 {
+    if !(libm::fabsf(x) < 8_388_608.0) {
+        return x as i32;
+    }
+    let whole = x as i32;
+    let fraction = x - whole as f32;
+    whole + i32::from(fraction >= 0.5) - i32::from(fraction <= -0.5)
+}
+
 /// e^x for x <= 0 (log-weights shifted by their maximum). Relative error < 3e-7; 0 below
 /// e^-87.33 (subnormal weights are negligible beside the maximum's 1); NaN stays NaN.
 #[inline(always)]
@@ -146,6 +159,39 @@ pub fn atan2(y: f32, x: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rounds_halves_away_from_zero_as_libm_does() {
+        let mut bits = 0x9e37_79b9u32;
+        let edges = [
+            0.5f32,
+            -0.5,
+            1.5,
+            -1.5,
+            2.5,
+            0.499_999_97,
+            -0.499_999_97,
+            8_388_607.5,
+            -8_388_607.5,
+            8_388_608.0,
+            3e9,
+            -3e9,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            -0.0,
+        ];
+        let random = (0..200_000).map(|_| {
+            bits ^= bits << 13;
+            bits ^= bits >> 17;
+            bits ^= bits << 5;
+            f32::from_bits(bits)
+        });
+        let near = (0..20_000).map(|k| (k as f32 - 10_000.0) * 0.25 + 0.5);
+        for x in edges.into_iter().chain(random).chain(near) {
+            assert_eq!(round_half_away(x), libm::roundf(x) as i32, "{x}");
+        }
+    }
 
     #[test]
     fn rounds_to_nearest() {

@@ -44,7 +44,7 @@ pub struct EvidenceCounts {
 /// The channel of a frequency to the kHz (two logs of one record round it differently).
 fn channel_key(f: Option<f32>) -> i32 {
     match f {
-        Some(f) => libm::roundf(f * 1000.0) as i32,
+        Some(f) => crate::fastmath::round_half_away(f * 1000.0),
         None => i32::MIN,
     }
 }

@@ -80,11 +80,17 @@ pub(crate) fn geometry_of<'a>(
         sum[1] += b.vehicle[1] as f64;
         match first {
             None => first = Some(*b),
+            // Each test once it is passed is not made again: every solve's set-up (hundreds a
+            // network's fix) walks its bearings through here.
             Some(f) => {
-                let dx = b.vehicle[0] - f.vehicle[0];
-                let dy = b.vehicle[1] - f.vehicle[1];
-                moved |= libm::hypotf(dx, dy) > STATIONARY_M;
-                turned |= libm::fabsf(libm::sinf(b.theta - f.theta)) > PARALLEL_SIN;
+                if !moved {
+                    let dx = b.vehicle[0] - f.vehicle[0];
+                    let dy = b.vehicle[1] - f.vehicle[1];
+                    moved = libm::hypotf(dx, dy) > STATIONARY_M;
+                }
+                if !turned {
+                    turned = libm::fabsf(libm::sinf(b.theta - f.theta)) > PARALLEL_SIN;
+                }
             }
         }
     }

@@ -4,8 +4,9 @@
 //! The standard library's sort is 4 KB of code, the largest single item of the 64 KiB MCU
 //! image, which sorts little else; the fixes sort residuals (medians, windows), bearing keys
 //! (repeated evidence) and frequencies (channels) with this one. The field pipeline's hot sorts,
-//! which the firmware does not run, take core's quicksort: the robust search's scoring
-//! ([`quicksort`]) and each solve's sorts of its bearings by key ([`quicksort_by`]).
+//! which the firmware does not run, take faster ones: the robust search's scoring a radix sort
+//! ([`radix_sort`]), each solve's sorts of its bearings by key core's quicksort
+//! ([`quicksort_by`]).
 
 use core::cmp::Ordering;
 
@@ -50,14 +51,62 @@ pub fn heapsort(v: &mut [f32]) {
     heapsort_by(v, |a, b| a.total_cmp(b).is_lt());
 }
 
-/// Sort ascending in [`f32::total_cmp`] order with core's pattern-defeating quicksort: the
-/// same order as [`heapsort`] at 4 KB more code, and much faster on random keys, where the
-/// heap's sift-down mispredicts a branch at every level. For the robust search's scoring
-/// (a few hundred residuals sorted per hypothesis, hundreds of hypotheses per fix), which
-/// runs where the field pipeline runs, the host: `locate` of a 200-station network spends
-/// 17 % less time. The MCU's windowed fix keeps the heapsort.
-pub fn quicksort(v: &mut [f32]) {
-    v.sort_unstable_by(f32::total_cmp);
+/// Values [`radix_sort`] sorts by radix; longer slices take core's quicksort.
+pub const RADIX_MAX: usize = 256;
+
+/// Sort ascending in [`f32::total_cmp`] order: the same order as [`heapsort`] (a total order
+/// has one sorted arrangement, so the same bits), in four counting passes over the bytes of
+/// each value's order key, for the robust search's scoring (a few hundred residuals sorted per
+/// hypothesis, hundreds of hypotheses per fix), which runs where the field pipeline runs, the
+/// host. Core's pattern-defeating quicksort, which it replaces there, compares about
+/// n log2 n = 2 000 times for 256 residuals and mispredicts a branch at many of them; a pass
+/// that every value would leave where it is (one byte shared by all) is skipped. Slices
+/// longer than [`RADIX_MAX`] take the quicksort. The MCU's windowed fix keeps the heapsort.
+pub fn radix_sort(v: &mut [f32]) {
+    let n = v.len();
+    if n > RADIX_MAX {
+        v.sort_unstable_by(f32::total_cmp);
+        return;
+    }
+    // total_cmp's key: the sign bit flipped on positives, every bit on negatives, as unsigned.
+    let order_key = |x: f32| {
+        let b = x.to_bits();
+        b ^ (((b as i32) >> 31) as u32 | 0x8000_0000)
+    };
+    let from_key = |k: u32| {
+        let b = k ^ ((!((k as i32) >> 31)) as u32 | 0x8000_0000);
+        f32::from_bits(b)
+    };
+    let mut keys = [0u32; RADIX_MAX];
+    let mut spare = [0u32; RADIX_MAX];
+    let mut counts = [[0u16; 256]; 4];
+    for (k, x) in keys.iter_mut().zip(v.iter()) {
+        *k = order_key(*x);
+        for (pass, c) in counts.iter_mut().enumerate() {
+            c[((*k >> (8 * pass)) & 0xff) as usize] += 1;
+        }
+    }
+    let (mut from, mut to) = (&mut keys[..n], &mut spare[..n]);
+    for (pass, c) in counts.iter_mut().enumerate() {
+        if c.iter().any(|&m| usize::from(m) == n) {
+            continue;
+        }
+        let mut start = 0u16;
+        for m in c.iter_mut() {
+            let here = *m;
+            *m = start;
+            start += here;
+        }
+        for &k in from.iter() {
+            let slot = &mut c[((k >> (8 * pass)) & 0xff) as usize];
+            to[usize::from(*slot)] = k;
+            *slot += 1;
+        }
+        core::mem::swap(&mut from, &mut to);
+    }
+    for (x, k) in v.iter_mut().zip(from.iter()) {
+        *x = from_key(*k);
+    }
 }
 
 /// Sort `v` ascending by `cmp` (a total order) with core's pattern-defeating quicksort: about
@@ -83,8 +132,48 @@ pub fn median(v: &mut [f32]) -> f32 {
 mod tests {
     use super::*;
     use crate::random;
-    use rand_core::SeedableRng;
+    use rand_core::{Rng, SeedableRng};
     use rand_xorshift::XorShiftRng;
+
+    #[test]
+    fn the_radix_sort_sorts_like_the_standard_library() {
+        let mut rng = XorShiftRng::seed_from_u64(11);
+        let specials = [
+            -0.0f32,
+            0.0,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            -f32::NAN,
+            f32::MIN_POSITIVE,
+            -1e-40,
+        ];
+        for n in (0..=RADIX_MAX + 8).step_by(7).chain([RADIX_MAX]) {
+            for kind in 0..3 {
+                let mut v = [0.0f32; RADIX_MAX + 8];
+                for (i, x) in v.iter_mut().take(n).enumerate() {
+                    let u = random::uniform(&mut rng);
+                    *x = match kind {
+                        // Residuals: a narrow spread about zero, both signs.
+                        0 => (u - 0.5) * 0.3,
+                        // Few distinct values: ties.
+                        1 => (u * 7.0) as i32 as f32 - 3.0,
+                        // Any bits at all, the specials among them.
+                        _ if i % 5 == 0 => specials[i / 5 % specials.len()],
+                        _ => f32::from_bits(rng.next_u32()),
+                    };
+                }
+                let mut expected = v;
+                expected[..n].sort_unstable_by(f32::total_cmp);
+                radix_sort(&mut v[..n]);
+                assert_eq!(
+                    v.map(f32::to_bits),
+                    expected.map(f32::to_bits),
+                    "n {n} kind {kind}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn heapsort_sorts_like_the_standard_library() {
@@ -104,7 +193,7 @@ mod tests {
         let mut v = [3.0f32, -0.0, 0.0, -1.0, f32::INFINITY, 2.0];
         let mut w = v;
         heapsort(&mut v);
-        quicksort(&mut w);
+        radix_sort(&mut w);
         assert_eq!(v.map(f32::to_bits), w.map(f32::to_bits));
         let mut odd = [5.0f32, 1.0, 4.0];
         assert_eq!(median(&mut odd), 4.0);

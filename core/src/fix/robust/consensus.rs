@@ -256,7 +256,7 @@ pub fn ransac<T: Sighting, R: Rng + ?Sized>(
         if best.is_some_and(|(c, ..)| (k as u32) < c) {
             continue;
         }
-        super::super::order::quicksort(&mut residuals[..k]);
+        super::super::order::radix_sort(&mut residuals[..k]);
         let (count, offset) = best_offset(&residuals[..k], t, window);
         // Ties go to the tighter window (smaller spread about its offset).
         let spread = residuals[..k]
