@@ -5,7 +5,7 @@
 //! when it moves or stops.
 
 use foxhunt_core::fix::locate::Observation;
-use std::collections::{HashMap, HashSet};
+use std::collections::{BTreeMap, HashMap, HashSet};
 use std::time::Instant;
 
 /// The bearings kept per channel by default: minutes of a small network, seconds of a large
@@ -23,6 +23,10 @@ pub struct ChannelWindow {
     turnover: HashMap<i64, (u64, Option<u64>)>,
     /// Channels found crowded, each named once.
     named: HashSet<i64>,
+    /// Each channel's bearings among the first `counted` of the observations.
+    count: HashMap<i64, usize>,
+    /// Observations counted so far.
+    counted: usize,
     /// Channels found crowded and not yet taken by [`ChannelWindow::crowded`]: (key,
     /// stations).
     crowded: Vec<(i64, usize)>,
@@ -37,7 +41,17 @@ pub const PER_STATION: usize = 2;
 /// frequency to the kHz.
 fn channel_key(o: &Observation) -> i64 {
     match o.freq_mhz {
-        Some(f) if f > 0.0 && f.is_finite() => (f64::from(f) * 1000.0).round() as i64,
+        Some(f) if f > 0.0 && f.is_finite() => {
+            // `round` (half away from zero) without its library call, which a worker made for
+            // every bearing of its window at every solve: for a positive x below 2^53 the
+            // fraction x - trunc(x) is exact (above, x is whole and the fraction 0).
+            let x = f64::from(f) * 1000.0;
+            if x >= 4_503_599_627_370_496.0 {
+                return x as i64;
+            }
+            let whole = x as i64;
+            whole + i64::from(x - whole as f64 >= 0.5)
+        }
         _ => -1,
     }
 }
@@ -50,31 +64,37 @@ impl ChannelWindow {
             dropped: 0,
             turnover: HashMap::new(),
             named: HashSet::new(),
+            count: HashMap::new(),
+            counted: 0,
             crowded: Vec::new(),
         }
     }
 
     /// Drop each channel's oldest bearings beyond the bound, keeping the order of the rest;
     /// how many were dropped. The observations are in arrival order, so a channel's oldest are
-    /// its first.
+    /// its first. A worker calls this at every solve with the bearings that arrived since the
+    /// last call appended: those are counted, not the whole window again, and the scan for the
+    /// oldest stops once every full channel has dropped its excess (they are at the front).
     pub fn trim(&mut self, obs: &mut Vec<Observation>) -> usize {
-        if obs.len() <= self.keep {
-            return 0;
+        // Bearings taken out by someone else: count them all again.
+        if obs.len() < self.counted {
+            self.count.clear();
+            self.counted = 0;
         }
-        let mut count: HashMap<i64, usize> = HashMap::new();
-        for o in obs.iter() {
-            *count.entry(channel_key(o)).or_default() += 1;
+        for o in obs.get(self.counted..).unwrap_or(&[]) {
+            *self.count.entry(channel_key(o)).or_default() += 1;
         }
+        self.counted = obs.len();
         // How many each channel still has to drop.
-        let mut excess: HashMap<i64, usize> = count
-            .into_iter()
-            .filter(|&(_, n)| n > self.keep)
-            .map(|(k, n)| (k, n - self.keep))
+        let mut excess: BTreeMap<i64, usize> = self
+            .count
+            .iter()
+            .filter(|&(_, &n)| n > self.keep)
+            .map(|(&k, &n)| (k, n - self.keep))
             .collect();
         if excess.is_empty() {
             return 0;
         }
-        let before = obs.len();
         let mut due = Vec::new();
         for (&key, &n) in &excess {
             let (dropped, counted) = self.turnover.entry(key).or_insert((0, None));
@@ -85,17 +105,31 @@ impl ChannelWindow {
                 due.push(key);
             }
             *dropped += n as u64;
+            self.count.insert(key, self.keep);
         }
-        obs.retain(|o| match excess.get_mut(&channel_key(o)) {
-            Some(n) if *n > 0 => {
-                *n -= 1;
-                false
+        let before = obs.len();
+        let mut left: usize = excess.values().sum();
+        let (mut read, mut write) = (0, 0);
+        while left > 0 && read < before {
+            let o = obs[read];
+            read += 1;
+            match excess.get_mut(&channel_key(&o)) {
+                Some(n) if *n > 0 => {
+                    *n -= 1;
+                    left -= 1;
+                }
+                _ => {
+                    obs[write] = o;
+                    write += 1;
+                }
             }
-            _ => true,
-        });
+        }
+        obs.copy_within(read.., write);
+        obs.truncate(write + before - read);
+        self.counted = obs.len();
         let gone = before - obs.len();
         self.dropped += gone as u64;
-        // A full channel, when it fills and each time its window turns over: are its
+        // A full channel, when it fills and each time its window has turned over: are its
         // stations too many for it?
         for key in due {
             let mut stations: Vec<u16> = obs
@@ -217,6 +251,70 @@ mod tests {
         assert!(v.windows(2).all(|p| p[0].time_s <= p[1].time_s));
         assert_eq!(w.trim(&mut v), 0);
         assert_eq!(w.dropped, 9);
+    }
+
+    #[test]
+    fn a_channels_key_is_its_frequency_rounded_to_the_khz() {
+        let mut rng = 0x2545_f491_4f6c_dd1du64;
+        let mut draw = || {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            rng
+        };
+        let edges = [
+            0.0005f32,
+            0.0015,
+            145.5005,
+            433.9205,
+            1e9,
+            3.4e38,
+            f32::MIN_POSITIVE,
+        ];
+        let random = (0..100_000).map(|_| f32::from_bits((draw() >> 33) as u32 & 0x7fff_ffff));
+        for f in edges
+            .into_iter()
+            .chain(random)
+            .filter(|f| f.is_finite() && *f > 0.0)
+        {
+            assert_eq!(
+                channel_key(&obs(f, 0.0)),
+                (f64::from(f) * 1000.0).round() as i64,
+                "{f}"
+            );
+        }
+    }
+
+    #[test]
+    fn trimming_as_bearings_arrive_keeps_what_trimming_everything_at_once_keeps() {
+        // The reference: each channel's latest `keep` of everything that ever arrived.
+        let keep = 5;
+        let mut all = Vec::new();
+        let mut v = Vec::new();
+        let mut w = ChannelWindow::new(keep);
+        let freqs = [145.5, 433.92, 446.0];
+        for round in 0..60usize {
+            for k in 0..(round * 7 % 11) {
+                let o = obs(freqs[(round + k * k) % 3], all.len() as f32);
+                all.push(o);
+                v.push(o);
+            }
+            w.trim(&mut v);
+            let mut left: HashMap<i64, usize> = HashMap::new();
+            let mut want: Vec<Observation> = all
+                .iter()
+                .rev()
+                .filter(|o| {
+                    let n = left.entry(channel_key(o)).or_default();
+                    *n += 1;
+                    *n <= keep
+                })
+                .copied()
+                .collect();
+            want.reverse();
+            assert_eq!(v, want, "round {round}");
+            assert_eq!(w.dropped as usize, all.len() - v.len());
+        }
     }
 
     #[test]
