@@ -37,6 +37,18 @@ pub fn round_half_away(x: f32) -> i32 {
     whole + i32::from(fraction >= 0.5) - i32::from(fraction <= -0.5)
 }
 
+/// [`round_half_away`] in f64: `libm::round(x) as i64`, exact the same way below 2^52 (a live
+/// worker's channel of each bearing its window holds, at every solve).
+#[inline]
+pub fn round_half_away_f64(x: f64) -> i64 {
+    if !(libm::fabs(x) < 4_503_599_627_370_496.0) {
+        return x as i64;
+    }
+    let whole = x as i64;
+    let fraction = x - whole as f64;
+    whole + i64::from(fraction >= 0.5) - i64::from(fraction <= -0.5)
+}
+
 /// e^x for x <= 0 (log-weights shifted by their maximum). Relative error < 3e-7; 0 below
 /// e^-87.33 (subnormal weights are negligible beside the maximum's 1); NaN stays NaN.
 #[inline(always)]
@@ -190,6 +202,12 @@ mod tests {
         let near = (0..20_000).map(|k| (k as f32 - 10_000.0) * 0.25 + 0.5);
         for x in edges.into_iter().chain(random).chain(near) {
             assert_eq!(round_half_away(x), libm::roundf(x) as i32, "{x}");
+            let wide = f64::from(x) * 1000.0 + 0.5;
+            assert_eq!(
+                round_half_away_f64(wide),
+                libm::round(wide) as i64,
+                "{wide}"
+            );
         }
     }
 

@@ -42,15 +42,7 @@ pub const PER_STATION: usize = 2;
 fn channel_key(o: &Observation) -> i64 {
     match o.freq_mhz {
         Some(f) if f > 0.0 && f.is_finite() => {
-            // `round` (half away from zero) without its library call, which a worker made for
-            // every bearing of its window at every solve: for a positive x below 2^53 the
-            // fraction x - trunc(x) is exact (above, x is whole and the fraction 0).
-            let x = f64::from(f) * 1000.0;
-            if x >= 4_503_599_627_370_496.0 {
-                return x as i64;
-            }
-            let whole = x as i64;
-            whole + i64::from(x - whole as f64 >= 0.5)
+            foxhunt_core::fastmath::round_half_away_f64(f64::from(f) * 1000.0)
         }
         _ => -1,
     }
