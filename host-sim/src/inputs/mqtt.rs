@@ -349,17 +349,92 @@ pub enum Handed {
 /// broker queues the rest): some minutes of a large network.
 const BATCH_WAITS: usize = 200_000;
 
-/// The fusing side's link: bearings in, fixes out, on one persistent session.
+/// The fusing side's link: bearings in on a persistent session, fixes out on a connection of
+/// their own.
 pub struct Subscription {
     client: Client,
-    url: MqttUrl,
     /// The topics it subscribed to.
     filter: String,
     /// Its counters.
     pub counts: Arc<Counts>,
+    fixes: Arc<Fixes>,
+}
+
+/// The fixes on their way to the broker, on a connection of their own: on the bearings'
+/// connection a fix queued behind a burst's thousands of acknowledgements, up to 150 ms at
+/// 200 stations (docs/src/speed.md, "Fixes on their own connection").
+struct Fixes {
+    client: Client,
+    url: MqttUrl,
+    counts: Arc<Counts>,
     /// Each channel's latest fix not yet handed to the client (its queue was full): only
-    /// the latest matters, the broker retains one per channel.
+    /// the latest matters, the broker retains one per channel. Handed on by the next
+    /// publish and by the connection's thread as the queue empties.
     waiting: Mutex<BTreeMap<String, String>>,
+    /// Whether `waiting` holds any (the connection's thread looks at each event).
+    any: AtomicBool,
+}
+
+impl Fixes {
+    /// Connect as `client_id`'s fix publisher (a clean session: a fix that did not get
+    /// through is replaced by the channel's next) and start the thread that drives the
+    /// connection, reconnecting after an outage as the bearings' does.
+    fn start(url: &MqttUrl, client_id: &str, counts: Arc<Counts>) -> Result<Arc<Self>, String> {
+        let mut options = url.options(&format!("{client_id}-fixes"));
+        options.set_clean_session(true);
+        let (client, mut conn) = client(options, 64);
+        first_connect(&mut conn, url)?;
+        let fixes = Arc::new(Self {
+            client,
+            url: url.clone(),
+            counts,
+            waiting: Mutex::new(BTreeMap::new()),
+            any: AtomicBool::new(false),
+        });
+        let f = fixes.clone();
+        std::thread::Builder::new()
+            .name("foxhunt-mqtt-fixes".into())
+            .spawn(move || {
+                loop {
+                    if f.any.load(Ordering::Relaxed) {
+                        f.flush();
+                    }
+                    match conn.recv_timeout(Duration::from_millis(50)) {
+                        Err(rumqttc::RecvTimeoutError::Timeout) => {}
+                        Err(rumqttc::RecvTimeoutError::Disconnected) => return,
+                        Ok(Ok(Event::Incoming(Packet::PubAck(_)))) => {
+                            f.counts.fixes_acked.fetch_add(1, Ordering::Relaxed);
+                        }
+                        Ok(Ok(_)) => {}
+                        // The bearings' connection notes the outage.
+                        Ok(Err(_)) if f.counts.closing.load(Ordering::Relaxed) => return,
+                        Ok(Err(_)) => std::thread::sleep(RETRY),
+                    }
+                }
+            })
+            .map_err(|e| format!("cannot start the MQTT fix publisher: {e}"))?;
+        Ok(fixes)
+    }
+
+    /// Hand the waiting fixes to the client while it has room.
+    fn flush(&self) {
+        let Ok(mut waiting) = self.waiting.lock() else {
+            return;
+        };
+        while let Some((channel, json)) = waiting.pop_first() {
+            let topic = self.url.fix_topic(&channel);
+            if self
+                .client
+                .try_publish(topic, QoS::AtLeastOnce, true, json.clone())
+                .is_err()
+            {
+                waiting.insert(channel, json);
+                break;
+            }
+            self.counts.fixes_sent.fetch_add(1, Ordering::Relaxed);
+        }
+        self.any.store(!waiting.is_empty(), Ordering::Relaxed);
+    }
 }
 
 /// A client of `options` with a request queue of `cap`, its socket sending each packet at
@@ -408,14 +483,15 @@ pub fn first_connect(conn: &mut Connection, url: &MqttUrl) -> Result<bool, Strin
 impl std::fmt::Debug for Subscription {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Subscription")
-            .field("url", &self.url)
+            .field("url", &self.fixes.url)
             .field("counts", &self.counts)
             .finish_non_exhaustive()
     }
 }
 
 impl Subscription {
-    /// Connect as `client_id` (an error now is the command's), subscribe to every bearing
+    /// Connect as `client_id` and as its fix publisher, `client_id-fixes` (an error now is
+    /// the command's), subscribe to every bearing
     /// under the prefix (`shard`'s only, with one), and start the thread that
     /// hands the new bearings' records to `take` in batches (its flag: it may block until
     /// the fusing side has room). Each new bearing goes to `keep` first, before the broker
@@ -443,6 +519,7 @@ impl Subscription {
             .try_subscribe(filter.clone(), QoS::AtLeastOnce)
             .map_err(|e| e.to_string())?;
         let counts = Arc::new(Counts::default());
+        let fixes = Fixes::start(url, client_id, counts.clone())?;
         let (c, cl, address) = (counts.clone(), client.clone(), url.address());
         std::thread::Builder::new()
             .name("foxhunt-mqtt".into())
@@ -516,9 +593,6 @@ impl Subscription {
                         Ok(Event::Incoming(Packet::SubAck(_))) => {
                             note(&format!("mqtt: subscribed to {filter} at {address}"));
                         }
-                        Ok(Event::Incoming(Packet::PubAck(_))) => {
-                            c.fixes_acked.fetch_add(1, Ordering::Relaxed);
-                        }
                         Ok(_) => {}
                         Err(e) => {
                             if c.closing.load(Ordering::Relaxed) {
@@ -538,10 +612,9 @@ impl Subscription {
             .map_err(|e| format!("cannot start the MQTT reader: {e}"))?;
         Ok(Self {
             client,
-            url: url.clone(),
             filter: url.worker_filter(shard),
             counts,
-            waiting: Mutex::new(BTreeMap::new()),
+            fixes,
         })
     }
 
@@ -554,27 +627,10 @@ impl Subscription {
     /// later gets the latest at once. Never blocks (the reader thread may be waiting on the
     /// caller): a fix the client has no room for waits, replaced by a newer one.
     pub fn publish_fix(&self, channel: &str, json: String) {
-        let Ok(mut waiting) = self.waiting.lock() else {
-            return;
-        };
-        waiting.insert(channel.to_string(), json);
-        self.flush(&mut waiting);
-    }
-
-    /// Hand the waiting fixes to the client while it has room.
-    fn flush(&self, waiting: &mut BTreeMap<String, String>) {
-        while let Some((channel, json)) = waiting.pop_first() {
-            let topic = self.url.fix_topic(&channel);
-            if self
-                .client
-                .try_publish(topic, QoS::AtLeastOnce, true, json.clone())
-                .is_err()
-            {
-                waiting.insert(channel, json);
-                return;
-            }
-            self.counts.fixes_sent.fetch_add(1, Ordering::Relaxed);
+        if let Ok(mut waiting) = self.fixes.waiting.lock() {
+            waiting.insert(channel.to_string(), json);
         }
+        self.fixes.flush();
     }
 
     /// Wait up to `wait` for every fix to be handed on and acknowledged by the broker, then
@@ -583,13 +639,12 @@ impl Subscription {
         let start = Instant::now();
         let c = &self.counts;
         let done = || {
+            self.fixes.flush();
             let empty = self
+                .fixes
                 .waiting
                 .lock()
-                .map(|mut w| {
-                    self.flush(&mut w);
-                    w.is_empty()
-                })
+                .map(|w| w.is_empty())
                 .unwrap_or(true);
             empty && c.fixes_acked.load(Ordering::Relaxed) >= c.fixes_sent.load(Ordering::Relaxed)
         };
@@ -600,6 +655,7 @@ impl Subscription {
         }
         c.closing.store(true, Ordering::Relaxed);
         let _ = self.client.try_disconnect();
+        let _ = self.fixes.client.try_disconnect();
         all
     }
 }

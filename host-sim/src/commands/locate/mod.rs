@@ -138,7 +138,8 @@ pub struct Args {
     #[arg(long, value_name = "URL")]
     pub mqtt: Option<String>,
     /// With --mqtt: the client id of the broker session, kept while this worker is away so
-    /// that the bearings sent meanwhile are delivered when it comes back (one id per worker).
+    /// that the bearings sent meanwhile are delivered when it comes back (one id per worker;
+    /// the fixes go out on a second connection, ID-fixes).
     #[arg(
         long,
         value_name = "ID",
