@@ -416,11 +416,24 @@ impl Fixes {
         Ok(fixes)
     }
 
-    /// Hand the waiting fixes to the client while it has room.
-    fn flush(&self) {
-        let Ok(mut waiting) = self.waiting.lock() else {
-            return;
-        };
+    /// Keep `json` as `channel`'s latest fix and hand on what waits.
+    fn publish(&self, channel: &str, json: String) {
+        if let Ok(mut waiting) = self.waiting.lock() {
+            waiting.insert(channel.to_string(), json);
+            self.hand_on(&mut waiting);
+        }
+    }
+
+    /// Hand the waiting fixes to the client while it has room; whether none waits.
+    fn flush(&self) -> bool {
+        self.waiting
+            .lock()
+            .map(|mut waiting| self.hand_on(&mut waiting))
+            .unwrap_or(true)
+    }
+
+    /// [`Fixes::flush`] with the waiting fixes already locked.
+    fn hand_on(&self, waiting: &mut BTreeMap<String, String>) -> bool {
         while let Some((channel, json)) = waiting.pop_first() {
             let topic = self.url.fix_topic(&channel);
             if self
@@ -433,7 +446,9 @@ impl Fixes {
             }
             self.counts.fixes_sent.fetch_add(1, Ordering::Relaxed);
         }
-        self.any.store(!waiting.is_empty(), Ordering::Relaxed);
+        let empty = waiting.is_empty();
+        self.any.store(!empty, Ordering::Relaxed);
+        empty
     }
 }
 
@@ -627,10 +642,7 @@ impl Subscription {
     /// later gets the latest at once. Never blocks (the reader thread may be waiting on the
     /// caller): a fix the client has no room for waits, replaced by a newer one.
     pub fn publish_fix(&self, channel: &str, json: String) {
-        if let Ok(mut waiting) = self.fixes.waiting.lock() {
-            waiting.insert(channel.to_string(), json);
-        }
-        self.fixes.flush();
+        self.fixes.publish(channel, json);
     }
 
     /// Wait up to `wait` for every fix to be handed on and acknowledged by the broker, then
@@ -639,14 +651,8 @@ impl Subscription {
         let start = Instant::now();
         let c = &self.counts;
         let done = || {
-            self.fixes.flush();
-            let empty = self
-                .fixes
-                .waiting
-                .lock()
-                .map(|w| w.is_empty())
-                .unwrap_or(true);
-            empty && c.fixes_acked.load(Ordering::Relaxed) >= c.fixes_sent.load(Ordering::Relaxed)
+            self.fixes.flush()
+                && c.fixes_acked.load(Ordering::Relaxed) >= c.fixes_sent.load(Ordering::Relaxed)
         };
         let mut all = done();
         while !all && start.elapsed() < wait {
