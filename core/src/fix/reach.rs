@@ -25,6 +25,11 @@ pub const GROWTH: f32 = core::f32::consts::SQRT_2;
 /// A direction's walk stops once the deviance exceeds this many times the region's threshold
 /// (a well-observed fix: at twice the ellipse's reach the quadratic gives 4).
 pub const STOP: f32 = 16.0;
+/// A direction's walk stops sooner, at its first slice outside the region, when that slice and
+/// the one before it each rise to at least this share of the deviance the ellipse's quadratic
+/// gives there: the likelihood falls as its curvature at the fix says, and nothing farther is
+/// looked for (a ridge that comes back inside flattens first).
+pub const BOWL: f32 = 0.8;
 
 /// The vehicle's position error the region allows for, metres (a GPS fix's few metres): with
 /// exact positions every vehicle position is a spike of the likelihood (a point a metre away
@@ -203,6 +208,8 @@ pub fn reach<T: Sighting>(
     let mut ends = [None; 2];
     let mut farthest = [[0.0f32; 2]; 2];
     let first = libm::sqrtf(k * l1);
+    // The slice at `s` lies at least `BOWL` of the quadratic's deviance up.
+    let in_bowl = |s: f32, d: f32| d >= BOWL * s * s / l1;
     // Each direction's walk starts from the slice at the fix, whose offsets are kept aside;
     // each later slice from the one before it (the table's current offsets).
     for row in stations.iter_mut() {
@@ -287,7 +294,7 @@ pub fn reach<T: Sighting>(
                     left = true;
                 }
                 inside = false;
-                if d > STOP * k {
+                if d > STOP * k || (last.0 > 0.0 && in_bowl(last.0, last.1) && in_bowl(s, d)) {
                     break;
                 }
             }
