@@ -175,6 +175,26 @@ fn best_offset(r: &[f32], t: f32, window: OffsetWindow) -> (u32, f32) {
     best
 }
 
+/// Bins [`densest_bound`] counts residuals in.
+const BOUND_BINS: usize = 64;
+
+/// At least the count of any window of width 2t among residuals `r`, all within `near`
+/// (unsorted): the most in three neighbouring bins at least t wide. A window of width 2t spans
+/// no more than three such bins (1 % wider than t, so rounding cannot make it four), so a
+/// hypothesis whose bound is below the best count cannot win and is neither sorted nor scanned.
+fn densest_bound(r: &[f32], near: (f32, f32), t: f32) -> u32 {
+    let width = 1.01 * t.max((near.1 - near.0) / BOUND_BINS as f32);
+    let mut bins = [0u16; BOUND_BINS];
+    for x in r {
+        let i = ((x - near.0) / width) as usize;
+        bins[i.min(BOUND_BINS - 1)] += 1;
+    }
+    bins.windows(3)
+        .map(|w| u32::from(w[0]) + u32::from(w[1]) + u32::from(w[2]))
+        .max()
+        .unwrap_or(r.len() as u32)
+}
+
 /// RANSAC over bearing pairs: the point most bearings agree on, with its common offset.
 pub fn ransac<T: Sighting, R: Rng + ?Sized>(
     items: &[T],
@@ -251,9 +271,10 @@ pub fn ransac<T: Sighting, R: Rng + ?Sized>(
                 }
             }
         }
-        // No more than the k near residuals can agree: a hypothesis with fewer than the best's
-        // count cannot win, and needs no sort.
-        if best.is_some_and(|(c, ..)| (k as u32) < c) {
+        // No more than the k near residuals can agree, nor more than the densest three bins
+        // hold: a hypothesis with fewer than the best's count cannot win, and needs no sort.
+        if best.is_some_and(|(c, ..)| (k as u32) < c || densest_bound(&residuals[..k], near, t) < c)
+        {
             continue;
         }
         super::super::order::radix_sort(&mut residuals[..k]);
@@ -321,7 +342,7 @@ pub fn chance(
 
 #[cfg(test)]
 mod window_tests {
-    use super::{OffsetWindow, best_offset, window_at};
+    use super::{OffsetWindow, best_offset, densest_bound, window_at};
     use crate::random;
     use rand_core::SeedableRng;
     use rand_xorshift::XorShiftRng;
@@ -348,6 +369,41 @@ mod window_tests {
                 };
                 assert_eq!(window_at(r, lo, width), (count, mean), "n {n} lo {lo}");
             }
+        }
+    }
+
+    /// The bound is never below the densest window's count, whatever the residuals and the
+    /// window (ties at bin edges among them).
+    #[test]
+    fn the_densest_bound_holds_the_densest_window() {
+        let mut rng = XorShiftRng::seed_from_u64(7);
+        for n in 0..200 {
+            let t = 0.001 + 0.05 * random::uniform(&mut rng);
+            let window = OffsetWindow {
+                centre: 0.1 * (random::uniform(&mut rng) - 0.5),
+                half_width: 0.6 * random::uniform(&mut rng) * random::uniform(&mut rng),
+            };
+            let near = (
+                window.centre - window.half_width - 3.0 * t,
+                window.centre + window.half_width + 3.0 * t,
+            );
+            let mut r = [0.0f32; 256];
+            let len = (n * 7) % 257;
+            for (i, x) in r[..len].iter_mut().enumerate() {
+                let u = random::uniform(&mut rng);
+                // Every fourth residual on a multiple of t from the near edge: bin edges.
+                *x = if i % 4 == 0 {
+                    near.0 + t * (u * 10.0) as i32 as f32
+                } else {
+                    near.0 + u * (near.1 - near.0)
+                }
+                .min(near.1);
+            }
+            let r = &mut r[..len];
+            let bound = densest_bound(r, near, t);
+            r.sort_unstable_by(f32::total_cmp);
+            let (count, _) = best_offset(r, t, window);
+            assert!(bound >= count, "n {n}: bound {bound} < {count}");
         }
     }
 
