@@ -231,6 +231,14 @@ pub fn ransac<T: Sighting, R: Rng + ?Sized>(
     let mut best: Option<(u32, f32, [f32; 2], f32)> = None;
     let mut scored = 0u32;
     let mut residuals = [0.0f32; SCORE_SAMPLE];
+    // Only residuals near the allowed offsets can count or enter the spread (those within a
+    // window of width 2t centred in the allowed range, or within t of its mean): the rest are
+    // left out before the sort, which is most of the scoring's cost (the sorted list, and so
+    // every sum over it, is what it was, a margin of t spare).
+    let near = (
+        window.centre - window.half_width - 3.0 * t,
+        window.centre + window.half_width + 3.0 * t,
+    );
     for _ in 0..options.max_attempts {
         if scored >= options.hypotheses {
             break;
@@ -254,14 +262,6 @@ pub fn ransac<T: Sighting, R: Rng + ?Sized>(
             continue;
         }
         scored += 1;
-        // Only residuals near the allowed offsets can count or enter the spread (those
-        // within a window of width 2t centred in the allowed range, or within t of its
-        // mean): the rest are left out before the sort, which is most of the scoring's cost
-        // (the sorted list, and so every sum over it, is what it was, a margin of t spare).
-        let near = (
-            window.centre - window.half_width - 3.0 * t,
-            window.centre + window.half_width + 3.0 * t,
-        );
         let mut k = 0;
         for (theta, observer) in sample {
             if let Some(slot) = residuals.get_mut(k) {
